@@ -1,0 +1,213 @@
+#include "broad_phase.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace demlab {
+
+namespace {
+// user data of a tree proxy: (index << 1) | kind, kind 0 = disc, 1 = wall piece
+inline void* encode(int32_t index, int kind) { return reinterpret_cast<void*>((uintptr_t(index) << 1) | uintptr_t(kind)); }
+
+// float bound no greater (lower) / no smaller (upper) than the double value
+inline float round_down(double v) {
+    float f = float(v);
+    return double(f) > v ? std::nextafter(f, -INFINITY) : f;
+}
+inline float round_up(double v) {
+    float f = float(v);
+    return double(f) < v ? std::nextafter(f, INFINITY) : f;
+}
+
+struct Collector {
+    std::vector<int32_t>* hits;
+    const b2DynamicTree* tree;
+    bool QueryCallback(int32 proxy) {
+        hits->push_back(int32_t(reinterpret_cast<uintptr_t>(tree->GetUserData(proxy))));
+        return true;
+    }
+};
+
+inline bool contains(const Vec2& flo, const Vec2& fhi, const Vec2& lo, const Vec2& hi) {
+    return flo.x() <= lo.x() && flo.y() <= lo.y() && hi.x() <= fhi.x() && hi.y() <= fhi.y();
+}
+}  // namespace
+
+b2AABB BroadPhase::to_tree(const Vec2& lo, const Vec2& hi) const {
+    b2AABB box;
+    box.lowerBound.Set(round_down(lo.x() * scale_), round_down(lo.y() * scale_));
+    box.upperBound.Set(round_up(hi.x() * scale_), round_up(hi.y() * scale_));
+    return box;
+}
+
+void BroadPhase::read_fat(int32_t proxy, Vec2& lo, Vec2& hi) const {
+    const b2AABB& f = tree_.GetFatAABB(proxy);
+    // scale_ is a power of two: these divisions are exact
+    lo = Vec2(double(f.lowerBound.x) / scale_, double(f.lowerBound.y) / scale_);
+    hi = Vec2(double(f.upperBound.x) / scale_, double(f.upperBound.y) / scale_);
+}
+
+void BroadPhase::query(const Vec2& lo, const Vec2& hi, std::vector<int32_t>& hits) {
+    hits.clear();
+    Collector c{&hits, &tree_};
+    // the stored fat boxes are exactly representable in tree units
+    b2AABB box;
+    box.lowerBound.Set(float(lo.x() * scale_), float(lo.y() * scale_));
+    box.upperBound.Set(float(hi.x() * scale_), float(hi.y() * scale_));
+    tree_.Query(&c, box);
+    ++stats_.queries;
+}
+
+void BroadPhase::init(double margin_target, double wall_piece_length, const std::vector<Vec2>& pos,
+                      const std::vector<double>& radius, const std::vector<WallGeom>& walls,
+                      const std::vector<uint8_t>& wall_active) {
+    // b2_aabbExtension (0.1 tree units) = margin in metres  =>  scale = 0.1 / margin
+    const int k = int(std::lround(std::log2(0.1 / margin_target)));
+    scale_ = std::ldexp(1.0, k);
+    margin_ = double(0.1f) / scale_;
+
+    const size_t n = pos.size();
+    disc_proxy_.resize(n);
+    fat_lo_.resize(n);
+    fat_hi_.resize(n);
+    escaped_.assign(n, 1);  // every disc is new: query them all
+    escaped_list_.clear();
+    for (size_t i = 0; i < n; ++i) {
+        const Vec2 rr(radius[i], radius[i]);
+        disc_proxy_[i] = tree_.CreateProxy(to_tree(pos[i] - rr, pos[i] + rr), encode(int32_t(i), 0));
+        read_fat(disc_proxy_[i], fat_lo_[i], fat_hi_[i]);
+        escaped_list_.push_back(int32_t(i));
+    }
+    pieces_.clear();
+    for (size_t w = 0; w < walls.size(); ++w) {
+        const int np = std::max(1, int(std::ceil(wall_length(walls[w]) / wall_piece_length)));
+        for (int p = 0; p < np; ++p) {
+            Piece pc{int32_t(w), double(p) / np, double(p + 1) / np, -1, Vec2::Zero(), Vec2::Zero()};
+            if (wall_active[w]) {
+                Vec2 lo, hi;
+                wall_piece_bounds(walls[w], pc.f0, pc.f1, lo, hi);
+                pc.proxy = tree_.CreateProxy(to_tree(lo, hi), encode(int32_t(pieces_.size()), 1));
+                read_fat(pc.proxy, pc.fat_lo, pc.fat_hi);
+            }
+            pieces_.push_back(pc);
+        }
+    }
+    dd_.clear();
+    dw_.clear();
+    // all discs are in escaped_list_: the common path below finds every pair
+    std::vector<uint8_t> none(walls.size(), 0);
+    std::vector<int32_t> list = escaped_list_;
+    // run the query part of update()
+    scratch_dd_.clear();
+    scratch_dw_.clear();
+    for (int32_t i : list) {
+        query(fat_lo_[i], fat_hi_[i], hits_);
+        for (int32_t code : hits_) {
+            const int32_t idx = code >> 1;
+            if (code & 1) {
+                scratch_dw_.push_back(pair_key(i, pieces_[idx].wall));
+            } else if (idx > i) {
+                scratch_dd_.push_back(pair_key(i, idx));
+            }
+        }
+    }
+    std::sort(scratch_dd_.begin(), scratch_dd_.end());
+    std::sort(scratch_dw_.begin(), scratch_dw_.end());
+    scratch_dw_.erase(std::unique(scratch_dw_.begin(), scratch_dw_.end()), scratch_dw_.end());
+    dd_.swap(scratch_dd_);
+    dw_.swap(scratch_dw_);
+    std::fill(escaped_.begin(), escaped_.end(), 0);
+    escaped_list_.clear();
+    ++stats_.updates;
+}
+
+bool BroadPhase::update(const std::vector<Vec2>& pos, const std::vector<double>& radius,
+                        const std::vector<WallGeom>& walls, const std::vector<uint8_t>& wall_active,
+                        const std::vector<uint8_t>& wall_moving) {
+    // walls: removed ones leave the tree; moving ones are re-inserted whole when any of
+    // their pieces leaves its fat box
+    std::vector<uint8_t> changed(walls.size(), 0);
+    bool any_wall = false;
+    for (Piece& pc : pieces_) {
+        const int32_t w = pc.wall;
+        if (pc.proxy >= 0 && !wall_active[w]) {
+            tree_.DestroyProxy(pc.proxy);
+            pc.proxy = -1;
+            changed[w] = 1;
+            any_wall = true;
+        } else if (pc.proxy >= 0 && wall_moving[w]) {
+            Vec2 lo, hi;
+            wall_piece_bounds(walls[w], pc.f0, pc.f1, lo, hi);
+            if (!contains(pc.fat_lo, pc.fat_hi, lo, hi)) {
+                changed[w] = 1;
+                any_wall = true;
+            }
+        }
+    }
+
+    escaped_list_.clear();
+    const size_t n = pos.size();
+    for (size_t i = 0; i < n; ++i) {
+        const Vec2 rr(radius[i], radius[i]);
+        if (!contains(fat_lo_[i], fat_hi_[i], pos[i] - rr, pos[i] + rr)) escaped_list_.push_back(int32_t(i));
+    }
+    if (escaped_list_.empty() && !any_wall) return false;
+
+    for (int32_t i : escaped_list_) {
+        const Vec2 rr(radius[i], radius[i]);
+        tree_.MoveProxy(disc_proxy_[i], to_tree(pos[i] - rr, pos[i] + rr), b2Vec2(0.0f, 0.0f));
+        read_fat(disc_proxy_[i], fat_lo_[i], fat_hi_[i]);
+        escaped_[i] = 1;
+    }
+    stats_.disc_reinserts += long(escaped_list_.size());
+    for (Piece& pc : pieces_) {
+        if (pc.proxy >= 0 && changed[pc.wall]) {
+            Vec2 lo, hi;
+            wall_piece_bounds(walls[pc.wall], pc.f0, pc.f1, lo, hi);
+            tree_.MoveProxy(pc.proxy, to_tree(lo, hi), b2Vec2(0.0f, 0.0f));
+            read_fat(pc.proxy, pc.fat_lo, pc.fat_hi);
+        }
+    }
+
+    // keep the pairs whose fat boxes did not change
+    scratch_dd_.clear();
+    for (uint64_t key : dd_)
+        if (!escaped_[key_first(key)] && !escaped_[key_second(key)]) scratch_dd_.push_back(key);
+    const size_t kept_dd = scratch_dd_.size();
+    scratch_dw_.clear();
+    for (uint64_t key : dw_)
+        if (!escaped_[key_first(key)] && !changed[key_second(key)]) scratch_dw_.push_back(key);
+
+    // query the escaped discs; a pair of two escaped discs is taken from the lower index
+    for (int32_t i : escaped_list_) {
+        query(fat_lo_[i], fat_hi_[i], hits_);
+        for (int32_t code : hits_) {
+            const int32_t idx = code >> 1;
+            if (code & 1) {
+                scratch_dw_.push_back(pair_key(i, pieces_[idx].wall));
+            } else if (idx != i && !(escaped_[idx] && idx < i)) {
+                scratch_dd_.push_back(idx < i ? pair_key(idx, i) : pair_key(i, idx));
+            }
+        }
+    }
+    // query the moved walls' pieces for the discs around them
+    for (const Piece& pc : pieces_) {
+        if (pc.proxy < 0 || !changed[pc.wall]) continue;
+        query(pc.fat_lo, pc.fat_hi, hits_);
+        for (int32_t code : hits_)
+            if (!(code & 1)) scratch_dw_.push_back(pair_key(code >> 1, pc.wall));
+    }
+
+    std::sort(scratch_dd_.begin() + long(kept_dd), scratch_dd_.end());
+    std::inplace_merge(scratch_dd_.begin(), scratch_dd_.begin() + long(kept_dd), scratch_dd_.end());
+    std::sort(scratch_dw_.begin(), scratch_dw_.end());
+    scratch_dw_.erase(std::unique(scratch_dw_.begin(), scratch_dw_.end()), scratch_dw_.end());
+    dd_.swap(scratch_dd_);
+    dw_.swap(scratch_dw_);
+
+    for (int32_t i : escaped_list_) escaped_[i] = 0;
+    ++stats_.updates;
+    return true;
+}
+
+}  // namespace demlab

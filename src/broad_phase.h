@@ -1,0 +1,80 @@
+// Broad phase: Box2D's b2DynamicTree holds one proxy per disc and a few per wall (long walls
+// are cut into pieces so that a slope's bounding box does not cover the whole mass). The tree
+// only answers "which fat boxes overlap"; the physics is ours.
+//
+// Fat boxes: the tree pads every box by b2_aabbExtension = 0.1 tree units. We choose the
+// units: tree coordinate = metres * scale with scale a power of two, so the pad is
+// 0.1 / scale metres (the margin) and converting the tree's float boxes back to metres is
+// exact. A disc is re-inserted only when its tight box leaves its fat box.
+//
+// Candidate pairs: every pair of discs (and disc-wall) whose fat boxes overlap. The set is
+// kept between updates: pairs of two discs that did not escape stay as they are (their fat
+// boxes did not change), and only the escaped discs are queried. The lists are sorted by
+// key, so the contact loop's order does not depend on the tree's internal layout.
+#pragma once
+#include <box2d/b2_dynamic_tree.h>
+
+#include <cstdint>
+#include <vector>
+
+#include "vec2.h"
+#include "wall.h"
+
+namespace demlab {
+
+inline uint64_t pair_key(int32_t a, int32_t b) { return (uint64_t(uint32_t(a)) << 32) | uint32_t(b); }
+inline int32_t key_first(uint64_t k) { return int32_t(k >> 32); }
+inline int32_t key_second(uint64_t k) { return int32_t(k & 0xffffffffu); }
+
+struct BroadPhaseStats {
+    long updates = 0;          // calls to update() that changed the candidate lists
+    long disc_reinserts = 0;   // discs re-inserted after leaving their fat box
+    long queries = 0;
+};
+
+class BroadPhase {
+public:
+    // margin_target: desired pad around each disc, m (> 0). The actual margin is the nearest
+    // 0.1 / 2^k (see margin()). wall_piece_length: the longest wall piece, m.
+    void init(double margin_target, double wall_piece_length, const std::vector<Vec2>& pos,
+              const std::vector<double>& radius, const std::vector<WallGeom>& walls,
+              const std::vector<uint8_t>& wall_active);
+
+    // Re-inserts escaped discs and moved walls' pieces, drops removed walls, and refreshes
+    // the candidate lists. Returns true if the lists changed.
+    bool update(const std::vector<Vec2>& pos, const std::vector<double>& radius,
+                const std::vector<WallGeom>& walls, const std::vector<uint8_t>& wall_active,
+                const std::vector<uint8_t>& wall_moving);
+
+    // Sorted, unique keys pair_key(i, j) with i < j.
+    const std::vector<uint64_t>& disc_pairs() const { return dd_; }
+    // Sorted, unique keys pair_key(disc, wall).
+    const std::vector<uint64_t>& wall_pairs() const { return dw_; }
+
+    double margin() const { return margin_; }
+    const BroadPhaseStats& stats() const { return stats_; }
+
+private:
+    struct Piece {
+        int32_t wall;
+        double f0, f1;
+        int32_t proxy;
+        Vec2 fat_lo, fat_hi;
+    };
+    b2AABB to_tree(const Vec2& lo, const Vec2& hi) const;
+    void read_fat(int32_t proxy, Vec2& lo, Vec2& hi) const;
+    void query(const Vec2& lo, const Vec2& hi, std::vector<int32_t>& hits);
+
+    b2DynamicTree tree_;
+    double scale_ = 1.0;
+    double margin_ = 0.1;
+    std::vector<int32_t> disc_proxy_;
+    std::vector<Vec2> fat_lo_, fat_hi_;
+    std::vector<Piece> pieces_;
+    std::vector<uint64_t> dd_, dw_, scratch_dd_, scratch_dw_;
+    std::vector<uint8_t> escaped_;
+    std::vector<int32_t> escaped_list_, hits_;
+    BroadPhaseStats stats_;
+};
+
+}  // namespace demlab

@@ -1,0 +1,90 @@
+// demlab bench db9k: the speed workload (docs/BENCHMARK.md), and optionally the peer (LAMMPS)
+// on the same work in the same invocation.
+#include <array>
+#include <chrono>
+#include <cstdio>
+#include <memory>
+#include <string>
+
+#include "commands.h"
+#include "db9k.h"
+#include "error.h"
+#include "progress.h"
+
+namespace demlab {
+
+namespace {
+struct BenchOptions {
+    std::string workload = "db9k";
+    long steps = 20000;
+    std::string file;
+    bool peer = false;
+};
+
+// Runs the LAMMPS script and returns its particle-steps/s (0 if it could not run).
+double run_peer(long steps, int ranks) {
+    const std::string script = std::string(DEMLAB_SOURCE_DIR) + "/bench/db9k/lammps/run.sh";
+    const std::string cmd = "bash '" + script + "' " + std::to_string(steps) + " " + std::to_string(ranks) + " 2>&1";
+    std::unique_ptr<FILE, int (*)(FILE*)> pipe(popen(cmd.c_str(), "r"), pclose);
+    if (!pipe) return 0.0;
+    std::array<char, 512> buf{};
+    double rate = 0.0;
+    while (fgets(buf.data(), int(buf.size()), pipe.get())) {
+        std::string line(buf.data());
+        std::fputs(("  [lammps] " + line).c_str(), stdout);
+        const auto pos = line.find("particle-steps/s  max ");
+        if (pos != std::string::npos) rate = std::stod(line.substr(pos + 22));
+    }
+    return rate;
+}
+
+int bench(const BenchOptions& o) {
+    if (o.workload != "db9k") throw InputError("bench: unknown workload '" + o.workload + "'; accepted: db9k");
+    if (o.steps < 1) throw InputError("bench --steps = " + std::to_string(o.steps) + ": must be >= 1");
+    const std::string path = o.file.empty() ? default_db9k_path() : o.file;
+    const auto discs = read_xyr(path);
+    World world(db9k_world_def());
+    build_db9k(world, discs);
+    world.finalize();
+
+    Progress progress(double(o.steps), "steps");
+    const auto t0 = std::chrono::steady_clock::now();
+    for (long s = 0; s < o.steps; ++s) {
+        world.step();
+        if ((s & 255) == 0) progress.update(double(s), s);
+    }
+    const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    progress.finish();
+    const double rate = double(world.disc_count()) * double(o.steps) / secs;
+    const auto& bs = world.broad_phase_stats();
+    std::printf("DB-9k: N=%zu steps=%ld dt=%g s threads=1\n", world.disc_count(), o.steps, world.dt());
+    std::printf("  wall time %.3f s, %.3e particle-steps/s, %.1f ns per particle-step\n", secs, rate,
+                1e9 * secs / (double(world.disc_count()) * double(o.steps)));
+    std::printf("  broad phase: margin %.3g m, %ld updates, %ld re-insertions; contacts now %ld disc-disc, %ld disc-wall\n",
+                world.broad_phase_margin(), bs.updates, bs.disc_reinserts, world.touching_disc_pairs(),
+                world.touching_wall_pairs());
+    std::printf("  final-state checksum %016llx\n", static_cast<unsigned long long>(state_hash(world)));
+    if (o.peer) {
+        std::printf("peer: LAMMPS, %ld steps, 1 rank\n", o.steps);
+        const double peer = run_peer(o.steps, 1);
+        if (peer > 0)
+            std::printf("  demlab %.3e vs LAMMPS %.3e particle-steps/s: ratio %.2f\n", rate, peer, rate / peer);
+        else
+            std::printf("  LAMMPS did not run (install it with scripts/install-deps.sh --peer)\n");
+    }
+    return kExitOk;
+}
+}  // namespace
+
+Command add_bench_command(CLI::App& app) {
+    auto opts = std::make_shared<BenchOptions>();
+    CLI::App* sub = app.add_subcommand("bench", "Speed benchmark: prints particle-steps per second and a state checksum");
+    sub->add_option("workload", opts->workload, "Workload to run (db9k)")->capture_default_str();
+    sub->add_option("--steps", opts->steps, "Number of time steps (20000: the quick figure; 100000: the reference)")
+        ->capture_default_str();
+    sub->add_option("--file", opts->file, "Initial state 'id x y r' (default: the repository's bench/db9k/db9k_initial.xyr)");
+    sub->add_flag("--peer", opts->peer, "Also run LAMMPS (bench/db9k/lammps/run.sh) on the same work and print the ratio");
+    return [opts] { return bench(*opts); };
+}
+
+}  // namespace demlab

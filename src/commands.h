@@ -1,0 +1,14 @@
+// The subcommands of the demlab executable. Each registers its options on the CLI11 app and
+// returns the callback to run when it was chosen.
+#pragma once
+#include <CLI/CLI.hpp>
+#include <functional>
+
+namespace demlab {
+
+using Command = std::function<int()>;
+
+Command add_bench_command(CLI::App& app);
+Command add_demo_command(CLI::App& app);
+
+}  // namespace demlab

@@ -1,0 +1,89 @@
+// The PFC "linear model" with viscous dashpots (thesis section 2.3.4-2.3.5, eq. 2.44-2.62),
+// as a small stateless function over a parameter struct and the contact's kinematics.
+//
+// Frame: the unit normal n points from body A to body B, t = perp(n) (n turned +90 deg).
+// All forces returned are the forces ON B; A receives the opposite. vn and vs are B's
+// velocity relative to A at the contact point along n and t (vn > 0: separating).
+#pragma once
+#include <algorithm>
+#include <cmath>
+
+namespace demlab {
+
+// PFC's dashpot modes (dp_mode): whether the normal dashpot may make the total normal force
+// tensile, and whether the shear dashpot stays active while the contact slides.
+enum class DashpotMode : int {
+    Full = 0,                        // PFC default: both dashpots always active
+    NoTension = 1,                   // total normal force kept >= 0
+    NoShearWhileSliding = 2,         // shear dashpot off while sliding
+    NoTensionNoShearWhileSliding = 3 // both of the above
+};
+
+// Parameters of one contact. Stiffnesses are already the series values (eq. 2.59, 2.61).
+struct LinearContactParams {
+    double kn = 0.0;   // normal stiffness, N/m
+    double ks = 0.0;   // shear stiffness, N/m
+    double mu = 0.0;   // Coulomb friction coefficient, -
+    double cn = 0.0;   // normal dashpot coefficient, N s/m: beta_n * 2 sqrt(m_eff kn) (eq. 2.56-2.57)
+    double cs = 0.0;   // shear dashpot coefficient, N s/m: beta_s * 2 sqrt(m_eff ks)
+    DashpotMode mode = DashpotMode::Full;
+};
+
+// Result of one evaluation; the caller stores fs_spring as the contact's shear history.
+struct LinearContactForce {
+    double fn = 0.0;         // total normal force on B along n (spring + dashpot), N
+    double ft = 0.0;         // total tangential force on B along t (spring + dashpot), N
+    double fs_spring = 0.0;  // updated shear spring force (history), N
+    double fn_spring = 0.0;  // elastic normal force kn*U, N
+    double damp_n = 0.0;     // normal dashpot force on B, N (for the energy ledger)
+    double damp_s = 0.0;     // shear dashpot force on B, N
+    double slip_work = 0.0;  // energy dissipated by sliding in this step, J
+    bool sliding = false;
+};
+
+// Critical damping coefficient scaled by beta (eq. 2.56-2.57): c = beta * 2 sqrt(m k).
+inline double dashpot_coefficient(double beta, double m_eff, double k) { return beta * 2.0 * std::sqrt(m_eff * k); }
+
+// One step of the linear law for a contact with overlap U > 0.
+//   F_n = kn U                         (eq. 2.45, secant: from the overlap)
+//   dF_s = -ks vs dt, F_s += dF_s      (eq. 2.48-2.49, incremental; the scalar history is
+//                                       measured along the current t, so it turns with the
+//                                       contact plane exactly)
+//   |F_s| <= mu F_n                    (eq. 2.50, on the spring part only)
+//   D_n = -cn vn, D_s = -cs vs          (eq. 2.55, added on top of the springs)
+inline LinearContactForce linear_contact(const LinearContactParams& p, double overlap, double vn, double vs,
+                                         double dt, double fs_old) {
+    LinearContactForce out;
+    const double fn_spring = p.kn * overlap;
+    double fn_damp = -p.cn * vn;
+    double fn = fn_spring + fn_damp;
+    if ((p.mode == DashpotMode::NoTension || p.mode == DashpotMode::NoTensionNoShearWhileSliding) && fn < 0.0) {
+        fn = 0.0;
+        fn_damp = -fn_spring;
+    }
+
+    const double fs_trial = fs_old - p.ks * vs * dt;
+    const double fs_max = p.mu * fn_spring;
+    double fs = fs_trial;
+    double slip_work = 0.0;
+    if (std::abs(fs_trial) > fs_max) {
+        fs = std::copysign(fs_max, fs_trial);
+        out.sliding = true;
+        // energy lost by the slider: the capped force times the slip it let through
+        slip_work = fs_max * (std::abs(fs_trial) - fs_max) / p.ks;
+    }
+    double fs_damp = -p.cs * vs;
+    if (out.sliding && (p.mode == DashpotMode::NoShearWhileSliding || p.mode == DashpotMode::NoTensionNoShearWhileSliding))
+        fs_damp = 0.0;
+
+    out.fn = fn;
+    out.ft = fs + fs_damp;
+    out.fs_spring = fs;
+    out.fn_spring = fn_spring;
+    out.damp_n = fn_damp;
+    out.damp_s = fs_damp;
+    out.slip_work = slip_work;
+    return out;
+}
+
+}  // namespace demlab

@@ -1,0 +1,42 @@
+// Progress of a long run on a terminal: percent of simulated time, steps/s and ETA on one
+// line of stderr, refreshed at most twice a second. Silent when stderr is not a terminal.
+#pragma once
+#include <chrono>
+#include <cstdio>
+#include <unistd.h>
+
+namespace demlab {
+
+class Progress {
+public:
+    explicit Progress(double total, const char* unit = "s")
+        : total_(total), unit_(unit), enabled_(isatty(STDERR_FILENO) != 0), start_(Clock::now()), last_(start_) {}
+
+    void update(double done, long steps) {
+        if (!enabled_) return;
+        const auto now = Clock::now();
+        if (now - last_ < std::chrono::milliseconds(500)) return;
+        last_ = now;
+        const double elapsed = std::chrono::duration<double>(now - start_).count();
+        const double frac = total_ > 0 ? done / total_ : 0.0;
+        const double eta = frac > 0 ? elapsed * (1.0 - frac) / frac : 0.0;
+        std::fprintf(stderr, "\r  %5.1f %%  %.3f / %.3f %s  %.0f steps/s  ETA %.0f s   ", 100.0 * frac, done, total_, unit_,
+                     elapsed > 0 ? double(steps) / elapsed : 0.0, eta);
+        std::fflush(stderr);
+        shown_ = true;
+    }
+    void finish() {
+        if (shown_) std::fprintf(stderr, "\r%*s\r", 78, "");
+        shown_ = false;
+    }
+    ~Progress() { finish(); }
+
+private:
+    using Clock = std::chrono::steady_clock;
+    double total_;
+    const char* unit_;
+    bool enabled_, shown_ = false;
+    Clock::time_point start_, last_;
+};
+
+}  // namespace demlab

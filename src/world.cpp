@@ -1,0 +1,550 @@
+#include "world.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "error.h"
+#include "timestep.h"
+#include "validate.h"
+
+namespace demlab {
+
+void validate(const WorldDef& d, const std::string& where) {
+    require_finite(where + ".gravity", d.gravity, "m/s2");
+    require_range(where + ".damping.beta_n", d.damping.beta_n, 0.0, 1.0, true, "(ratio)");
+    require_range(where + ".damping.beta_s", d.damping.beta_s, 0.0, 1.0, true, "(ratio)");
+    require_range(where + ".damping.local_alpha", d.damping.local_alpha, 0.0, 1.0, true, "(ratio)");
+    const int mode = int(d.damping.dp_mode);
+    if (mode < 0 || mode > 3)
+        throw InputError(where + ".damping.dp_mode = " + std::to_string(mode) + ": must be 0, 1, 2 or 3");
+    require_range(where + ".timestep.safety", d.timestep.safety, 1e-6, 1.0, false, "(factor)");
+    if (!d.timestep.automatic) require_positive(where + ".timestep.fixed", d.timestep.fixed, "s");
+    require_non_negative(where + ".broadphase_margin", d.broadphase_margin, "m");
+    require_positive(where + ".wall_piece_length", d.wall_piece_length, "m");
+    require_non_negative(where + ".joint_tolerance", d.joint_tolerance, "m");
+    require_range(where + ".max_overlap_ratio", d.max_overlap_ratio, 1e-6, 2.0, false, "(ratio)");
+}
+
+World::World(const WorldDef& def) : def_(def) {}
+
+int World::add_material(const MaterialDef& m) {
+    validate(m, "material[" + std::to_string(materials_.size()) + "]");
+    materials_.push_back(m);
+    return int(materials_.size()) - 1;
+}
+
+int World::add_disc(const DiscDef& d) {
+    const std::string where = "disc[" + std::to_string(pos_.size()) + "]";
+    require_finite(where + ".position", d.pos, "m");
+    require_positive(where + ".radius", d.radius, "m");
+    require_finite(where + ".velocity", d.vel, "m/s");
+    require_finite(where + ".omega", d.omega, "rad/s");
+    require_finite(where + ".angle", d.angle, "rad");
+    if (d.material < 0 || size_t(d.material) >= materials_.size())
+        throw InputError(where + ".material = " + std::to_string(d.material) + ": no such material (" +
+                         std::to_string(materials_.size()) + " defined)");
+    if (finalized_) throw InputError(where + ": discs must be added before finalize()");
+    const MaterialDef& m = materials_[size_t(d.material)];
+    const double mass = m.density * kPi * d.radius * d.radius;
+    const double inertia = 0.5 * mass * d.radius * d.radius;
+    pos_.push_back(d.pos);
+    vel_.push_back(d.vel);
+    force_.push_back(Vec2::Zero());
+    radius_.push_back(d.radius);
+    mass_.push_back(mass);
+    inv_mass_.push_back(1.0 / mass);
+    inertia_.push_back(inertia);
+    inv_inertia_.push_back(1.0 / inertia);
+    angle_.push_back(d.angle);
+    omega_.push_back(def_.rotation.model == 1 ? 0.0 : d.omega);
+    torque_.push_back(0.0);
+    material_.push_back(d.material);
+    return int(pos_.size()) - 1;
+}
+
+int World::add_wall(const WallDef& w) {
+    validate(w, w.name.empty() ? "wall[" + std::to_string(walls_.size()) + "]" : "wall '" + w.name + "'");
+    if (finalized_) throw InputError("walls must be added before finalize()");
+    walls_.push_back(w);
+    return int(walls_.size()) - 1;
+}
+
+void World::set_dt(double dt) {
+    require_positive("dt", dt, "s");
+    def_.timestep.automatic = false;
+    def_.timestep.fixed = dt;
+    dt_ = dt;
+}
+
+void World::set_local_damping(double alpha) {
+    require_range("local_alpha", alpha, 0.0, 1.0, true, "(ratio)");
+    def_.damping.local_alpha = alpha;
+}
+
+// Wall ends closer than joint_tolerance are joined: a segment's end is moved onto the
+// neighbour's end (an arc's ends are fixed by its centre and angles), so the two walls meet
+// exactly. A tangential joint is left open (no corner), so a disc crossing it is carried by
+// one wall or the other with a continuous normal force; any other joint keeps its corners.
+void World::join_wall_ends() {
+    const size_t nw = walls_.size();
+    geom_.resize(nw);
+    for (size_t w = 0; w < nw; ++w) geom_[w] = make_geom(walls_[w]);
+    auto end_point = [&](size_t w, int e) -> Vec2& { return e == 0 ? geom_[w].p0 : geom_[w].p1; };
+    std::vector<int> joined(2 * nw, 0);
+    for (size_t a = 0; a < nw; ++a) {
+        for (int ea = 0; ea < 2; ++ea) {
+            for (size_t b = a + 1; b < nw; ++b) {
+                for (int eb = 0; eb < 2; ++eb) {
+                    Vec2& pa = end_point(a, ea);
+                    Vec2& pb = end_point(b, eb);
+                    if ((pa - pb).norm() > def_.joint_tolerance) continue;
+                    const bool seg_a = geom_[a].shape == WallShape::Segment;
+                    const bool seg_b = geom_[b].shape == WallShape::Segment;
+                    if (seg_a && seg_b) {
+                        const Vec2 mid = 0.5 * (pa + pb);
+                        pa = mid;
+                        pb = mid;
+                    } else if (seg_a) {
+                        pa = pb;
+                    } else if (seg_b) {
+                        pb = pa;
+                    }
+                    // tangents at the joint, oriented along each wall away from its start
+                    const Vec2 ta = ea == 0 ? tangent_at_start(geom_[a]) : tangent_at_end(geom_[a]);
+                    const Vec2 tb = eb == 0 ? tangent_at_start(geom_[b]) : tangent_at_end(geom_[b]);
+                    const bool tangential = std::abs(cross(ta, tb)) < std::sin(deg_to_rad(2.0));
+                    joined[2 * a + size_t(ea)] = tangential ? 2 : 1;
+                    joined[2 * b + size_t(eb)] = tangential ? 2 : 1;
+                }
+            }
+        }
+    }
+    for (size_t w = 0; w < nw; ++w) {
+        WallGeom& g = geom_[w];
+        if (g.shape == WallShape::Segment) {  // re-derive after snapping
+            WallDef d = walls_[w];
+            d.p0 = g.p0;
+            d.p1 = g.p1;
+            const bool c0 = g.cap0, c1 = g.cap1;
+            g = make_geom(d);
+            g.cap0 = c0;
+            g.cap1 = c1;
+        }
+        auto resolve = [&](EndCap cap, int joint) {
+            if (cap == EndCap::Capped) return true;
+            if (cap == EndCap::Open) return false;
+            return joint != 2;
+        };
+        g.cap0 = resolve(walls_[w].cap_start, joined[2 * w]);
+        g.cap1 = resolve(walls_[w].cap_end, joined[2 * w + 1]);
+    }
+}
+
+void World::finalize() {
+    if (finalized_) return;
+    validate(def_, "world");
+    if (materials_.empty()) add_material(MaterialDef{});
+    const size_t n = pos_.size();
+    double r_min = 0.0;
+    if (n > 0) r_min = *std::min_element(radius_.begin(), radius_.end());
+    validate(def_.rotation, r_min, "rotation");
+
+    join_wall_ends();
+    const size_t nw = walls_.size(), nm = materials_.size();
+    wall_active_.assign(nw, 1);
+    wall_moving_.assign(nw, 0);
+    wall_force_.assign(nw, Vec2::Zero());
+    wall_impulse_.assign(nw, Vec2::Zero());
+    wall_moment_.assign(nw, 0.0);
+    for (size_t w = 0; w < nw; ++w)
+        if (walls_[w].remove_at <= 0.0) wall_active_[w] = 0;
+
+    mat_dd_.resize(nm * nm);
+    for (size_t a = 0; a < nm; ++a)
+        for (size_t b = 0; b < nm; ++b)
+            mat_dd_[a * nm + b] = {series_stiffness(materials_[a].kn, materials_[b].kn),
+                                   series_stiffness(materials_[a].ks, materials_[b].ks),
+                                   combine_friction(def_.friction_rule_disc_disc, materials_[a].friction,
+                                                    materials_[b].friction)};
+    mat_dw_.resize(nm * nw);
+    for (size_t a = 0; a < nm; ++a)
+        for (size_t w = 0; w < nw; ++w)
+            mat_dw_[a * nw + w] = {series_stiffness(materials_[a].kn, walls_[w].kn),
+                                   series_stiffness(materials_[a].ks, walls_[w].ks),
+                                   combine_friction(def_.friction_rule_disc_wall, materials_[a].friction,
+                                                    walls_[w].friction)};
+
+    rr_factor_.assign(n, 0.0);
+    if (def_.rotation.model >= 2 && def_.rotation.u_rr > 0.0)
+        for (size_t i = 0; i < n; ++i) rr_factor_[i] = preh_poisel_factor(radius_[i], def_.rotation.u_rr);
+    n_wall_.assign(n, 0);
+    n_disc_.assign(n, 0);
+    wall_normal_.assign(n, 0.0);
+    k_tran_.assign(n, 0.0);
+    k_rot_.assign(n, 0.0);
+
+    const double margin = def_.broadphase_margin > 0.0 ? def_.broadphase_margin : (n > 0 ? 0.5 * r_min : 0.001);
+    broad_.init(margin, def_.wall_piece_length, pos_, radius_, geom_, wall_active_);
+    refresh_contacts();
+    finalized_ = true;
+
+    // first time step: a force pass with dt = 0 (no shear increment, nothing dissipated)
+    // counts the contacts the automatic rule needs
+    if (def_.timestep.automatic) {
+        dt_ = 0.0;
+        compute_forces();
+        dt_ = automatic_dt();
+    } else {
+        dt_ = def_.timestep.fixed;
+    }
+}
+
+double World::contact_mass_disc(int i, int j) const { return effective_mass(mass_[size_t(i)], mass_[size_t(j)]); }
+
+// Carries the shear history of pairs that stay candidates; new pairs start with F_s = 0 and
+// get their dashpot coefficients (eq. 2.56-2.62) once.
+void World::refresh_contacts() {
+    const size_t nm = materials_.size(), nw = walls_.size();
+    const auto& keys = broad_.disc_pairs();
+    dd_scratch_.clear();
+    dd_scratch_.reserve(keys.size());
+    size_t o = 0;
+    for (uint64_t key : keys) {
+        const int32_t i = key_first(key), j = key_second(key);
+        while (o < dd_.size() && pair_key(dd_[o].i, dd_[o].j) < key) ++o;
+        if (o < dd_.size() && dd_[o].i == i && dd_[o].j == j) {
+            dd_scratch_.push_back(dd_[o]);
+            continue;
+        }
+        const PairMaterial& pm = mat_dd_[size_t(material_[size_t(i)]) * nm + size_t(material_[size_t(j)])];
+        const double m_eff = contact_mass_disc(i, j);
+        dd_scratch_.push_back({i, j, 0.0, dashpot_coefficient(def_.damping.beta_n, m_eff, pm.kn),
+                               dashpot_coefficient(def_.damping.beta_s, m_eff, pm.ks), 0.0f, 0.0f});
+    }
+    dd_.swap(dd_scratch_);
+
+    const auto& wkeys = broad_.wall_pairs();
+    dw_scratch_.clear();
+    dw_scratch_.reserve(wkeys.size());
+    o = 0;
+    for (uint64_t key : wkeys) {
+        const int32_t i = key_first(key), w = key_second(key);
+        while (o < dw_.size() && pair_key(dw_[o].disc, dw_[o].wall) < key) ++o;
+        if (o < dw_.size() && dw_[o].disc == i && dw_[o].wall == w) {
+            dw_scratch_.push_back(dw_[o]);
+            continue;
+        }
+        const PairMaterial& pm = mat_dw_[size_t(material_[size_t(i)]) * nw + size_t(w)];
+        const double m_eff = mass_[size_t(i)];  // eq. 2.60: the wall's mass is infinite
+        dw_scratch_.push_back({i, w, 0.0, dashpot_coefficient(def_.damping.beta_n, m_eff, pm.kn),
+                               dashpot_coefficient(def_.damping.beta_s, m_eff, pm.ks), 0.0f, 0.0f});
+    }
+    dw_.swap(dw_scratch_);
+}
+
+static std::string where_disc(long step, double t, int i, const Vec2& p) {
+    std::ostringstream s;
+    s << "step " << step << ", t = " << t << " s, disc " << i << " at (" << p.x() << ", " << p.y() << ")";
+    return s.str();
+}
+
+void World::compute_forces() {
+    const size_t n = pos_.size(), nw = walls_.size(), nm = materials_.size();
+    std::fill(force_.begin(), force_.end(), Vec2::Zero());
+    std::fill(torque_.begin(), torque_.end(), 0.0);
+    std::fill(n_wall_.begin(), n_wall_.end(), 0);
+    std::fill(n_disc_.begin(), n_disc_.end(), 0);
+    std::fill(wall_normal_.begin(), wall_normal_.end(), 0.0);
+    std::fill(k_tran_.begin(), k_tran_.end(), 0.0);
+    std::fill(k_rot_.begin(), k_rot_.end(), 0.0);
+    std::fill(wall_force_.begin(), wall_force_.end(), Vec2::Zero());
+    std::fill(wall_moment_.begin(), wall_moment_.end(), 0.0);
+    (void)n;
+
+    const DashpotMode mode = def_.damping.dp_mode;
+    const double dt = dt_;
+    const double last_dt = last_dt_;
+    const double max_ratio = def_.max_overlap_ratio;
+    double dissipated = 0.0;
+    long touching = 0;
+
+    // disc-disc: n from i (A) to j (B); the force on j is F = fn n + ft t, on i -F
+    for (DiscContact& c : dd_) {
+        const size_t i = size_t(c.i), j = size_t(c.j);
+        const Vec2 d = pos_[j] - pos_[i];
+        const double rsum = radius_[i] + radius_[j];
+        const double dist2 = d.squaredNorm();
+        if (dist2 >= rsum * rsum) {
+            // PFC deletes a contact that opens: its history starts again at zero. The last
+            // dashpot force still acted over the second half of the previous step.
+            if (c.damp_n != 0.0f || c.damp_s != 0.0f) {
+                const Vec2 vrel = vel_[j] - vel_[i];
+                const Vec2 nrm = d / std::sqrt(dist2);
+                const double vs = vrel.dot(perp(nrm)) - (omega_[i] * radius_[i] + omega_[j] * radius_[j]);
+                dissipated -= 0.5 * last_dt * (c.damp_n * vrel.dot(nrm) + c.damp_s * vs);
+            }
+            c.fs = 0.0;
+            c.damp_n = c.damp_s = 0.0f;
+            continue;
+        }
+        const double dist = std::sqrt(dist2);
+        const double overlap = rsum - dist;
+        if (!(overlap <= max_ratio * std::min(radius_[i], radius_[j])) || dist == 0.0)
+            throw RunError("blow-up: overlap " + format_number(overlap) + " m between discs " + std::to_string(i) +
+                           " and " + std::to_string(j) + " exceeds " + format_number(max_ratio) +
+                           " of the smaller radius at " + where_disc(steps_, time_, int(i), pos_[i]) +
+                           ". Likely cause: the time step is too large for the stiffness and speeds "
+                           "(use the automatic time step or a smaller safety factor)");
+        ++touching;
+        const Vec2 nrm = d / dist;
+        const Vec2 t = perp(nrm);
+        // PFC's contact point: x_A + (r_A - U/2) n; the lever arms of both discs
+        const double ra = radius_[i] - 0.5 * overlap, rb = radius_[j] - 0.5 * overlap;
+        const Vec2 vrel = vel_[j] - vel_[i];
+        const double vn = vrel.dot(nrm);
+        // eq. 2.46: tangential velocity of B relative to A at the contact point
+        const double vs = vrel.dot(t) - (omega_[i] * ra + omega_[j] * rb);
+        const PairMaterial& pm = mat_dd_[size_t(material_[i]) * nm + size_t(material_[j])];
+        const LinearContactParams p{pm.kn, pm.ks, pm.mu, c.cn, c.cs, mode};
+        const LinearContactForce f = linear_contact(p, overlap, vn, vs, dt, c.fs);
+        c.fs = f.fs_spring;
+        // centred dashpot work: this step's force over the first half, the last step's
+        // force over the second half of the velocity interval around v(t - dt/2)
+        dissipated -= 0.5 * ((f.damp_n * dt + c.damp_n * last_dt) * vn + (f.damp_s * dt + c.damp_s * last_dt) * vs);
+        dissipated += f.slip_work;
+        c.damp_n = float(f.damp_n);
+        c.damp_s = float(f.damp_s);
+        const Vec2 F = f.fn * nrm + f.ft * t;
+        force_[j] += F;
+        force_[i] -= F;
+        // torque = lever x force; both levers give -r * ft (see docs/contact-frame)
+        torque_[j] -= rb * f.ft;
+        torque_[i] -= ra * f.ft;
+        ++n_disc_[i];
+        ++n_disc_[j];
+        const double kt = std::max(pm.kn, pm.ks);
+        k_tran_[i] += kt;
+        k_tran_[j] += kt;
+        k_rot_[i] += pm.ks;
+        k_rot_[j] += pm.ks;
+    }
+    touching_dd_ = touching;
+
+    // disc-wall: n from the wall (A) to the disc (B)
+    touching = 0;
+    for (WallContact& c : dw_) {
+        const size_t i = size_t(c.disc), w = size_t(c.wall);
+        WallHit hit;
+        if (!wall_active_[w] || !disc_wall_contact(geom_[w], pos_[i], radius_[i], hit)) {
+            if (c.damp_n != 0.0f || c.damp_s != 0.0f) {
+                // the last dashpot force's second half, along the normal it had
+                const Vec2 vrel = vel_[i] - (wall_moving_[w] ? walls_[w].velocity : Vec2::Zero());
+                const Vec2 q = closest_point(geom_[w], pos_[i]);
+                const Vec2 nrm = (pos_[i] - q).normalized();
+                const double vs = vrel.dot(perp(nrm)) - omega_[i] * radius_[i];
+                dissipated -= 0.5 * last_dt * (c.damp_n * vrel.dot(nrm) + c.damp_s * vs);
+            }
+            c.fs = 0.0;
+            c.damp_n = c.damp_s = 0.0f;
+            continue;
+        }
+        if (!(hit.overlap <= max_ratio * radius_[i]))
+            throw RunError("blow-up: overlap " + format_number(hit.overlap) + " m of disc " + std::to_string(i) +
+                           " with wall '" + walls_[w].name + "' exceeds " + format_number(max_ratio) +
+                           " of its radius at " + where_disc(steps_, time_, int(i), pos_[i]) +
+                           ". Likely cause: a time step too large for the stiffness, or a disc crossing the wall");
+        ++touching;
+        const Vec2 nrm = hit.normal;
+        const Vec2 t = perp(nrm);
+        const double rb = radius_[i] - 0.5 * hit.overlap;
+        const Vec2 vwall = wall_moving_[w] ? walls_[w].velocity : Vec2::Zero();
+        const Vec2 vrel = vel_[i] - vwall;
+        const double vn = vrel.dot(nrm);
+        const double vs = vrel.dot(t) - omega_[i] * rb;
+        const PairMaterial& pm = mat_dw_[size_t(material_[i]) * nw + w];
+        const LinearContactParams p{pm.kn, pm.ks, pm.mu, c.cn, c.cs, mode};
+        const LinearContactForce f = linear_contact(p, hit.overlap, vn, vs, dt, c.fs);
+        c.fs = f.fs_spring;
+        dissipated -= 0.5 * ((f.damp_n * dt + c.damp_n * last_dt) * vn + (f.damp_s * dt + c.damp_s * last_dt) * vs);
+        dissipated += f.slip_work;
+        c.damp_n = float(f.damp_n);
+        c.damp_s = float(f.damp_s);
+        const Vec2 F = f.fn * nrm + f.ft * t;
+        force_[i] += F;
+        torque_[i] -= rb * f.ft;
+        const Vec2 contact_point = pos_[i] - rb * nrm;
+        wall_force_[w] -= F;
+        wall_moment_[w] -= cross(contact_point, F);
+        ++n_wall_[i];
+        wall_normal_[i] += f.fn_spring;
+        k_tran_[i] += std::max(pm.kn, pm.ks);
+        k_rot_[i] += pm.ks;
+    }
+    touching_dw_ = touching;
+    diss_contacts_ += dissipated;
+}
+
+double World::automatic_dt() const {
+    const bool rotation_free = def_.rotation.model != 1;
+    const double phi = def_.timestep.damping_correction ? rotational_damping_factor(def_.damping.beta_s) : 1.0;
+    double best = INFINITY;
+    for (size_t i = 0; i < pos_.size(); ++i) {
+        const MaterialDef& m = materials_[size_t(material_[i])];
+        const double kt = k_tran_[i] > 0.0 ? k_tran_[i] : std::max(m.kn, m.ks);
+        const double kr = k_rot_[i] > 0.0 ? k_rot_[i] : m.ks;
+        best = std::min(best, critical_step_squared(mass_[i], inertia_[i], radius_[i], kt, kr, rotation_free, phi * phi));
+    }
+    if (!std::isfinite(best)) return def_.timestep.fixed;  // no discs
+    return def_.timestep.safety * std::sqrt(best);
+}
+
+// PFC's central differences: v(t + dt/2) = v(t - dt/2) + (F(t)/m + g) dt, x(t + dt) = x(t) + v(t + dt/2) dt.
+void World::integrate() {
+    const size_t n = pos_.size();
+    const double dt = dt_;
+    const Vec2 g = def_.gravity;
+    const double alpha = def_.damping.local_alpha;
+    const RotationDef& rot = def_.rotation;
+    const double g_abs = g.norm();
+    double diss_local = 0.0, diss_rot = 0.0;
+    for (size_t i = 0; i < n; ++i) {
+        Vec2 f = force_[i] + mass_[i] * g;
+        Vec2 fd = Vec2::Zero();
+        if (alpha > 0.0) {
+            // eq. 2.51: F_d = -alpha |F| sign(v) per degree of freedom
+            for (int k = 0; k < 2; ++k) {
+                const double v = vel_[i][k];
+                fd[k] = v > 0.0 ? -alpha * std::abs(f[k]) : (v < 0.0 ? alpha * std::abs(f[k]) : 0.0);
+            }
+            f += fd;
+        }
+        const Vec2 v_old = vel_[i];
+        vel_[i] += f * (inv_mass_[i] * dt);
+        if (alpha > 0.0) diss_local -= 0.5 * fd.dot(v_old + vel_[i]) * dt;  // centred work
+        pos_[i] += vel_[i] * dt;
+        if (rot.model != 1) {
+            double tq = torque_[i];
+            double td = 0.0;
+            const double w_old = omega_[i];
+            if (alpha > 0.0) {
+                td = w_old > 0.0 ? -alpha * std::abs(tq) : (w_old < 0.0 ? alpha * std::abs(tq) : 0.0);
+                tq += td;
+            }
+            double w = w_old + tq * inv_inertia_[i] * dt;
+            const double w_free = w;
+            if (alpha > 0.0) diss_local -= 0.5 * td * (w_old + w_free) * dt;
+            // Model 2/3: Preh-Poisel rolling resistance for a disc touching a wall (eq. 2.71, 2.73)
+            if (n_wall_[i] > 0 && rr_factor_[i] > 0.0) {
+                const double g_eff = rot.rolling_form == RollingForm::Literal ? g_abs : wall_normal_[i] * inv_mass_[i];
+                w = reduce_towards_zero(w, g_eff * rr_factor_[i] * dt);
+            }
+            // Model 3: rotational damping at disc-disc contacts (eq. 2.75)
+            if (rot.model == 3 && n_disc_[i] > 0)
+                w *= rot.damping_per == RotDampingPer::Disc ? rot.mu_br : std::pow(rot.mu_br, n_disc_[i]);
+            // Energy these velocity rules take out. The contact ledger credits the torque's work
+            // over the mean of the old and the *final* omega; the dynamics moved it over the
+            // mean of the old and the free one: the difference belongs here.
+            diss_rot += 0.5 * inertia_[i] * (w_free * w_free - w * w) - 0.5 * torque_[i] * dt * (w_free - w);
+            omega_[i] = w;
+            angle_[i] += w * dt;
+        }
+        const Vec2& p = pos_[i];
+        if (!std::isfinite(p.x() + p.y() + vel_[i].x() + vel_[i].y()))
+            throw RunError("blow-up: non-finite state of disc " + std::to_string(i) + " at step " +
+                           std::to_string(steps_) + ", t = " + format_number(time_) +
+                           " s. Likely cause: a time step too large for the stiffness");
+        if (p.x() < def_.domain_lo.x() || p.y() < def_.domain_lo.y() || p.x() > def_.domain_hi.x() ||
+            p.y() > def_.domain_hi.y())
+            throw RunError("lost disc: " + where_disc(steps_, time_, int(i), p) +
+                           " left the domain. Likely cause: a disc crossed a wall (time step too large, or a gap "
+                           "between walls)");
+    }
+    diss_local_ += diss_local;
+    diss_rotation_ += diss_rot;
+}
+
+void World::move_walls() {
+    for (size_t w = 0; w < walls_.size(); ++w) {
+        if (!wall_active_[w] || !wall_moving_[w]) continue;
+        const Vec2 d = walls_[w].velocity * dt_;
+        translate(geom_[w], d);
+        // power the wall puts into the discs: -(force on wall) . v_wall
+        work_walls_ += -wall_force_[w].dot(walls_[w].velocity) * dt_;
+    }
+}
+
+void World::step() {
+    if (!finalized_) finalize();
+    // wall schedule at time t: removal and which walls move during this step
+    bool wall_removed = false;
+    for (size_t w = 0; w < walls_.size(); ++w) {
+        if (wall_active_[w] && time_ >= walls_[w].remove_at) {
+            wall_active_[w] = 0;
+            wall_removed = true;
+        }
+        const bool moving = walls_[w].velocity.squaredNorm() > 0.0 && time_ >= walls_[w].move_from &&
+                            time_ < walls_[w].move_until;
+        wall_moving_[w] = moving ? 1 : 0;
+    }
+    if (wall_removed) {
+        // the elastic energy stored in contacts with a removed wall leaves the ledger
+        const size_t nw = walls_.size();
+        for (const WallContact& c : dw_) {
+            const size_t w = size_t(c.wall);
+            if (wall_active_[w]) continue;
+            WallHit hit;
+            if (disc_wall_contact(geom_[w], pos_[size_t(c.disc)], radius_[size_t(c.disc)], hit)) {
+                const PairMaterial& pm = mat_dw_[size_t(material_[size_t(c.disc)]) * nw + w];
+                removed_walls_ += 0.5 * pm.kn * hit.overlap * hit.overlap + 0.5 * c.fs * c.fs / pm.ks;
+            }
+        }
+    }
+    if (broad_.update(pos_, radius_, geom_, wall_active_, wall_moving_)) refresh_contacts();
+    compute_forces();
+    integrate();
+    move_walls();
+    for (size_t w = 0; w < walls_.size(); ++w) wall_impulse_[w] += wall_force_[w] * dt_;
+    time_ += dt_;
+    last_dt_ = dt_;
+    ++steps_;
+    if (def_.timestep.automatic) dt_ = automatic_dt();
+}
+
+void World::run(long steps) {
+    for (long s = 0; s < steps; ++s) step();
+}
+
+EnergyReport World::energy() const {
+    EnergyReport e;
+    const Vec2 g = def_.gravity;
+    for (size_t i = 0; i < pos_.size(); ++i) {
+        e.kinetic_translation += 0.5 * mass_[i] * vel_[i].squaredNorm();
+        e.kinetic_rotation += 0.5 * inertia_[i] * omega_[i] * omega_[i];
+        // at t - dt/2: the mean of x(t) and x(t - dt) = x(t) - v(t - dt/2) dt
+        e.potential -= mass_[i] * g.dot(pos_[i] - 0.5 * last_dt_ * vel_[i]);
+    }
+    const size_t nm = materials_.size(), nw = walls_.size();
+    for (const DiscContact& c : dd_) {
+        const size_t i = size_t(c.i), j = size_t(c.j);
+        const double overlap = radius_[i] + radius_[j] - (pos_[j] - pos_[i]).norm();
+        if (overlap <= 0.0) continue;
+        const PairMaterial& pm = mat_dd_[size_t(material_[i]) * nm + size_t(material_[j])];
+        e.elastic += 0.5 * pm.kn * overlap * overlap + 0.5 * c.fs * c.fs / pm.ks;
+    }
+    for (const WallContact& c : dw_) {
+        const size_t i = size_t(c.disc), w = size_t(c.wall);
+        WallHit hit;
+        if (!wall_active_[w] || !disc_wall_contact(geom_[w], pos_[i], radius_[i], hit)) continue;
+        const PairMaterial& pm = mat_dw_[size_t(material_[i]) * nw + w];
+        e.elastic += 0.5 * pm.kn * hit.overlap * hit.overlap + 0.5 * c.fs * c.fs / pm.ks;
+    }
+    e.dissipated_contacts = diss_contacts_;
+    e.dissipated_local = diss_local_;
+    e.dissipated_rotation = diss_rotation_;
+    e.work_by_walls = work_walls_;
+    e.removed_with_walls = removed_walls_;
+    return e;
+}
+
+}  // namespace demlab

@@ -1,0 +1,196 @@
+// The simulated world: discs (structure of arrays), walls, the contact lists and the time
+// loop. One step (PFC's cycle, thesis Fig. 8): broad phase, contact forces (linear law),
+// time step, central-difference motion with the chosen rotation model, wall motion.
+#pragma once
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "broad_phase.h"
+#include "contact_law.h"
+#include "material.h"
+#include "rotation.h"
+#include "vec2.h"
+#include "wall.h"
+
+namespace demlab {
+
+struct DampingDef {
+    double beta_n = 0.5;                   // -, normal critical damping ratio in [0, 1) (Table 15)
+    double beta_s = 0.5;                   // -, shear critical damping ratio in [0, 1)
+    DashpotMode dp_mode = DashpotMode::Full;
+    double local_alpha = 0.0;              // -, PFC local damping (eq. 2.51) in [0, 1); settling only
+};
+
+struct TimeStepDef {
+    bool automatic = true;                 // PFC rule (timestep.h); false: the fixed step below
+    double safety = 0.8;                   // -, safety factor of the automatic step, (0, 1]
+    double fixed = 1.0e-6;                 // s, used when automatic = false
+    bool damping_correction = true;        // shrink the rotational bound for the shear dashpot (timestep.h)
+};
+
+struct WorldDef {
+    Vec2 gravity{0.0, -9.81};              // m/s2
+    DampingDef damping;
+    TimeStepDef timestep;
+    RotationDef rotation;
+    FrictionRule friction_rule_disc_disc = FrictionRule::Min;  // PFC default
+    FrictionRule friction_rule_disc_wall = FrictionRule::Max;  // thesis, section 4.3.2
+    double broadphase_margin = 0.0;        // m, pad of the fat boxes; 0 = half the smallest radius
+    double wall_piece_length = 0.05;       // m, walls are cut into pieces this long for the broad phase
+    double joint_tolerance = 1.0e-3;       // m, wall ends closer than this are joined (snapped)
+    double max_overlap_ratio = 0.5;        // -, an overlap beyond this fraction of the smaller radius stops the run
+    Vec2 domain_lo{-1e30, -1e30};          // m, a disc centre leaving [lo, hi] stops the run
+    Vec2 domain_hi{1e30, 1e30};
+};
+
+void validate(const WorldDef& d, const std::string& where);
+
+struct DiscDef {
+    Vec2 pos{0.0, 0.0};                    // m
+    double radius = 0.0;                   // m, > 0
+    Vec2 vel{0.0, 0.0};                    // m/s
+    double omega = 0.0;                    // rad/s, counter-clockwise
+    double angle = 0.0;                    // rad
+    int material = 0;                      // index returned by add_material
+};
+
+// A disc-disc contact candidate (i < j) and its history.
+struct DiscContact {
+    int32_t i, j;
+    double fs;   // shear spring force along t, N (history)
+    double cn;   // normal dashpot coefficient, N s/m
+    double cs;   // shear dashpot coefficient, N s/m
+    float damp_n, damp_s;  // last step's dashpot forces, N (energy ledger only)
+};
+
+// A disc-wall contact candidate and its history.
+struct WallContact {
+    int32_t disc, wall;
+    double fs, cn, cs;
+    float damp_n, damp_s;
+};
+
+// Energies of the current state and what was dissipated so far, J per metre of thickness.
+// Central differences keep velocities at half steps, so the ledger is centred too: kinetic
+// energy from v(t - dt/2), potential energy at t - dt/2 (mean of the last two positions), and
+// a dashpot's work as its force times the mean of the relative velocities before and after
+// the step (the displacement (x(t+dt) - x(t-dt)) / 2 it acts over).
+struct EnergyReport {
+    double kinetic_translation = 0, kinetic_rotation = 0, potential = 0, elastic = 0;
+    double dissipated_contacts = 0;   // dashpots and sliding
+    double dissipated_local = 0;      // local damping
+    double dissipated_rotation = 0;   // rolling resistance and rotational damping
+    double work_by_walls = 0;         // work done on the discs by moving walls
+    double removed_with_walls = 0;    // elastic energy of contacts lost when a wall was removed
+    // Balance: kinetic + potential + elastic + dissipated - work_by_walls should stay constant.
+    double balance() const {
+        return kinetic_translation + kinetic_rotation + potential + elastic + dissipated_contacts +
+               dissipated_local + dissipated_rotation + removed_with_walls - work_by_walls;
+    }
+};
+
+class World {
+public:
+    explicit World(const WorldDef& def = WorldDef{});
+
+    int add_material(const MaterialDef& m);
+    int add_disc(const DiscDef& d);
+    int add_wall(const WallDef& w);
+    // Checks the whole set-up, joins wall ends, builds the broad phase and the first time step.
+    void finalize();
+
+    void step();
+    void run(long steps);
+
+    // --- state (read-only views) ---
+    size_t disc_count() const { return pos_.size(); }
+    size_t wall_count() const { return walls_.size(); }
+    double time() const { return time_; }
+    double dt() const { return dt_; }
+    long step_count() const { return steps_; }
+    const WorldDef& def() const { return def_; }
+
+    const std::vector<Vec2>& positions() const { return pos_; }
+    const std::vector<Vec2>& velocities() const { return vel_; }
+    const std::vector<double>& radii() const { return radius_; }
+    const std::vector<double>& masses() const { return mass_; }
+    const std::vector<double>& angles() const { return angle_; }
+    const std::vector<double>& omegas() const { return omega_; }
+    const std::vector<Vec2>& forces() const { return force_; }   // contact forces of the last step
+    const std::vector<double>& torques() const { return torque_; }
+    const std::vector<DiscContact>& disc_contacts() const { return dd_; }
+    const std::vector<WallContact>& wall_contacts() const { return dw_; }
+    const WallDef& wall_def(int w) const { return walls_[size_t(w)]; }
+    const WallGeom& wall_geom(int w) const { return geom_[size_t(w)]; }
+    bool wall_active(int w) const { return wall_active_[size_t(w)] != 0; }
+
+    // Force (N per metre of thickness) and moment about the origin (N m / m) that the discs
+    // exert on wall w, summed over its contacts in the last step.
+    Vec2 wall_force(int w) const { return wall_force_[size_t(w)]; }
+    double wall_moment(int w) const { return wall_moment_[size_t(w)]; }
+    // Time integral of wall_force since the start, N s / m.
+    Vec2 wall_impulse(int w) const { return wall_impulse_[size_t(w)]; }
+
+    // Number of disc-disc and disc-wall contacts with overlap in the last step.
+    long touching_disc_pairs() const { return touching_dd_; }
+    long touching_wall_pairs() const { return touching_dw_; }
+
+    EnergyReport energy() const;
+    const BroadPhaseStats& broad_phase_stats() const { return broad_.stats(); }
+    double broad_phase_margin() const { return broad_.margin(); }
+
+    // The automatic step for the current contacts (timestep rule, see timestep.h).
+    double automatic_dt() const;
+
+    // --- direct edits (tests, generation); call between steps ---
+    void set_velocity(int i, const Vec2& v) { vel_[size_t(i)] = v; }
+    void set_omega(int i, double w) { omega_[size_t(i)] = w; }
+    void set_position(int i, const Vec2& p) { pos_[size_t(i)] = p; }
+    void set_dt(double dt);  // switches to a fixed step
+    void set_local_damping(double alpha);
+    void set_gravity(const Vec2& g) { def_.gravity = g; }
+
+private:
+    void compute_forces();
+    void integrate();
+    void move_walls();
+    void refresh_contacts();
+    void join_wall_ends();
+    double contact_mass_disc(int i, int j) const;
+
+    WorldDef def_;
+    bool finalized_ = false;
+    double time_ = 0.0, dt_ = 0.0;
+    long steps_ = 0;
+
+    std::vector<MaterialDef> materials_;
+    struct PairMaterial { double kn, ks, mu; };
+    std::vector<PairMaterial> mat_dd_;   // [mi * nm + mj]
+    std::vector<PairMaterial> mat_dw_;   // [mi * nw + w]
+
+    // discs, structure of arrays
+    std::vector<Vec2> pos_, vel_, force_;
+    std::vector<double> radius_, mass_, inv_mass_, inertia_, inv_inertia_, angle_, omega_, torque_;
+    std::vector<int32_t> material_;
+    std::vector<double> rr_factor_;     // Preh-Poisel factor per disc, 1/m (0 without rolling resistance)
+    std::vector<int32_t> n_wall_, n_disc_;
+    std::vector<double> wall_normal_, k_tran_, k_rot_;
+
+    // walls
+    std::vector<WallDef> walls_;
+    std::vector<WallGeom> geom_;
+    std::vector<uint8_t> wall_active_, wall_moving_;
+    std::vector<Vec2> wall_force_, wall_impulse_;
+    std::vector<double> wall_moment_;
+
+    BroadPhase broad_;
+    std::vector<DiscContact> dd_, dd_scratch_;
+    std::vector<WallContact> dw_, dw_scratch_;
+    long touching_dd_ = 0, touching_dw_ = 0;
+
+    // energy ledger
+    double diss_contacts_ = 0, diss_local_ = 0, diss_rotation_ = 0, work_walls_ = 0, removed_walls_ = 0, last_dt_ = 0;
+};
+
+}  // namespace demlab

@@ -1,0 +1,45 @@
+// Small builders shared by the tests.
+#pragma once
+#include <cmath>
+
+#include "error.h"
+#include "world.h"
+
+namespace demlab::test {
+
+inline WallDef segment(Vec2 p0, Vec2 p1, double friction = 0.0, SegmentSolid solid = SegmentSolid::Both) {
+    WallDef w;
+    w.shape = WallShape::Segment;
+    w.p0 = p0;
+    w.p1 = p1;
+    w.friction = friction;
+    w.segment_solid = solid;
+    return w;
+}
+
+inline WallDef arc(Vec2 centre, double radius, double a0_deg, double a1_deg, ArcSolid solid = ArcSolid::Outside,
+                   double friction = 0.0) {
+    WallDef w;
+    w.shape = WallShape::Arc;
+    w.centre = centre;
+    w.radius = radius;
+    w.angle_start_deg = a0_deg;
+    w.angle_end_deg = a1_deg;
+    w.arc_solid = solid;
+    w.friction = friction;
+    return w;
+}
+
+inline MaterialDef material(double friction, double k = 1e8, double density = 2672.0) {
+    MaterialDef m;
+    m.friction = friction;
+    m.kn = k;
+    m.ks = k;
+    m.density = density;
+    return m;
+}
+
+// Restitution coefficient of the linear spring-dashpot for a damping ratio beta.
+inline double restitution(double beta) { return std::exp(-kPi * beta / std::sqrt(1.0 - beta * beta)); }
+
+}  // namespace demlab::test

@@ -1,0 +1,108 @@
+// The broad phase finds every touching pair: its contact set equals a brute-force search.
+#include <gtest/gtest.h>
+
+#include <random>
+#include <set>
+
+#include "helpers.h"
+
+using namespace demlab;
+using namespace demlab::test;
+
+namespace {
+double uniform(std::mt19937_64& rng, double lo, double hi) { return lo + (hi - lo) * double(rng() >> 11) * 0x1.0p-53; }
+
+using PairSet = std::set<std::pair<int, int>>;
+
+PairSet brute_force_discs(const World& w) {
+    PairSet s;
+    const auto& p = w.positions();
+    const auto& r = w.radii();
+    for (size_t i = 0; i < p.size(); ++i)
+        for (size_t j = i + 1; j < p.size(); ++j)
+            if ((p[j] - p[i]).squaredNorm() < (r[i] + r[j]) * (r[i] + r[j])) s.insert({int(i), int(j)});
+    return s;
+}
+
+PairSet engine_discs(const World& w) {
+    PairSet s;
+    const auto& p = w.positions();
+    const auto& r = w.radii();
+    for (const DiscContact& c : w.disc_contacts()) {
+        const size_t i = size_t(c.i), j = size_t(c.j);
+        if ((p[j] - p[i]).squaredNorm() < (r[i] + r[j]) * (r[i] + r[j])) s.insert({c.i, c.j});
+    }
+    return s;
+}
+
+PairSet brute_force_walls(const World& w) {
+    PairSet s;
+    for (size_t i = 0; i < w.disc_count(); ++i)
+        for (int k = 0; k < int(w.wall_count()); ++k) {
+            WallHit hit;
+            if (w.wall_active(k) && disc_wall_contact(w.wall_geom(k), w.positions()[i], w.radii()[i], hit))
+                s.insert({int(i), k});
+        }
+    return s;
+}
+
+PairSet engine_walls(const World& w) {
+    PairSet s;
+    for (const WallContact& c : w.wall_contacts()) {
+        WallHit hit;
+        if (w.wall_active(c.wall) &&
+            disc_wall_contact(w.wall_geom(c.wall), w.positions()[size_t(c.disc)], w.radii()[size_t(c.disc)], hit))
+            s.insert({c.disc, c.wall});
+    }
+    return s;
+}
+}  // namespace
+
+TEST(BroadPhase, ContactSetEqualsBruteForceOnRandomConfigurations) {
+    for (unsigned seed : {1u, 2u, 3u}) {
+        WorldDef def;
+        def.rotation.model = 2;
+        def.rotation.u_rr = 0.0;
+        World w(def);
+        const int m = w.add_material(material(0.3));
+        std::mt19937_64 rng(seed);
+        // dense, random, not overlapping (rejection sampling), flying in all directions
+        std::vector<Vec2> placed;
+        std::vector<double> radii;
+        while (placed.size() < 600) {
+            const double r = uniform(rng, 0.001, 0.003);
+            const Vec2 p(uniform(rng, 0.02, 0.13), uniform(rng, 0.03, 0.15));
+            bool free = true;
+            for (size_t k = 0; k < placed.size() && free; ++k) free = (placed[k] - p).norm() >= r + radii[k];
+            if (!free) continue;
+            placed.push_back(p);
+            radii.push_back(r);
+            w.add_disc({p, r, Vec2(uniform(rng, -2, 2), uniform(rng, -2, 2)), 0, 0, m});
+        }
+        w.add_wall(segment(Vec2(-0.05, 0.02), Vec2(0.3, 0.0), 0.3, SegmentSolid::Right));
+        w.add_wall(arc(Vec2(0.075, 0.35), 0.34, 200, 340, ArcSolid::Outside, 0.3));
+        w.add_wall(segment(Vec2(0.0, 0.3), Vec2(0.0, -0.1), 0.3, SegmentSolid::Right));
+        w.finalize();
+        long touching_seen = 0;
+        for (int round = 0; round < 10; ++round) {
+            w.run(round == 0 ? 1 : 300);
+            const PairSet expect_dd = brute_force_discs(w), got_dd = engine_discs(w);
+            EXPECT_EQ(got_dd, expect_dd) << "seed " << seed << " round " << round;
+            EXPECT_EQ(engine_walls(w), brute_force_walls(w)) << "seed " << seed << " round " << round;
+            touching_seen += long(expect_dd.size());
+        }
+        EXPECT_GT(touching_seen, 100);
+        EXPECT_GT(w.broad_phase_stats().disc_reinserts, 0);  // discs did leave their fat boxes
+    }
+}
+
+TEST(BroadPhase, MarginIsAPowerOfTwoFractionOfTheTreePad) {
+    WorldDef def;
+    def.broadphase_margin = 0.0005;
+    World w(def);
+    const int m = w.add_material(material(0.3));
+    w.add_disc({Vec2(0, 0), 0.001, Vec2::Zero(), 0, 0, m});
+    w.finalize();
+    // 0.1 / 2^k nearest to 0.5 mm: 2^8 -> 0.39 mm
+    EXPECT_NEAR(w.broad_phase_margin(), 0.1 / 256.0, 1e-9);
+}

@@ -1,0 +1,141 @@
+// Balances: energy of an undamped, frictionless system; momentum and angular momentum of free
+// collisions; the energy ledger of a damped, frictional collapse; determinism.
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "db9k.h"
+#include "helpers.h"
+
+using namespace demlab;
+using namespace demlab::test;
+
+namespace {
+double uniform(std::mt19937_64& rng, double lo, double hi) { return lo + (hi - lo) * double(rng() >> 11) * 0x1.0p-53; }
+
+// n discs with random velocities in a closed box of walls (0.2 m x 0.2 m).
+World box_of_discs(int n, double beta, double mu, unsigned seed, bool gravity, bool walls, int model) {
+    WorldDef def;
+    def.damping.beta_n = beta;
+    def.damping.beta_s = beta;
+    def.rotation.model = model;
+    def.rotation.u_rr = 0.0;
+    def.rotation.mu_br = 1.0;
+    if (!gravity) def.gravity = Vec2::Zero();
+    def.timestep.automatic = false;
+    World w(def);
+    const int m = w.add_material(material(mu));
+    std::mt19937_64 rng(seed);
+    std::vector<Vec2> placed;
+    std::vector<double> radii;
+    while (int(placed.size()) < n) {
+        const double r = uniform(rng, 0.004, 0.008);
+        const Vec2 p(uniform(rng, r, 0.2 - r), uniform(rng, r, 0.2 - r));
+        bool free = true;
+        for (size_t k = 0; k < placed.size(); ++k)
+            if ((placed[k] - p).norm() < r + radii[k]) free = false;
+        if (!free) continue;
+        placed.push_back(p);
+        radii.push_back(r);
+        w.add_disc({p, r, Vec2(uniform(rng, -1, 1), uniform(rng, -1, 1)), uniform(rng, -50, 50), 0.0, m});
+    }
+    if (walls) {
+        w.add_wall(segment(Vec2(0, 0), Vec2(0.2, 0), mu, SegmentSolid::Right));
+        w.add_wall(segment(Vec2(0.2, 0), Vec2(0.2, 0.2), mu, SegmentSolid::Right));
+        w.add_wall(segment(Vec2(0.2, 0.2), Vec2(0, 0.2), mu, SegmentSolid::Right));
+        w.add_wall(segment(Vec2(0, 0.2), Vec2(0, 0), mu, SegmentSolid::Right));
+    }
+    w.set_dt(2e-6);
+    w.finalize();
+    return w;
+}
+
+double mechanical_energy(const World& w) {
+    const EnergyReport e = w.energy();
+    return e.kinetic_translation + e.kinetic_rotation + e.potential + e.elastic;
+}
+}  // namespace
+
+TEST(Conservation, UndampedFrictionlessDiscsInABoxKeepTheirEnergy) {
+    World w = box_of_discs(30, 0.0, 0.0, 7, true, true, 2);
+    const double e0 = mechanical_energy(w);
+    long contacts_seen = 0;
+    double worst = 0.0;
+    for (int k = 0; k < 100; ++k) {
+        w.run(1000);  // 100,000 steps in all
+        contacts_seen += w.touching_disc_pairs() + w.touching_wall_pairs();
+        worst = std::max(worst, std::abs(mechanical_energy(w) - e0) / e0);
+    }
+    EXPECT_LT(worst, 1e-3);
+    const EnergyReport e = w.energy();
+    EXPECT_EQ(e.dissipated_contacts, 0.0);
+    EXPECT_GT(contacts_seen, 0);  // the discs did collide
+}
+
+TEST(Conservation, FreeCollisionsConserveMomentumAndAngularMomentum) {
+    // damped, frictional, rotating: internal forces only
+    World w = box_of_discs(40, 0.5, 0.5, 11, false, false, 2);
+    const auto momenta = [&](Vec2& p, double& l) {
+        p = Vec2::Zero();
+        l = 0.0;
+        for (size_t i = 0; i < w.disc_count(); ++i) {
+            const double m = w.masses()[i], r = w.radii()[i];
+            p += m * w.velocities()[i];
+            l += m * cross(w.positions()[i], w.velocities()[i]) + 0.5 * m * r * r * w.omegas()[i];
+        }
+    };
+    Vec2 p0;
+    double l0;
+    momenta(p0, l0);
+    long touching = 0;
+    for (int k = 0; k < 50; ++k) {
+        w.run(200);
+        touching += w.touching_disc_pairs();
+        // every pair's forces are equal and opposite: they sum to zero
+        Vec2 sum = Vec2::Zero();
+        double scale = 0.0;
+        for (const Vec2& f : w.forces()) {
+            sum += f;
+            scale += f.norm();
+        }
+        EXPECT_LE(sum.norm(), 1e-12 * std::max(scale, 1.0));
+    }
+    EXPECT_GT(touching, 0);
+    Vec2 p1;
+    double l1;
+    momenta(p1, l1);
+    double pscale = 0, lscale = 0;
+    for (size_t i = 0; i < w.disc_count(); ++i) {
+        pscale += w.masses()[i] * 1.0;
+        lscale += w.masses()[i] * 0.2 * 1.0;
+    }
+    EXPECT_LT((p1 - p0).norm(), 1e-12 * pscale);
+    EXPECT_LT(std::abs(l1 - l0), 1e-11 * lscale);
+}
+
+TEST(Conservation, EnergyLedgerOfADampedFrictionalCollapseCloses) {
+    for (int model : {1, 2, 3}) {
+        World w = box_of_discs(60, 0.5, 0.4, 3, true, true, model);
+        const double b0 = w.energy().balance();
+        w.run(50000);
+        const EnergyReport e = w.energy();
+        const double dissipated = e.dissipated_contacts + e.dissipated_rotation;
+        EXPECT_GT(dissipated, 0.0);
+        // the ledger closes to 1 % of what moved through it
+        EXPECT_LT(std::abs(e.balance() - b0), 0.01 * dissipated) << "model " << model;
+    }
+}
+
+TEST(Determinism, SameSetUpSameStateHash) {
+    auto discs = read_xyr(default_db9k_path());
+    discs.resize(1500);
+    uint64_t h[2];
+    for (int k = 0; k < 2; ++k) {
+        World w(db9k_world_def());
+        build_db9k(w, discs);
+        w.finalize();
+        w.run(1500);
+        h[k] = state_hash(w);
+    }
+    EXPECT_EQ(h[0], h[1]);
+}

@@ -1,0 +1,89 @@
+// Bad input is refused with a message that names the parameter and the accepted range.
+#include <gtest/gtest.h>
+
+#include <functional>
+#include <limits>
+
+#include "helpers.h"
+
+using namespace demlab;
+using namespace demlab::test;
+
+namespace {
+// Runs f, expects an InputError whose message contains every fragment.
+void expect_refused(const std::function<void()>& f, std::initializer_list<const char*> fragments) {
+    try {
+        f();
+        ADD_FAILURE() << "accepted, expected an InputError";
+    } catch (const InputError& e) {
+        const std::string msg = e.what();
+        for (const char* frag : fragments) EXPECT_NE(msg.find(frag), std::string::npos) << "message: " << msg;
+    }
+}
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+}  // namespace
+
+TEST(Validation, DiscsAndMaterials) {
+    World w;
+    const int m = w.add_material(material(0.3));
+    expect_refused([&] { w.add_disc({Vec2(0, 0), -0.001, Vec2::Zero(), 0, 0, m}); }, {"radius", "must be > 0"});
+    expect_refused([&] { w.add_disc({Vec2(0, 0), 0.0, Vec2::Zero(), 0, 0, m}); }, {"radius", "> 0"});
+    expect_refused([&] { w.add_disc({Vec2(kNaN, 0), 0.001, Vec2::Zero(), 0, 0, m}); }, {"position", "finite"});
+    expect_refused([&] { w.add_disc({Vec2(0, 0), 0.001, Vec2::Zero(), 0, 0, 7}); }, {"material", "no such material"});
+    expect_refused([&] { w.add_material(material(0.3, 1e8, 0.0)); }, {"density", "kg/m3", "> 0"});
+    expect_refused([&] { w.add_material(material(0.3, -1.0)); }, {"kn", "N/m", "> 0"});
+    expect_refused([&] { w.add_material(material(-0.1)); }, {"friction", ">= 0"});
+    expect_refused([&] { w.add_material(material(kNaN)); }, {"friction", "finite"});
+}
+
+TEST(Validation, Walls) {
+    World w;
+    expect_refused([&] { w.add_wall(segment(Vec2(1, 1), Vec2(1, 1))); }, {"zero-length segment"});
+    expect_refused([&] { w.add_wall(arc(Vec2(0, 0), 0.0, 0, 90)); }, {"radius", "> 0"});
+    expect_refused([&] { w.add_wall(arc(Vec2(0, 0), 1.0, 30, 30)); }, {"zero extent", "(0, 360]"});
+    WallDef bad = segment(Vec2(0, 0), Vec2(1, 0));
+    bad.kn = 0.0;
+    expect_refused([&] { w.add_wall(bad); }, {"kn", "> 0"});
+    bad = segment(Vec2(0, 0), Vec2(1, 0), -0.2);
+    expect_refused([&] { w.add_wall(bad); }, {"friction", ">= 0"});
+    bad = segment(Vec2(0, 0), Vec2(1, kNaN));
+    expect_refused([&] { w.add_wall(bad); }, {"p1", "finite"});
+}
+
+TEST(Validation, WorldSettings) {
+    const auto finalize_with = [](const std::function<void(WorldDef&)>& edit) {
+        WorldDef def;
+        edit(def);
+        World w(def);
+        const int m = w.add_material(material(0.3));
+        w.add_disc({Vec2(0, 0), 0.001, Vec2::Zero(), 0, 0, m});
+        w.finalize();
+    };
+    expect_refused([&] { finalize_with([](WorldDef& d) { d.damping.beta_n = 1.0; }); }, {"beta_n", "[0, 1)"});
+    expect_refused([&] { finalize_with([](WorldDef& d) { d.damping.beta_s = -0.1; }); }, {"beta_s", "[0, 1)"});
+    expect_refused([&] { finalize_with([](WorldDef& d) { d.rotation.model = 4; }); }, {"model", "1", "3"});
+    expect_refused([&] { finalize_with([](WorldDef& d) { d.rotation.mu_br = 1.5; }); }, {"mu_br", "[0, 1]"});
+    expect_refused([&] { finalize_with([](WorldDef& d) { d.timestep.safety = 0.0; }); }, {"safety"});
+    expect_refused([&] { finalize_with([](WorldDef& d) { d.gravity = Vec2(0, kNaN); }); }, {"gravity", "finite"});
+}
+
+TEST(BlowUp, TooLargeATimeStepStopsWithADiagnosis) {
+    WorldDef def;
+    def.timestep.automatic = false;
+    def.timestep.fixed = 5e-4;  // ~40 times the critical step
+    World w(def);
+    const int m = w.add_material(material(0.3));
+    w.add_disc({Vec2(0, 0.0011), 0.001, Vec2(0, -2.0), 0, 0, m});
+    w.add_disc({Vec2(0, 0.0035), 0.001, Vec2(0, -2.0), 0, 0, m});
+    w.add_wall(segment(Vec2(-1, 0), Vec2(1, 0), 0.3, SegmentSolid::Right));
+    w.finalize();
+    try {
+        w.run(1000);
+        ADD_FAILURE() << "a run with dt 40x too large did not stop";
+    } catch (const RunError& e) {
+        const std::string msg = e.what();
+        EXPECT_NE(msg.find("time step"), std::string::npos) << msg;
+        EXPECT_NE(msg.find("disc"), std::string::npos) << msg;
+        EXPECT_NE(msg.find("step"), std::string::npos) << msg;
+    }
+}
