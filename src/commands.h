@@ -10,5 +10,7 @@ using Command = std::function<int()>;
 
 Command add_bench_command(CLI::App& app);
 Command add_demo_command(CLI::App& app);
+Command add_run_command(CLI::App& app);
+Command add_keys_command(CLI::App& app);
 
 }  // namespace demlab

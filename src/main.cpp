@@ -16,7 +16,9 @@ int main(int argc, char** argv) {
         Command c = make(app);
         commands.emplace_back(app.get_subcommands([](CLI::App*) { return true; }).back(), std::move(c));
     };
+    add(add_run_command);
     add(add_demo_command);
+    add(add_keys_command);
     add(add_bench_command);
     try {
         app.parse(argc, argv);

@@ -77,6 +77,46 @@ void World::set_dt(double dt) {
     dt_ = dt;
 }
 
+void World::set_radius(int i, double r) {
+    require_positive("disc[" + std::to_string(i) + "].radius", r, "m");
+    const size_t k = size_t(i);
+    const double mass = materials_[size_t(material_[k])].density * kPi * r * r;
+    radius_[k] = r;
+    mass_[k] = mass;
+    inv_mass_[k] = 1.0 / mass;
+    inertia_[k] = 0.5 * mass * r * r;
+    inv_inertia_[k] = 1.0 / inertia_[k];
+    if (!rr_factor_.empty() && def_.rotation.model >= 2 && def_.rotation.u_rr > 0.0)
+        rr_factor_[k] = preh_poisel_factor(r, def_.rotation.u_rr);
+}
+
+void World::refresh_dashpots() {
+    const size_t nm = materials_.size(), nw = walls_.size();
+    for (DiscContact& c : dd_) {
+        const PairMaterial& pm = mat_dd_[size_t(material_[size_t(c.i)]) * nm + size_t(material_[size_t(c.j)])];
+        const double m_eff = contact_mass_disc(c.i, c.j);
+        c.cn = dashpot_coefficient(def_.damping.beta_n, m_eff, pm.kn);
+        c.cs = dashpot_coefficient(def_.damping.beta_s, m_eff, pm.ks);
+    }
+    for (WallContact& c : dw_) {
+        const PairMaterial& pm = mat_dw_[size_t(material_[size_t(c.disc)]) * nw + size_t(c.wall)];
+        c.cn = dashpot_coefficient(def_.damping.beta_n, mass_[size_t(c.disc)], pm.kn);
+        c.cs = dashpot_coefficient(def_.damping.beta_s, mass_[size_t(c.disc)], pm.ks);
+    }
+}
+
+double World::unbalanced_force_ratio() const {
+    double net = 0.0, contact = 0.0;
+    long touching = 0;
+    for (size_t i = 0; i < pos_.size(); ++i) {
+        if (k_tran_[i] == 0.0) continue;  // no contacts
+        ++touching;
+        net += (force_[i] + mass_[i] * def_.gravity).norm();
+        contact += force_[i].norm();
+    }
+    return touching == 0 || contact == 0.0 ? 0.0 : net / contact;
+}
+
 void World::set_local_damping(double alpha) {
     require_range("local_alpha", alpha, 0.0, 1.0, true, "(ratio)");
     def_.damping.local_alpha = alpha;
@@ -387,13 +427,16 @@ void World::compute_forces() {
 
 double World::automatic_dt() const {
     const bool rotation_free = def_.rotation.model != 1;
-    const double phi = def_.timestep.damping_correction ? rotational_damping_factor(def_.damping.beta_s) : 1.0;
+    const bool corr = def_.timestep.damping_correction;
+    const double local = corr ? local_damping_factor(def_.damping.local_alpha) : 1.0;
+    const double phi = local * (corr ? rotational_damping_factor(def_.damping.beta_s) : 1.0);
+    const double phi_t = local * (corr ? translational_damping_factor(def_.damping.beta_n) : 1.0);
     double best = INFINITY;
     for (size_t i = 0; i < pos_.size(); ++i) {
         const MaterialDef& m = materials_[size_t(material_[i])];
         const double kt = k_tran_[i] > 0.0 ? k_tran_[i] : std::max(m.kn, m.ks);
         const double kr = k_rot_[i] > 0.0 ? k_rot_[i] : m.ks;
-        best = std::min(best, critical_step_squared(mass_[i], inertia_[i], radius_[i], kt, kr, rotation_free, phi * phi));
+        best = std::min(best, critical_step_squared(mass_[i], inertia_[i], radius_[i], kt, kr, rotation_free, phi * phi, phi_t * phi_t));
     }
     if (!std::isfinite(best)) return def_.timestep.fixed;  // no discs
     return def_.timestep.safety * std::sqrt(best);

@@ -148,6 +148,12 @@ public:
     void set_omega(int i, double w) { omega_[size_t(i)] = w; }
     void set_position(int i, const Vec2& p) { pos_[size_t(i)] = p; }
     void set_dt(double dt);  // switches to a fixed step
+    // Changes a disc's radius (mass and inertia follow); call refresh_dashpots() after a batch.
+    void set_radius(int i, double r);
+    void refresh_dashpots();
+    // Mean |net force| (contact + gravity) over mean |contact force| of the last step: PFC's
+    // equilibrium ratio (0 when nothing touches).
+    double unbalanced_force_ratio() const;
     void set_local_damping(double alpha);
     void set_gravity(const Vec2& g) { def_.gravity = g; }
 

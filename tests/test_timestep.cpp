@@ -18,7 +18,8 @@ TEST(TimeStep, LoneDiscUsesItsOwnStiffness) {
         w.add_disc({Vec2(0, 0), r, Vec2::Zero(), 0, 0, m});
         w.finalize();
         const double mass = 2672.0 * kPi * r * r, inertia = 0.5 * mass * r * r;
-        double t2 = mass / 1e8;
+        const double phi_t = translational_damping_factor(0.5);
+        double t2 = phi_t * phi_t * mass / 1e8;
         if (model != 1) {
             const double phi = rotational_damping_factor(0.5);
             t2 = std::min(t2, phi * phi * inertia / (1e8 * r * r));
@@ -33,6 +34,7 @@ TEST(TimeStep, SumsTheStiffnessOfCurrentContacts) {
     def.rotation.model = 2;
     def.rotation.u_rr = 0.0;
     def.damping.beta_s = 0.0;  // phi = 1: PFC's rule as printed
+    def.damping.beta_n = 0.0;  // phi_t = 1
     def.timestep.safety = 0.7;
     World w(def);
     const int m = w.add_material(material(0.3, 1e8));
@@ -54,6 +56,8 @@ TEST(TimeStep, SumsTheStiffnessOfCurrentContacts) {
 
 TEST(TimeStep, DampingCorrectionFactor) {
     EXPECT_DOUBLE_EQ(rotational_damping_factor(0.0), 1.0);
+    EXPECT_DOUBLE_EQ(translational_damping_factor(0.0), 1.0);
+    EXPECT_NEAR(translational_damping_factor(0.5), 0.8740, 1e-4);
     // z = sqrt(3) / 2: (2 / sqrt 3)(sqrt(1.75) - 0.866) = 0.5275
     EXPECT_NEAR(rotational_damping_factor(0.5), 0.5275, 1e-4);
 }

@@ -1,0 +1,26 @@
+// Files written whole and atomically: to a temporary name beside the target, then renamed,
+// so a run killed mid-write leaves either the old file or the complete new one.
+#pragma once
+#include <fstream>
+#include <string>
+
+namespace demlab {
+
+void write_file_atomic(const std::string& path, const std::string& content);
+
+// A file written over time (a CSV series): it is written as PATH.part and renamed to PATH
+// by close(), so an unfinished series is never mistaken for a complete one.
+class SeriesFile {
+public:
+    SeriesFile() = default;
+    void open(const std::string& path);
+    std::ofstream& out() { return out_; }
+    void close();
+    bool is_open() const { return out_.is_open(); }
+
+private:
+    std::string path_;
+    std::ofstream out_;
+};
+
+}  // namespace demlab

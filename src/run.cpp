@@ -1,0 +1,327 @@
+#include "run.h"
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <sstream>
+#include <unordered_map>
+
+#include "error.h"
+#include "fileio.h"
+#include "flume.h"
+#include "output_dir.h"
+#include "progress.h"
+#include "release.h"
+#include "snapshot.h"
+#include "world.h"
+
+namespace demlab {
+
+namespace {
+
+// Discs that belong to the mass: those with another disc within r_i + r_j + gap. Lone discs
+// that left the mass (a few bounce ahead) do not count for the front, run-out or run-up.
+std::vector<uint8_t> connected_discs(const World& w, double gap) {
+    const size_t n = w.disc_count();
+    std::vector<uint8_t> ok(n, 0);
+    if (n == 0) return ok;
+    double r_max = 0;
+    for (double r : w.radii()) r_max = std::max(r_max, r);
+    const double cell = 2.0 * r_max + gap;
+    std::unordered_map<long long, std::vector<int>> grid;
+    grid.reserve(n);
+    auto key = [](long long ix, long long iy) { return ix * 2000003LL + iy; };
+    const auto& p = w.positions();
+    for (size_t i = 0; i < n; ++i)
+        grid[key((long long)std::floor(p[i].x() / cell), (long long)std::floor(p[i].y() / cell))].push_back(int(i));
+    for (size_t i = 0; i < n; ++i) {
+        if (ok[i]) continue;
+        const long long ix = (long long)std::floor(p[i].x() / cell), iy = (long long)std::floor(p[i].y() / cell);
+        for (long long dx = -1; dx <= 1 && !ok[i]; ++dx)
+            for (long long dy = -1; dy <= 1 && !ok[i]; ++dy) {
+                auto it = grid.find(key(ix + dx, iy + dy));
+                if (it == grid.end()) continue;
+                for (int j : it->second) {
+                    if (size_t(j) == i) continue;
+                    const double reach = w.radii()[i] + w.radii()[size_t(j)] + gap;
+                    if ((p[size_t(j)] - p[i]).squaredNorm() <= reach * reach) {
+                        ok[i] = 1;
+                        ok[size_t(j)] = 1;
+                        break;
+                    }
+                }
+            }
+    }
+    return ok;
+}
+
+std::string json_number(double v) {
+    if (!std::isfinite(v)) return "null";
+    std::ostringstream o;
+    o.precision(10);
+    o << v;
+    return o.str();
+}
+
+}  // namespace
+
+RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
+    prepare_output_dir(o.out_dir, o.force);
+    const std::string dir = o.out_dir;
+    write_file_atomic(dir + "/scenario.toml", resolved_toml(s));
+    const bool terminal = isatty(STDERR_FILENO) != 0;
+
+    // --- the release mass
+    ReleaseMass mass;
+    if (s.flume.enabled) {
+        if (!s.release.from_file.empty()) {
+            mass = load_release(s.release.from_file);
+        } else {
+            if (terminal) std::fprintf(stderr, "generating the release mass ...\n");
+            mass = generate_release(s);
+        }
+        if (!mass.settled)
+            std::fprintf(stderr, "demlab: warning: the release mass did not reach settle_ratio %.3g within %.3g s (ratio %.3g)\n",
+                         s.release.settle_ratio, s.release.settle_max_time, mass.settle_ratio);
+        save_release(mass, dir + "/release.csv");
+    }
+
+    // --- the world
+    WorldDef def = s.world;
+    // the domain: the walls' and discs' box, padded by 0.5 m; leaving it stops the run
+    Vec2 lo(INFINITY, INFINITY), hi(-INFINITY, -INFINITY);
+    auto grow = [&](const Vec2& p) {
+        lo = lo.cwiseMin(p);
+        hi = hi.cwiseMax(p);
+    };
+    for (const Vec2& p : mass.pos) grow(p);
+    for (const DiscDef& d : s.discs) grow(d.pos);
+    for (const WallDef& wd : s.walls) {
+        grow(wd.shape == WallShape::Segment ? wd.p0 : wd.centre - Vec2(wd.radius, wd.radius));
+        grow(wd.shape == WallShape::Segment ? wd.p1 : wd.centre + Vec2(wd.radius, wd.radius));
+    }
+    if (s.flume.enabled)
+        for (const Vec2& p : {s.flume.w1_p0, s.flume.w1_p1, s.flume.w3_p0, s.flume.w3_p1}) grow(p);
+    def.domain_lo = lo - Vec2(0.5, 0.5);
+    def.domain_hi = hi + Vec2(0.5, 0.5);
+    World w(def);
+    const int mat = w.add_material(s.disc);
+    std::vector<int> layer, grid;
+    for (size_t i = 0; i < mass.pos.size(); ++i) {
+        w.add_disc({mass.pos[i], mass.radius[i], Vec2::Zero(), 0.0, 0.0, mat});
+        layer.push_back(mass.layer[i]);
+        grid.push_back(mass.grid[i]);
+    }
+    for (const DiscDef& d : s.discs) {
+        DiscDef dd = d;
+        dd.material = mat;
+        w.add_disc(dd);
+        layer.push_back(0);
+        grid.push_back(0);
+    }
+    if (s.flume.enabled)
+        for (const WallDef& wd : flume_walls(s, false)) w.add_wall(wd);
+    for (WallDef wd : s.walls) w.add_wall(wd);
+    w.finalize();
+    const size_t n = w.disc_count();
+    if (n == 0) throw InputError(s.source + ": the scenario has no discs");
+    for (long id : s.output.track)
+        if (id >= long(n)) throw InputError(s.source + ": output.track: disc id " + std::to_string(id) + " does not exist (" + std::to_string(n) + " discs)");
+    const std::vector<Vec2> start_pos = w.positions();
+
+    std::unique_ptr<FlumePath> path;
+    if (s.flume.enabled) path = std::make_unique<FlumePath>(w.wall_geom(kW1), w.wall_geom(kW2), w.wall_geom(kW3));
+    double r_max = 0, total_mass = 0;
+    for (size_t i = 0; i < n; ++i) {
+        r_max = std::max(r_max, w.radii()[i]);
+        total_mass += w.masses()[i];
+    }
+    const double gap = s.output.front_neighbour_gap > 0 ? s.output.front_neighbour_gap : r_max;
+
+    // --- output files
+    SeriesFile forces, front, energy, track;
+    forces.open(dir + "/forces.csv");
+    forces.out() << "t,fx_slope,fy_slope,fx_arc,fy_arc,fx_barrier,fy_barrier,fx_total,fy_total,"
+                    "ix_slope,iy_slope,ix_arc,iy_arc,ix_barrier,iy_barrier,ix_total,iy_total,fx_gate,fy_gate,ix_gate,iy_gate\n";
+    energy.open(dir + "/energy.csv");
+    energy.out() << "t,kinetic_translation,kinetic_rotation,potential,elastic,dissipated_contacts,dissipated_local,"
+                    "dissipated_rotation,work_by_walls,removed_with_walls,balance\n";
+    if (path) {
+        front.open(dir + "/front.csv");
+        front.out() << "t,s_front,displacement\n";
+    }
+    if (!s.output.track.empty()) {
+        track.open(dir + "/track.csv");
+        track.out() << "t,id,x,y,vx,vy,angle,omega\n";
+    }
+    std::unique_ptr<SnapshotWriter> snaps;
+    if (s.output.snapshot_interval > 0) snaps = std::make_unique<SnapshotWriter>(dir + "/snapshots", layer, grid);
+
+    RunSummary sum;
+    sum.n_discs = long(n);
+    sum.total_mass = total_mass;
+    sum.porosity = s.flume.enabled ? mass.porosity_settled : -1.0;
+    sum.dt_min = INFINITY;
+    double peak_fx_barrier = -1, peak_fy_arc = -1, peak_ke = 0, rest_since = -1;
+    const double e0 = w.energy().balance();
+    double next_series = 0.0, next_snap = 0.0;
+    Progress progress(s.stop.t_max);
+    const auto t0 = std::chrono::steady_clock::now();
+
+    auto sample = [&]() {
+        const double t = w.time();
+        Vec2 f[3] = {Vec2::Zero(), Vec2::Zero(), Vec2::Zero()}, imp[3] = {Vec2::Zero(), Vec2::Zero(), Vec2::Zero()};
+        if (path)
+            for (int k = 0; k < 3; ++k) {
+                f[k] = w.wall_force(k);
+                imp[k] = w.wall_impulse(k);
+            }
+        const Vec2 ft = f[0] + f[1] + f[2], it = imp[0] + imp[1] + imp[2];
+        std::ostream& fo = forces.out();
+        fo << t;
+        for (const Vec2& v : {f[0], f[1], f[2], ft, imp[0], imp[1], imp[2], it}) fo << ',' << v.x() << ',' << v.y();
+        const Vec2 fg = path ? w.wall_force(kGate) : Vec2::Zero(), ig = path ? w.wall_impulse(kGate) : Vec2::Zero();
+        fo << ',' << fg.x() << ',' << fg.y() << ',' << ig.x() << ',' << ig.y() << '\n';
+        if (std::abs(f[2].x()) > peak_fx_barrier) {
+            peak_fx_barrier = std::abs(f[2].x());
+            sum.t_peak_fx_barrier = t;
+        }
+        if (std::abs(f[1].y()) > peak_fy_arc) {
+            peak_fy_arc = std::abs(f[1].y());
+            sum.t_peak_fy_arc = t;
+        }
+        const EnergyReport e = w.energy();
+        energy.out() << t << ',' << e.kinetic_translation << ',' << e.kinetic_rotation << ',' << e.potential << ','
+                     << e.elastic << ',' << e.dissipated_contacts << ',' << e.dissipated_local << ','
+                     << e.dissipated_rotation << ',' << e.work_by_walls << ',' << e.removed_with_walls << ','
+                     << e.balance() << '\n';
+        if (path) {
+            const auto conn = connected_discs(w, gap);
+            double s_front = -INFINITY, disp = 0, runup = 0;
+            for (size_t i = 0; i < n; ++i) {
+                if (!conn[i]) continue;
+                double si, hi_;
+                path->project(w.positions()[i], si, hi_);
+                if (si > s_front) {
+                    s_front = si;
+                    disp = (w.positions()[i] - start_pos[i]).norm();
+                }
+                if (si > path->s_barrier_start())
+                    runup = std::max(runup, w.positions()[i].y() + w.radii()[i] - path->barrier_foot().y());
+            }
+            front.out() << t << ',' << s_front << ',' << disp << '\n';
+            sum.max_runup_height_during_run = std::max(sum.max_runup_height_during_run, runup);
+            if (sum.t_front_at_barrier < 0 && s_front >= path->s_barrier_start()) sum.t_front_at_barrier = t;
+        }
+        for (long id : s.output.track) {
+            const size_t i = size_t(id);
+            track.out() << t << ',' << id << ',' << w.positions()[i].x() << ',' << w.positions()[i].y() << ','
+                        << w.velocities()[i].x() << ',' << w.velocities()[i].y() << ',' << w.angles()[i] << ','
+                        << w.omegas()[i] << '\n';
+        }
+    };
+
+    sum.stop_reason = "t_max";
+    while (true) {
+        if (w.time() >= next_series - 1e-12) {
+            sample();
+            next_series += s.output.series_interval;
+        }
+        if (snaps && w.time() >= next_snap - 1e-12) {
+            snaps->write(w);
+            next_snap += s.output.snapshot_interval;
+        }
+        if (w.time() >= s.stop.t_max) break;
+        w.step();
+        sum.dt_min = std::min(sum.dt_min, w.dt());
+        sum.dt_max = std::max(sum.dt_max, w.dt());
+        if (w.step_count() % 10 == 0) {
+            double ke = 0;
+            for (size_t i = 0; i < n; ++i) ke += 0.5 * w.masses()[i] * w.velocities()[i].squaredNorm();
+            if (s.world.rotation.model != 1)
+                for (size_t i = 0; i < n; ++i)
+                    ke += 0.25 * w.masses()[i] * w.radii()[i] * w.radii()[i] * w.omegas()[i] * w.omegas()[i];
+            peak_ke = std::max(peak_ke, ke);
+            if (ke < s.stop.rest_ke_fraction * peak_ke) {
+                if (rest_since < 0) rest_since = w.time();
+                if (w.time() - rest_since >= s.stop.rest_duration) {
+                    sum.stop_reason = "rest";
+                    break;
+                }
+            } else {
+                rest_since = -1;
+            }
+            progress.update(w.time(), w.step_count());
+        }
+    }
+    progress.finish();
+    sample();
+    if (snaps) {
+        if (std::abs(w.time() - (next_snap - s.output.snapshot_interval)) > 1e-12) snaps->write(w);
+        snaps->finish();
+    }
+    sum.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    sum.steps = w.step_count();
+    sum.t_end = w.time();
+    sum.dt = w.dt();
+    sum.particle_steps_per_second = double(n) * double(sum.steps) / std::max(sum.wall_seconds, 1e-9);
+    const EnergyReport e = w.energy();
+    const double dissipated = e.dissipated_contacts + e.dissipated_local + e.dissipated_rotation;
+    sum.energy_balance_error = dissipated > 0 ? std::abs(e.balance() - e0) / dissipated : 0.0;
+    forces.close();
+    energy.close();
+    front.close();
+    track.close();
+
+    // --- the deposit
+    if (path) {
+        const auto conn = connected_discs(w, gap);
+        const int bins = int(std::ceil(path->length() / s.output.deposit_bin)) + 1;
+        std::vector<double> top(size_t(bins), 0.0);
+        for (size_t i = 0; i < n; ++i) {
+            if (!conn[i]) continue;
+            double si, hi_;
+            path->project(w.positions()[i], si, hi_);
+            sum.runout_s = std::max(sum.runout_s, si + w.radii()[i]);
+            const int b = int(std::floor(si / s.output.deposit_bin + 0.5));
+            if (b >= 0 && b < bins) top[size_t(b)] = std::max(top[size_t(b)], hi_ + w.radii()[i]);
+            if (si > path->s_barrier_start())
+                sum.runup_height = std::max(sum.runup_height, w.positions()[i].y() + w.radii()[i] - path->barrier_foot().y());
+        }
+        std::ostringstream d;
+        d << "s_m,height_m\n";
+        for (int b = 0; b < bins; ++b) d << b * s.output.deposit_bin << ',' << top[size_t(b)] << '\n';
+        write_file_atomic(dir + "/deposit.csv", d.str());
+    }
+
+    std::ostringstream j;
+    j << "{\n"
+      << "  \"scenario\": \"" << s.name << "\",\n"
+      << "  \"n_discs\": " << sum.n_discs << ",\n"
+      << "  \"total_mass\": " << json_number(sum.total_mass) << ",\n"
+      << "  \"porosity\": " << json_number(sum.porosity) << ",\n"
+      << "  \"release_porosity_generated\": " << json_number(s.flume.enabled ? mass.porosity_generated : NAN) << ",\n"
+      << "  \"release_settle_time\": " << json_number(s.flume.enabled ? mass.settle_time : NAN) << ",\n"
+      << "  \"release_wall_seconds\": " << json_number(s.flume.enabled ? mass.wall_seconds : NAN) << ",\n"
+      << "  \"dt\": " << json_number(sum.dt) << ",\n"
+      << "  \"dt_min\": " << json_number(sum.dt_min) << ",\n"
+      << "  \"dt_max\": " << json_number(sum.dt_max) << ",\n"
+      << "  \"steps\": " << sum.steps << ",\n"
+      << "  \"t_end\": " << json_number(sum.t_end) << ",\n"
+      << "  \"stop_reason\": \"" << sum.stop_reason << "\",\n"
+      << "  \"wall_seconds\": " << json_number(sum.wall_seconds) << ",\n"
+      << "  \"particle_steps_per_second\": " << json_number(sum.particle_steps_per_second) << ",\n"
+      << "  \"runout_s\": " << json_number(sum.runout_s) << ",\n"
+      << "  \"runup_height\": " << json_number(sum.runup_height) << ",\n"
+      << "  \"max_runup_height_during_run\": " << json_number(sum.max_runup_height_during_run) << ",\n"
+      << "  \"t_front_at_barrier\": " << json_number(sum.t_front_at_barrier) << ",\n"
+      << "  \"t_peak_fx_barrier\": " << json_number(sum.t_peak_fx_barrier) << ",\n"
+      << "  \"t_peak_fy_arc\": " << json_number(sum.t_peak_fy_arc) << ",\n"
+      << "  \"energy_balance_error\": " << json_number(sum.energy_balance_error) << "\n"
+      << "}\n";
+    write_file_atomic(dir + "/summary.json", j.str());
+    return sum;
+}
+
+}  // namespace demlab

@@ -1,0 +1,28 @@
+// Snapshots of a run as VTK XML PolyData (.vtp), one file for the discs and one for the
+// walls per instant, indexed by ParaView collections (discs.pvd, walls.pvd). Discs are points
+// with radius, velocity, angle, omega, speed, layer, grid and id; open them in ParaView with
+// "Point Gaussian" scaled by radius. The same files are what `demlab render` replays.
+#pragma once
+#include <string>
+#include <vector>
+
+#include "world.h"
+
+namespace demlab {
+
+class SnapshotWriter {
+public:
+    // dir is created; layer and grid are per-disc colour tags (may be empty).
+    SnapshotWriter(std::string dir, std::vector<int> layer, std::vector<int> grid);
+    void write(const World& w);
+    // Writes the .pvd collections (call at the end; also safe to call repeatedly).
+    void finish();
+    int count() const { return int(times_.size()); }
+
+private:
+    std::string dir_;
+    std::vector<int> layer_, grid_;
+    std::vector<double> times_;
+};
+
+}  // namespace demlab

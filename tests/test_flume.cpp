@@ -1,0 +1,161 @@
+// The flume study end to end at scale 20 (364 discs), and a hand-checkable explicit scenario.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "error.h"
+#include "run.h"
+#include "scenario.h"
+
+using namespace demlab;
+namespace fs = std::filesystem;
+
+namespace {
+std::string read(const fs::path& p) {
+    std::ifstream in(p);
+    std::stringstream b;
+    b << in.rdbuf();
+    return b.str();
+}
+
+std::vector<std::vector<double>> read_csv(const fs::path& p) {
+    std::ifstream in(p);
+    std::string line;
+    std::getline(in, line);  // header
+    std::vector<std::vector<double>> rows;
+    while (std::getline(in, line)) {
+        std::vector<double> row;
+        std::stringstream s(line);
+        std::string cell;
+        while (std::getline(s, cell, ',')) row.push_back(std::stod(cell));
+        rows.push_back(row);
+    }
+    return rows;
+}
+
+fs::path temp_dir(const std::string& name) {
+    const fs::path p = fs::temp_directory_path() / ("demlab-test-" + name + "-" + std::to_string(::getpid()));
+    fs::remove_all(p);
+    return p;
+}
+
+struct FlumeRun {
+    RunSummary summary;
+    fs::path dir;
+};
+
+FlumeRun run_geometry_a(const std::string& tag) {
+    Scenario s = load_scenario(std::string(DEMLAB_SOURCE_DIR) + "/scenarios/geometry-A.toml");
+    apply_override(s, "release.scale=20");
+    apply_override(s, "output.snapshot_interval=0.5");
+    finish_scenario(s);
+    FlumeRun r;
+    r.dir = temp_dir(tag);
+    r.summary = run_scenario(s, {r.dir.string(), false});
+    return r;
+}
+}  // namespace
+
+class GeometryA20 : public ::testing::Test {
+protected:
+    static void SetUpTestSuite() { first_ = new FlumeRun(run_geometry_a("a20")); }
+    static void TearDownTestSuite() {
+        fs::remove_all(first_->dir);
+        delete first_;
+    }
+    static FlumeRun* first_;
+};
+FlumeRun* GeometryA20::first_ = nullptr;
+
+TEST_F(GeometryA20, RunsFromGenerationToRestWithNoDiscLost) {
+    const RunSummary& s = first_->summary;
+    EXPECT_EQ(s.n_discs, 364);
+    EXPECT_EQ(s.stop_reason, "rest");
+    // reached the barrier, stopped on the flume
+    EXPECT_GT(s.t_front_at_barrier, 0.0);
+    EXPECT_GT(s.runup_height, 0.05);
+    for (const char* f : {"scenario.toml", "release.csv", "forces.csv", "front.csv", "energy.csv", "deposit.csv",
+                          "summary.json", "snapshots/discs.pvd", "snapshots/walls.pvd"})
+        EXPECT_TRUE(fs::exists(first_->dir / f)) << f;
+    EXPECT_LT(s.energy_balance_error, 0.01);
+}
+
+TEST_F(GeometryA20, AtRestTheWallsCarryTheWeight) {
+    const auto rows = read_csv(first_->dir / "forces.csv");
+    const auto& last = rows.back();
+    const double weight = first_->summary.total_mass * 9.81;
+    // fy_total (column 8): force of the discs on W1 + W2 + W3; the gate has gone
+    EXPECT_NEAR(-last[8], weight, 0.01 * weight);
+}
+
+TEST_F(GeometryA20, WallImpulsesBalanceGravityOverTheRun) {
+    // from rest to rest: the walls' impulse on the mass cancels gravity's, m g t_end
+    const auto rows = read_csv(first_->dir / "forces.csv");
+    const auto& last = rows.back();
+    const double t = last[0], weight = first_->summary.total_mass * 9.81;
+    const double ix = last[15] + last[19], iy = last[16] + last[20];  // W1..W3 plus the gate
+    EXPECT_NEAR(iy, -weight * t, 0.01 * weight * t);
+    EXPECT_NEAR(ix, 0.0, 0.01 * weight * t);
+}
+
+TEST_F(GeometryA20, SameSeedGivesIdenticalFiles) {
+    const FlumeRun again = run_geometry_a("a20-again");
+    for (const char* f : {"release.csv", "forces.csv", "front.csv", "energy.csv", "deposit.csv", "snapshots/discs_00001.vtp"})
+        EXPECT_EQ(read(first_->dir / f), read(again.dir / f)) << f;
+    fs::remove_all(again.dir);
+}
+
+TEST(ExplicitScenario, TracerFallsFreely) {
+    const std::string text = R"(
+[scenario]
+name = "free-fall"
+[timestep]
+automatic = false
+fixed = 1e-5
+[stop]
+t_max = 0.3
+rest_duration = 0.1
+[output]
+series_interval = 0.01
+snapshot_interval = 0
+track = [0]
+[[discs]]
+position = [0.0, 1.0]
+radius = 0.01
+velocity = [0.5, 0.0]
+[[walls]]
+type = "segment"
+start = [-1.0, -5.0]
+end = [1.0, -5.0]
+)";
+    Scenario s = parse_scenario(text, "free-fall.toml");
+    finish_scenario(s);
+    const fs::path dir = temp_dir("freefall");
+    const RunSummary r = run_scenario(s, {dir.string(), false});
+    EXPECT_EQ(r.stop_reason, "t_max");
+    const auto rows = read_csv(dir / "track.csv");
+    ASSERT_GT(rows.size(), 20u);
+    for (const auto& row : rows) {
+        const double t = row[0];
+        // central differences with v(dt/2) = v0 + g dt: x = x0 + vx t, y = y0 - g t (t + dt) / 2
+        EXPECT_NEAR(row[2], 0.5 * t, 1e-9);
+        EXPECT_NEAR(row[3], 1.0 - 0.5 * 9.81 * t * (t + 1e-5), 1e-9);
+        // the initial velocity stands at t = -dt/2 (PFC), so v(t - dt/2) = v0 - g t
+        EXPECT_NEAR(row[5], -9.81 * t, 1e-9);
+    }
+    fs::remove_all(dir);
+}
+
+TEST(ExplicitScenario, ExistingOutputFolderIsNotOverwritten) {
+    const fs::path dir = temp_dir("exists");
+    fs::create_directories(dir);
+    std::ofstream(dir / "mine.txt") << "keep";
+    Scenario s = parse_scenario("[[discs]]\nposition = [0, 0]\nradius = 0.01\n[stop]\nt_max = 0.01\nrest_duration = 0.001\n", "x.toml");
+    finish_scenario(s);
+    EXPECT_THROW(run_scenario(s, {dir.string(), false}), InputError);
+    EXPECT_EQ(read(dir / "mine.txt"), "keep");
+    fs::remove_all(dir);
+}
