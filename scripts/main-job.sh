@@ -1,9 +1,14 @@
 #!/usr/bin/env bash
-# Installs the dependencies, builds demlab and runs the main job into runs/.
-# usage: scripts/main-job.sh [OUT_DIR]   (default runs/demo; an existing folder is refused)
+# Installs the dependencies, builds demlab and runs the main job: flume geometry A of the
+# thesis (scale 4, 9,099 discs, Model 3, Variant II) from the release to rest.
+# usage: scripts/main-job.sh [OUT_DIR] [extra demlab run options]
+#   default OUT_DIR runs/geometry-A; an existing folder is refused (give another, or --force)
+#   a quick look: scripts/main-job.sh runs/geometry-A-20 --scale 20   (364 discs, seconds)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/install-deps.sh
 cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
 cmake --build build -j "$(nproc)"
-./build/demlab demo --out "${1:-runs/demo}"
+out="${1:-runs/geometry-A}"
+shift || true
+./build/demlab run scenarios/geometry-A.toml --out "$out" "$@"

@@ -226,6 +226,8 @@ void save_release(const ReleaseMass& m, const std::string& path) {
       << "\n# settle_time_s " << m.settle_time << "\n# settle_steps " << m.settle_steps << "\n# settle_ratio "
       << m.settle_ratio << "\n# settled " << (m.settled ? 1 : 0) << "\n# lid_load_fraction " << m.lid_load_fraction
       << "\n";
+    for (const auto& w : m.box_walls)
+        o << "# wall " << w[0].x() << ' ' << w[0].y() << ' ' << w[1].x() << ' ' << w[1].y() << '\n';
     o << "id,x_m,y_m,r_m,layer,grid\n";
     for (size_t i = 0; i < m.pos.size(); ++i)
         o << i << ',' << m.pos[i].x() << ',' << m.pos[i].y() << ',' << m.radius[i] << ',' << m.layer[i] << ','
@@ -247,6 +249,14 @@ ReleaseMass load_release(const std::string& path) {
             std::istringstream h(line.substr(1));
             std::string k;
             double v = 0;
+            if (line.rfind("# wall ", 0) == 0) {
+                double x0, y0, x1, y1;
+                std::istringstream wl(line.substr(7));
+                if (!(wl >> x0 >> y0 >> x1 >> y1))
+                    throw InputError(path + ":" + std::to_string(lineno) + ": expected '# wall x0 y0 x1 y1'");
+                m.box_walls.push_back({Vec2(x0, y0), Vec2(x1, y1)});
+                continue;
+            }
             if (h >> k >> v) {
                 if (k == "box_area_m2") m.box_area = v;
                 else if (k == "porosity_target") m.porosity_target = v;

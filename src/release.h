@@ -3,6 +3,7 @@
 // and the mass settles under gravity. The count follows PFC's radius-expansion rule,
 // N = A (1 - n) / (pi R_mean^2), which gives the thesis' 9,099 (scale 4), 36,403 (2) and 364 (20).
 #pragma once
+#include <array>
 #include <string>
 #include <vector>
 
@@ -23,7 +24,8 @@ struct ReleaseMass {
     long settle_steps = 0;
     double settle_ratio = 0;       // final unbalanced-force ratio
     bool settled = false;
-    double lid_load_fraction = 0;  // load on the lid / weight at the end of the frictionless phase
+    double lid_load_fraction = 0;
+    std::vector<std::array<Vec2, 2>> box_walls;  // W1, gate, lid the mass settled against  // load on the lid / weight at the end of the frictionless phase
     double wall_seconds = 0;
 };
 

@@ -14,6 +14,7 @@
 #include "progress.h"
 #include "release.h"
 #include "snapshot.h"
+#include "validate.h"
 #include "world.h"
 
 namespace demlab {
@@ -77,9 +78,27 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
     if (s.flume.enabled) {
         if (!s.release.from_file.empty()) {
             mass = load_release(s.release.from_file);
+            // a mass settled against other walls (another geometry's W1 differs by ~0.1 mm at
+            // the box) would start with overlaps of tens of micrometres: kilonewtons per disc
+            const auto walls = flume_walls(s, true);
+            const Vec2 here[3][2] = {{walls[kW1].p0, walls[kW1].p1}, {walls[kGate].p0, walls[kGate].p1},
+                                     {walls[kLid].p0, walls[kLid].p1}};
+            if (mass.box_walls.size() != 3)
+                throw InputError(s.release.from_file + ": no '# wall' lines: not a release mass written by demlab run");
+            for (int k = 0; k < 3; ++k)
+                for (int e = 0; e < 2; ++e)
+                    if ((mass.box_walls[size_t(k)][size_t(e)] - here[k][e]).norm() > 1e-6)
+                        throw InputError(s.release.from_file + ": the mass was settled against other walls (" +
+                                         std::string(k == 0 ? "W1" : (k == 1 ? "gate" : "lid")) + " differs by " +
+                                         format_number((mass.box_walls[size_t(k)][size_t(e)] - here[k][e]).norm()) +
+                                         " m): it fits another geometry. Generate it for this scenario (omit --release-from)");
         } else {
             if (terminal) std::fprintf(stderr, "generating the release mass ...\n");
             mass = generate_release(s);
+        }
+        {
+            const auto walls = flume_walls(s, true);
+            mass.box_walls = {{walls[kW1].p0, walls[kW1].p1}, {walls[kGate].p0, walls[kGate].p1}, {walls[kLid].p0, walls[kLid].p1}};
         }
         if (!mass.settled)
             std::fprintf(stderr, "demlab: warning: the release mass did not reach settle_ratio %.3g within %.3g s (ratio %.3g)\n",
