@@ -238,7 +238,7 @@ const std::vector<Key>& registry() {
         k.push_back(real("release.radius_reduction", "-", "fraction all radii shrink by after generation (thesis: 0.03)", [](Scenario& s) -> double& { return s.release.radius_reduction; }, 0, 0.5));
         k.push_back(text("release.variant", "I: the gate is deleted at t = 0; II: the gate is lifted at gate_speed", [](Scenario& s) -> std::string& { return s.release.variant; }, {"I", "II"}));
         k.push_back(real("release.gate_speed", "m/s", "lifting speed of the gate, Variant II (lab: 2.25)", [](Scenario& s) -> double& { return s.release.gate_speed; }, 0, 100, true));
-        k.push_back(real("release.settle_alpha", "-", "local damping while the mass settles", [](Scenario& s) -> double& { return s.release.settle_alpha; }, 0, 1, false, true));
+        k.push_back(real("release.settle_alpha", "-", "local damping while the mass compacts without friction (the frictional phase settles on the dashpots alone)", [](Scenario& s) -> double& { return s.release.settle_alpha; }, 0, 1, false, true));
         k.push_back(real("release.settle_ratio", "-", "settled when mean |unbalanced force| / mean |contact force| falls below this", [](Scenario& s) -> double& { return s.release.settle_ratio; }, 0, 1, true));
         k.push_back(real("release.settle_max_time", "s", "simulated settling time at most (the run refuses a mass that did not settle)", [](Scenario& s) -> double& { return s.release.settle_max_time; }, 0, 100, true));
         k.push_back(real("release.layer_height", "m", "height of the horizontal colour bands (layers)", [](Scenario& s) -> double& { return s.release.layer_height; }, 0, 10, true));

@@ -31,8 +31,8 @@ struct ReleaseDef {
     double radius_reduction = 0.03;        // fraction by which all radii shrink after generation
     std::string variant = "II";            // I: gate deleted at t = 0; II: gate lifted at gate_speed
     double gate_speed = 2.25;              // m/s, Variant II
-    double settle_alpha = 0.7;             // local damping while settling
-    double settle_ratio = 1e-4;            // settled when mean |unbalanced force| / mean |contact force| < this
+    double settle_alpha = 0.7;             // local damping while settling (frictionless phase)
+    double settle_ratio = 5e-4;            // settled when mean |unbalanced force| / mean |contact force| < this
     double settle_max_time = 1.5;          // s of simulated settling at most
     double layer_height = 0.03;            // m, height of the colour bands (layers)
     double grid_cell = 0.05;               // m, size of the colour grid cells
