@@ -8,6 +8,10 @@
 #include "commands.h"
 #include "error.h"
 #include "run.h"
+#include "frame.h"
+#include "image.h"
+#include "plot.h"
+#include "render_run.h"
 #include "scenario.h"
 
 namespace demlab {
@@ -22,6 +26,8 @@ struct RunCliOptions {
     std::vector<std::string> set;
     std::string release_from;
     bool force = false;
+    bool frames = false;
+    bool no_plots = false;
 };
 
 int run_command(const RunCliOptions& o) {
@@ -35,6 +41,7 @@ int run_command(const RunCliOptions& o) {
     RunOptions ro;
     ro.out_dir = o.out.empty() ? "runs/" + s.name : o.out;
     ro.force = o.force;
+    if (o.frames) attach_frame_hook(ro, s.flume.enabled);
     const RunSummary r = run_scenario(s, ro);
     std::printf("%s: %ld discs, model %d, variant %s, %ld steps to t = %.3f s (%s), dt %.3g-%.3g s\n", s.name.c_str(),
                 r.n_discs, s.world.rotation.model, s.release.variant.c_str(), r.steps, r.t_end, r.stop_reason.c_str(),
@@ -48,6 +55,14 @@ int run_command(const RunCliOptions& o) {
     }
     std::printf("  energy ledger closes to %.2f %% of the dissipated energy\n", 100.0 * r.energy_balance_error);
     std::printf("  wrote %s/\n", ro.out_dir.c_str());
+    if (!o.no_plots) {
+        if (gnuplot_available()) {
+            make_plots(ro.out_dir);
+            std::printf("  plots in %s/plots/\n", ro.out_dir.c_str());
+        } else {
+            std::printf("  no plots: gnuplot is not installed (apt-get install gnuplot-nox)\n");
+        }
+    }
     return kExitOk;
 }
 }  // namespace
@@ -66,6 +81,8 @@ Command add_run_command(CLI::App& app) {
     sub->add_option("--set", o->set, "Override a scenario key: --set key=value (repeatable), e.g. --set material.friction_disc_deg=16");
     sub->add_option("--release-from", o->release_from, "Start from a settled release mass (release.csv of an earlier run)");
     sub->add_flag("--force", o->force, "Replace the files of an existing output folder");
+    sub->add_flag("--frames", o->frames, "Render a PNG frame at every snapshot while running (RUN_DIR/frames)");
+    sub->add_flag("--no-plots", o->no_plots, "Do not make the plots (RUN_DIR/plots) at the end");
     return [o] { return run_command(*o); };
 }
 

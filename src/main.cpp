@@ -17,6 +17,8 @@ int main(int argc, char** argv) {
         commands.emplace_back(app.get_subcommands([](CLI::App*) { return true; }).back(), std::move(c));
     };
     add(add_run_command);
+    add(add_render_command);
+    add(add_plot_command);
     add(add_demo_command);
     add(add_keys_command);
     add(add_bench_command);

@@ -211,12 +211,11 @@ ReleaseMass generate_release(const Scenario& s) {
     m.porosity_settled = 1.0 - solid_settled / m.box_area;
     m.layer.resize(m.pos.size());
     m.grid.resize(m.pos.size());
-    const int nx = int(std::ceil((tri.b - tri.a).norm() / rd.grid_cell)) + 2;
     for (size_t i = 0; i < m.pos.size(); ++i) {
         m.layer[i] = int(std::floor((m.pos[i].y() - y_min) / rd.layer_height));
         const int gx = int(std::floor((m.pos[i].x() - lo.x()) / rd.grid_cell));
         const int gy = int(std::floor((m.pos[i].y() - lo.y()) / rd.grid_cell));
-        m.grid[i] = gy * nx + gx;
+        m.grid[i] = gy * 1000 + gx;  // the renderer decodes the cell as (grid % 1000, grid / 1000)
     }
     m.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     return m;

@@ -249,6 +249,7 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
         }
         if (snaps && w.time() >= next_snap - 1e-12) {
             snaps->write(w);
+            if (o.on_snapshot) o.on_snapshot(snaps->last_discs(), snaps->last_walls(), snaps->count() - 1);
             next_snap += s.output.snapshot_interval;
         }
         if (w.time() >= s.stop.t_max) break;
@@ -277,7 +278,10 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
     progress.finish();
     sample();
     if (snaps) {
-        if (std::abs(w.time() - (next_snap - s.output.snapshot_interval)) > 1e-12) snaps->write(w);
+        if (std::abs(w.time() - (next_snap - s.output.snapshot_interval)) > 1e-12) {
+            snaps->write(w);
+            if (o.on_snapshot) o.on_snapshot(snaps->last_discs(), snaps->last_walls(), snaps->count() - 1);
+        }
         snaps->finish();
     }
     sum.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

@@ -3,6 +3,7 @@
 //   scenario.toml (resolved), release.csv, forces.csv, front.csv, energy.csv, track.csv,
 //   deposit.csv, summary.json, snapshots/ (VTK).
 #pragma once
+#include <functional>
 #include <string>
 
 #include "scenario.h"
@@ -12,6 +13,8 @@ namespace demlab {
 struct RunOptions {
     std::string out_dir;
     bool force = false;     // replace the files of an existing folder
+    // called after each snapshot is written, with the two files and the snapshot's index
+    std::function<void(const std::string& discs_vtp, const std::string& walls_vtp, int index)> on_snapshot;
 };
 
 struct RunSummary {

@@ -102,6 +102,14 @@ void SnapshotWriter::write(const World& w) {
     times_.push_back(w.time());
 }
 
+static std::string numbered(const std::string& dir, const char* kind, int index) {
+    char name[64];
+    std::snprintf(name, sizeof name, "/%s_%05d.vtp", kind, index);
+    return dir + name;
+}
+std::string SnapshotWriter::last_discs() const { return numbered(dir_, "discs", count() - 1); }
+std::string SnapshotWriter::last_walls() const { return numbered(dir_, "walls", count() - 1); }
+
 void SnapshotWriter::finish() {
     for (const char* kind : {"discs", "walls"}) {
         std::ostringstream o;

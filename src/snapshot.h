@@ -18,6 +18,9 @@ public:
     // Writes the .pvd collections (call at the end; also safe to call repeatedly).
     void finish();
     int count() const { return int(times_.size()); }
+    // the files of the last snapshot written
+    std::string last_discs() const;
+    std::string last_walls() const;
 
 private:
     std::string dir_;

@@ -54,7 +54,7 @@ FlumeRun run_geometry_a(const std::string& tag) {
     finish_scenario(s);
     FlumeRun r;
     r.dir = temp_dir(tag);
-    r.summary = run_scenario(s, {r.dir.string(), false});
+    r.summary = run_scenario(s, {r.dir.string(), false, {}});
     return r;
 }
 }  // namespace
@@ -134,7 +134,7 @@ end = [1.0, -5.0]
     Scenario s = parse_scenario(text, "free-fall.toml");
     finish_scenario(s);
     const fs::path dir = temp_dir("freefall");
-    const RunSummary r = run_scenario(s, {dir.string(), false});
+    const RunSummary r = run_scenario(s, {dir.string(), false, {}});
     EXPECT_EQ(r.stop_reason, "t_max");
     const auto rows = read_csv(dir / "track.csv");
     ASSERT_GT(rows.size(), 20u);
@@ -155,7 +155,7 @@ TEST(ExplicitScenario, ExistingOutputFolderIsNotOverwritten) {
     std::ofstream(dir / "mine.txt") << "keep";
     Scenario s = parse_scenario("[[discs]]\nposition = [0, 0]\nradius = 0.01\n[stop]\nt_max = 0.01\nrest_duration = 0.001\n", "x.toml");
     finish_scenario(s);
-    EXPECT_THROW(run_scenario(s, {dir.string(), false}), InputError);
+    EXPECT_THROW(run_scenario(s, {dir.string(), false, {}}), InputError);
     EXPECT_EQ(read(dir / "mine.txt"), "keep");
     fs::remove_all(dir);
 }

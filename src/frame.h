@@ -1,0 +1,31 @@
+// One instant of a run as the renderer sees it, read back from the run's VTK snapshots.
+// Frames always come from the files (also when rendering during a run), so a replay draws
+// exactly what the run drew.
+#pragma once
+#include <string>
+#include <vector>
+
+#include "vec2.h"
+
+namespace demlab {
+
+struct Frame {
+    double time = 0;
+    std::vector<Vec2> pos;
+    std::vector<double> radius, angle, speed;
+    std::vector<int> layer, grid;
+    std::vector<std::vector<Vec2>> walls;  // polylines of the walls present
+    std::vector<int> wall_id;              // wall index of each polyline
+};
+
+// Reads snapshots/discs_NNNNN.vtp and walls_NNNNN.vtp. Throws InputError on a malformed file.
+Frame read_frame(const std::string& discs_vtp, const std::string& walls_vtp);
+
+struct SnapshotEntry {
+    double time;
+    std::string discs, walls;  // file paths
+};
+// The snapshots of a run folder, from snapshots/discs.pvd (or by listing when it is missing).
+std::vector<SnapshotEntry> list_snapshots(const std::string& run_dir);
+
+}  // namespace demlab

@@ -1,0 +1,17 @@
+// Plots of a run folder's CSVs with gnuplot (pngcairo): force in x and y over time for the
+// path, the arc and the barrier (thesis Fig. 42/43), the front over time (Fig. 37) and the
+// kinetic energy over time.
+#pragma once
+#include <string>
+#include <vector>
+
+namespace demlab {
+
+// True when gnuplot can be run.
+bool gnuplot_available();
+
+// Writes RUN_DIR/plots/{forces_x,forces_y,front,kinetic_energy}.png (those whose CSV exists)
+// at width x height px and returns their paths. Throws RunError when gnuplot is missing or fails.
+std::vector<std::string> make_plots(const std::string& run_dir, int width = 1000, int height = 600);
+
+}  // namespace demlab

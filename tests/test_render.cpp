@@ -1,0 +1,195 @@
+// Frames: pixel colours of a known scene, disc size in pixels, no display needed, replay equal
+// to rendering during the run; plots from a run's CSVs.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "error.h"
+#include "frame.h"
+#include "image.h"
+#include "plot.h"
+#include "render_run.h"
+#include "renderer.h"
+#include "run.h"
+#include "scenario.h"
+
+using namespace demlab;
+namespace fs = std::filesystem;
+
+namespace {
+// a disc of radius 0.1 m at (0.5, 0.5) in layer 0, a second in layer 1, a horizontal wall at y = 0.2
+Frame known_scene() {
+    Frame f;
+    f.time = 1.25;
+    f.pos = {Vec2(0.5, 0.5), Vec2(0.8, 0.8)};
+    f.radius = {0.1, 0.05};
+    f.angle = {0.0, 0.0};
+    f.speed = {0.0, 0.0};
+    f.layer = {0, 1};
+    f.grid = {0, 0};
+    f.walls = {{Vec2(0.0, 0.2), Vec2(1.0, 0.2)}};
+    f.wall_id = {0};
+    return f;
+}
+
+RenderStyle unit_view(int px) {
+    RenderStyle s;
+    s.width = px;
+    s.height = px;
+    s.view_set = true;
+    s.view_lo = Vec2(0, 0);
+    s.view_hi = Vec2(1, 1);
+    s.show_time = false;
+    return s;
+}
+
+std::string read(const fs::path& p) {
+    std::ifstream in(p, std::ios::binary);
+    std::stringstream b;
+    b << in.rdbuf();
+    return b.str();
+}
+
+int colour_distance(const uint8_t* p, int r, int g, int b) { return std::abs(p[0] - r) + std::abs(p[1] - g) + std::abs(p[2] - b); }
+}  // namespace
+
+TEST(Renderer, KnownSceneHasTheRightColoursWhereExpected) {
+    Renderer r(unit_view(400));  // 400 px per metre
+    const Image img = r.render(known_scene());
+    ASSERT_EQ(img.width, 400);
+    ASSERT_EQ(img.height, 400);
+    // inside the first disc: the sand colour of even layers (0.84, 0.55, 0.24)
+    EXPECT_LE(colour_distance(img.at(200, 200), 214, 140, 61), 3);
+    // inside the second disc (layer 1): the blue band (0.27, 0.43, 0.67); y = 0.8 m is row 80
+    EXPECT_LE(colour_distance(img.at(320, 80), 69, 110, 171), 3);
+    // outside: the white background
+    EXPECT_EQ(colour_distance(img.at(50, 50), 255, 255, 255), 0);
+    // on the wall (y = 0.2 m: row 320): the wall's dark grey
+    EXPECT_LE(colour_distance(img.at(100, 320), 41, 41, 41), 3);
+}
+
+TEST(Renderer, DiscOfRadiusRSpansTwoRPixels) {
+    Renderer r(unit_view(400));
+    const Image img = r.render(known_scene());
+    // across the row through the first disc's centre, count pixels darker than half way
+    double covered = 0;
+    for (int x = 0; x < 400; ++x) {
+        const uint8_t* p = img.at(x, 200);
+        if (x > 300) break;
+        covered += (255.0 - p[2]) / (255.0 - 61.0);  // blue channel: 255 background, 61 disc (partial at edges)
+    }
+    EXPECT_NEAR(covered, 2 * 0.1 * 400, 1.0);  // 80 px within one pixel
+}
+
+TEST(Renderer, WorksWithoutADisplay) {
+    const char* display = std::getenv("DISPLAY");
+    const std::string saved = display ? display : "";
+    unsetenv("DISPLAY");
+    {
+        Renderer r(unit_view(64));
+        const Image img = r.render(known_scene());
+        EXPECT_EQ(img.width, 64);
+    }
+    if (display) setenv("DISPLAY", saved.c_str(), 1);
+}
+
+TEST(Renderer, RefusesBadOptions) {
+    RenderStyle s;
+    s.width = 0;
+    EXPECT_THROW(Renderer{s}, InputError);
+    EXPECT_THROW(parse_color_mode("rainbow"), InputError);
+}
+
+class SmallRun : public ::testing::Test {
+protected:
+    static void SetUpTestSuite() {
+        dir_ = new fs::path(fs::temp_directory_path() / ("demlab-render-" + std::to_string(::getpid())));
+        fs::remove_all(*dir_);
+        const std::string text = R"(
+[scenario]
+name = "drop"
+[stop]
+t_max = 0.12
+rest_duration = 0.05
+[output]
+series_interval = 0.005
+snapshot_interval = 0.02
+[[walls]]
+type = "segment"
+start = [-0.2, 0.0]
+end = [0.3, -0.05]
+[[walls]]
+type = "arc"
+centre = [0.0, 0.1]
+radius = 0.1
+start_deg = 180
+end_deg = 270
+[[discs]]
+position = [0.0, 0.05]
+radius = 0.01
+velocity = [0.4, 0.0]
+omega = 5.0
+[[discs]]
+position = [0.05, 0.05]
+radius = 0.015
+)";
+        Scenario s = parse_scenario(text, "drop.toml");
+        finish_scenario(s);
+        RunOptions ro{dir_->string(), false, {}};
+        attach_frame_hook(ro, false);
+        run_scenario(s, ro);
+    }
+    static void TearDownTestSuite() {
+        fs::remove_all(*dir_);
+        delete dir_;
+    }
+    static fs::path* dir_;
+};
+fs::path* SmallRun::dir_ = nullptr;
+
+TEST_F(SmallRun, ReplayEqualsTheFramesRenderedDuringTheRun) {
+    RenderRunOptions o;
+    o.run_dir = dir_->string();
+    o.out = (*dir_ / "replay").string();
+    const int n = render_run(o);
+    EXPECT_EQ(size_t(n), list_snapshots(dir_->string()).size());  // t = 0, 0.02, ..., 0.12 and the end
+    EXPECT_GE(n, 7);
+    for (int k = 0; k < n; ++k) {
+        char name[32];
+        std::snprintf(name, sizeof name, "frame_%05d.png", k);
+        const std::string during = read(*dir_ / "frames" / name), replay = read(*dir_ / "replay" / name);
+        ASSERT_FALSE(during.empty()) << name;
+        EXPECT_EQ(during, replay) << name;
+    }
+}
+
+TEST_F(SmallRun, FramesEveryStepOfSnapshotsOnlyAndNeverInterpolated) {
+    RenderRunOptions o;
+    o.run_dir = dir_->string();
+    o.out = (*dir_ / "every4").string();
+    o.every = 0.04;
+    o.size = "320x200";
+    o.color = "rotation";
+    EXPECT_EQ(render_run(o), 4);  // 0, 0.04, 0.08, 0.12
+    EXPECT_EQ(read_png((*dir_ / "every4" / "frame_00000.png").string()).width, 320);
+    o.out = (*dir_ / "every-too-fine").string();
+    o.every = 0.01;  // snapshots are 0.02 apart
+    EXPECT_THROW(render_run(o), InputError);
+    o.out = (*dir_ / "every4").string();  // exists: refused without --force
+    o.every = 0.04;
+    EXPECT_THROW(render_run(o), InputError);
+}
+
+TEST_F(SmallRun, PlotsAreValidPngsOfTheRequestedSize) {
+    if (!gnuplot_available()) GTEST_SKIP() << "gnuplot is not installed";
+    const auto made = make_plots(dir_->string(), 640, 400);
+    ASSERT_FALSE(made.empty());
+    for (const auto& p : made) {
+        const Image img = read_png(p);
+        EXPECT_EQ(img.width, 640) << p;
+        EXPECT_EQ(img.height, 400) << p;
+    }
+}
