@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Installs the dependencies, builds demlab and runs the main job: flume geometry A of the
-# thesis (scale 4, 9,099 discs, Model 3, Variant II) from the release to rest.
+# thesis (scale 4, 9,099 discs, Model 3, Variant II) from the release to rest, with a PNG
+# frame at every snapshot (frames/) and the force, front and energy plots (plots/).
 # usage: scripts/main-job.sh [OUT_DIR] [extra demlab run options]
 #   default OUT_DIR runs/geometry-A; an existing folder is refused (give another, or --force)
 #   a quick look: scripts/main-job.sh runs/geometry-A-20 --scale 20   (364 discs, seconds)
@@ -11,4 +12,4 @@ cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
 cmake --build build -j "$(nproc)"
 out="${1:-runs/geometry-A}"
 shift || true
-./build/demlab run scenarios/geometry-A.toml --out "$out" "$@"
+./build/demlab run scenarios/geometry-A.toml --out "$out" --frames "$@"

@@ -33,6 +33,8 @@ Command add_render_command(CLI::App& app) {
     sub->add_option("--speed-max", o->speed_max, "Top of the speed colour bar, m/s")->capture_default_str();
     sub->add_option("--out", o->out, "Output folder (default RUN_DIR/frames); must not exist unless --force");
     sub->add_flag("--force", o->force, "Replace the files of an existing output folder");
+    sub->add_flag("--last", o->last_only, "Render only the final snapshot (the deposit)");
+    sub->add_option("--strip", o->strip, "Also tile the frames into one PNG, three to a row");
     sub->add_flag("--video", o->video, "Also assemble the frames into video.mp4 with ffmpeg (when installed)");
     return [o] {
         render_run(*o);

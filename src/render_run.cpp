@@ -1,5 +1,6 @@
 #include "render_run.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -92,16 +93,35 @@ int render_run(const RenderRunOptions& o) {
             chosen.push_back(k);
         }
     }
+    if (o.last_only && !chosen.empty()) chosen = {chosen.back()};
     Renderer renderer(style);
+    std::vector<Image> tiles;
     for (size_t f = 0; f < chosen.size(); ++f) {
         const SnapshotEntry& e = snaps[chosen[f]];
         char name[64];
         std::snprintf(name, sizeof name, "/frame_%05zu.png", f);
-        write_png(out + name, renderer.render(read_frame(e.discs, e.walls)));
+        Image img = renderer.render(read_frame(e.discs, e.walls));
+        write_png(out + name, img);
+        if (!o.strip.empty()) tiles.push_back(std::move(img));
     }
     std::printf("rendered %zu frames (%dx%d, %s) into %s/\n", chosen.size(), style.width, style.height, o.color.c_str(),
                 out.c_str());
     const int frames = int(chosen.size());
+    if (!o.strip.empty() && !tiles.empty()) {
+        const int cols = std::min<int>(3, int(tiles.size())), rows = (int(tiles.size()) + cols - 1) / cols;
+        Image strip;
+        strip.width = cols * style.width;
+        strip.height = rows * style.height;
+        strip.rgb.assign(size_t(strip.width) * size_t(strip.height) * 3, 255);
+        for (size_t t = 0; t < tiles.size(); ++t) {
+            const int cx = int(t) % cols, cy = int(t) / cols;
+            for (int y = 0; y < style.height; ++y)
+                std::copy(tiles[t].at(0, y), tiles[t].at(0, y) + 3 * style.width,
+                          strip.at(cx * style.width, cy * style.height + y));
+        }
+        write_png(o.strip, strip);
+        std::printf("strip of %zu frames: %s\n", tiles.size(), o.strip.c_str());
+    }
     if (o.video) {
         if (std::system("ffmpeg -version >/dev/null 2>&1") != 0) {
             std::printf("ffmpeg is not installed: the frames are written, but no video was made "

@@ -18,6 +18,8 @@ struct RenderRunOptions {
     double speed_max = 3.0;         // m/s
     bool force = false;
     bool video = false;
+    bool last_only = false;         // only the final snapshot
+    std::string strip;              // also tile the frames into this one PNG (3 columns)
 };
 
 // Renders the frames; returns the number written. Throws InputError on bad options.

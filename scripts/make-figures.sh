@@ -1,0 +1,34 @@
+#!/usr/bin/env bash
+# Regenerates the figures the README shows (figures/*.png) from runs of geometries A, B, C.
+# usage: scripts/make-figures.sh [RUNS_DIR]     (default runs/figures; SCALE=4 by default)
+# Runs that already exist in RUNS_DIR (with a summary.json) are reused, not recomputed.
+# At scale 4 the three runs take about an hour on 2 cores; SCALE=20 gives a quick look.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+runs="${1:-runs/figures}"
+scale="${SCALE:-4}"
+demlab=./build/demlab
+[ -x "$demlab" ] || { echo "build demlab first (scripts/main-job.sh or scripts/test.sh)"; exit 1; }
+mkdir -p "$runs" figures
+pids=()
+for g in A B C; do
+  out="$runs/geometry-$g-s$scale"
+  if [ ! -f "$out/summary.json" ]; then
+    rm -rf "$out"
+    "$demlab" run "scenarios/geometry-$g.toml" --scale "$scale" --out "$out" --no-plots > "$out.log" 2>&1 &
+    pids+=($!)
+    # two cores: at most two runs at once
+    if [ ${#pids[@]} -ge 2 ]; then wait "${pids[0]}"; pids=("${pids[@]:1}"); fi
+  fi
+done
+for p in "${pids[@]}"; do wait "$p"; done
+a="$runs/geometry-A-s$scale"
+"$demlab" render "$a" --every 0.2 --size 480x270 --out "$a/strip" --force --strip figures/geometry-A-strip.png
+for g in A B C; do
+  r="$runs/geometry-$g-s$scale"
+  "$demlab" render "$r" --last --view barrier --size 640x360 --out "$r/deposit" --force --strip "figures/deposit-$g.png"
+done
+"$demlab" plot "$a" > /dev/null
+cp "$a/plots/forces_x.png" figures/geometry-A-forces-x.png
+cp "$a/plots/forces_y.png" figures/geometry-A-forces-y.png
+du -sh figures
