@@ -5,6 +5,8 @@
 
 namespace demlab {
 
+static void open_gate(const Scenario& s, WallDef& gate);
+
 std::vector<WallDef> flume_walls(const Scenario& s, bool for_release) {
     const FlumeDef& f = s.flume;
     const double mu = std::tan(deg_to_rad(s.wall_friction_deg));
@@ -44,17 +46,74 @@ std::vector<WallDef> flume_walls(const Scenario& s, bool for_release) {
     w[kLid].p1 = f.lid_p1;
     if (!for_release) {
         w[kLid].remove_at = 0.0;  // the lid goes: it only held the mass while it was generated
-        if (s.release.variant == "I") {
-            w[kGate].remove_at = 0.0;
-        } else {
-            const Vec2 up = (f.gate_p1 - f.gate_p0).normalized();
-            w[kGate].velocity = s.release.gate_speed * up;
-            w[kGate].move_from = 0.0;
-            // once its lower end is a gate's height above the slope it is out of the way
-            w[kGate].remove_at = 2.0 * (f.gate_p1 - f.gate_p0).norm() / s.release.gate_speed;
-        }
+        open_gate(s, w[kGate]);
     }
     return w;
+}
+
+// The gate opens as in the flume: Variant I deletes it at t = 0, Variant II lifts it along its
+// own direction at gate_speed and deletes it once it is a gate's height clear.
+static void open_gate(const Scenario& s, WallDef& gate) {
+    if (s.release.variant == "I") {
+        gate.remove_at = 0.0;
+    } else {
+        const Vec2 up = (gate.p1 - gate.p0).normalized();
+        gate.velocity = s.release.gate_speed * up;
+        gate.move_from = 0.0;
+        gate.remove_at = 2.0 * (gate.p1 - gate.p0).norm() / s.release.gate_speed;
+    }
+}
+
+std::vector<WallDef> dam_break_walls(const Scenario& s, bool for_release) {
+    const DamBreakDef& d = s.dam_break;
+    WallDef base;
+    base.kn = s.wall_kn;
+    base.ks = s.wall_ks;
+    base.friction = std::tan(deg_to_rad(s.wall_friction_deg));
+    std::vector<WallDef> w(4, base);
+    w[kFloor].name = "floor";
+    w[kFloor].p0 = Vec2(0.0, 0.0);
+    w[kFloor].p1 = Vec2(d.floor_length, 0.0);
+    w[kFloor].segment_solid = SegmentSolid::Right;  // free side up
+    w[kBack].name = "back_wall";
+    w[kBack].p0 = Vec2(0.0, d.height + 0.1);
+    w[kBack].p1 = Vec2(0.0, 0.0);
+    w[kBack].segment_solid = SegmentSolid::Right;  // free side +x
+    w[kDamGate].name = "gate";
+    w[kDamGate].p0 = Vec2(d.width, 0.0);
+    w[kDamGate].p1 = Vec2(d.width, d.height);
+    w[kDamGate].cap_start = EndCap::Capped;
+    w[kDamLid].name = "lid";
+    w[kDamLid].p0 = Vec2(d.width, d.height);
+    w[kDamLid].p1 = Vec2(0.0, d.height);
+    if (!for_release) {
+        w[kDamLid].remove_at = 0.0;
+        open_gate(s, w[kDamGate]);
+    }
+    return w;
+}
+
+ReleaseBox release_box(const Scenario& s) {
+    ReleaseBox b;
+    if (s.flume.enabled) {
+        const auto w = flume_walls(s, true);
+        b.polygon = {s.flume.w1_p0, s.flume.gate_p0, s.flume.gate_p1};
+        b.walls = {w[kW1], w[kGate], w[kLid]};
+        b.lid = 2;
+    } else {
+        const auto w = dam_break_walls(s, true);
+        const DamBreakDef& d = s.dam_break;
+        b.polygon = {Vec2(0, 0), Vec2(d.width, 0), Vec2(d.width, d.height), Vec2(0, d.height)};
+        b.walls = w;
+        b.lid = kDamLid;
+    }
+    return b;
+}
+
+std::vector<WallDef> lab_walls(const Scenario& s) {
+    if (s.flume.enabled) return flume_walls(s, false);
+    if (s.dam_break.enabled) return dam_break_walls(s, false);
+    return {};
 }
 
 FlumePath::FlumePath(const WallGeom& w1, const WallGeom& arc, const WallGeom& w3) : w1_(w1), arc_(arc), w3_(w3) {

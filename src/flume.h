@@ -16,6 +16,22 @@ enum FlumeWall : int { kW1 = 0, kW2 = 1, kW3 = 2, kGate = 3, kLid = 4, kFlumeWal
 // removed at t = 0; Variant II: lifted at gate_speed); settling keeps them (see release.cpp).
 std::vector<WallDef> flume_walls(const Scenario& s, bool for_release);
 
+// Dam-break walls (indices): floor, back wall, gate, lid.
+enum DamBreakWall : int { kFloor = 0, kBack = 1, kDamGate = 2, kDamLid = 3 };
+std::vector<WallDef> dam_break_walls(const Scenario& s, bool for_release);
+
+// The release box of a lab set-up: the (convex) polygon the mass fills and the walls that
+// hold it while it is generated; `lid` indexes the lid among them.
+struct ReleaseBox {
+    std::vector<Vec2> polygon;
+    std::vector<WallDef> walls;
+    int lid = -1;
+};
+ReleaseBox release_box(const Scenario& s);
+
+// The walls of a run (flume: W1, W2, W3, gate, lid; dam break: floor, back, gate, lid).
+std::vector<WallDef> lab_walls(const Scenario& s);
+
 // The flume's bed as a path: W1, the arc, W3 (as joined by the world).
 class FlumePath {
 public:

@@ -16,6 +16,13 @@ struct Frame {
     std::vector<int> layer, grid;
     std::vector<std::vector<Vec2>> walls;  // polylines of the walls present
     std::vector<int> wall_id;              // wall index of each polyline
+    // drawn on top (analysis figures): polylines in a colour, and text at world positions
+    struct Overlay {
+        std::vector<Vec2> line;
+        double r = 0.8, g = 0.1, b = 0.1;
+    };
+    std::vector<Overlay> overlays;
+    std::vector<std::pair<Vec2, std::string>> notes;
 };
 
 // Reads snapshots/discs_NNNNN.vtp and walls_NNNNN.vtp. Throws InputError on a malformed file.

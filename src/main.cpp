@@ -19,6 +19,7 @@ int main(int argc, char** argv) {
     add(add_run_command);
     add(add_render_command);
     add(add_plot_command);
+    add(add_calibrate_command);
     add(add_demo_command);
     add(add_keys_command);
     add(add_bench_command);

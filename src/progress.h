@@ -1,16 +1,21 @@
 // Progress of a long run on a terminal: percent of simulated time, steps/s and ETA on one
 // line of stderr, refreshed at most twice a second. Silent when stderr is not a terminal.
 #pragma once
+#include <atomic>
 #include <chrono>
 #include <cstdio>
 #include <unistd.h>
 
 namespace demlab {
 
+// Set while several runs share the terminal (calibration workers): no progress lines then.
+inline std::atomic<bool> g_progress_muted{false};
+
 class Progress {
 public:
     explicit Progress(double total, const char* unit = "s")
-        : total_(total), unit_(unit), enabled_(isatty(STDERR_FILENO) != 0), start_(Clock::now()), last_(start_) {}
+        : total_(total), unit_(unit), enabled_(isatty(STDERR_FILENO) != 0 && !g_progress_muted), start_(Clock::now()),
+          last_(start_) {}
 
     void update(double done, long steps) {
         if (!enabled_) return;

@@ -26,31 +26,43 @@ namespace {
 // Uniform in [0, 1) from the top 53 bits: the same numbers on every platform.
 double uniform01(std::mt19937_64& rng) { return double(rng() >> 11) * 0x1.0p-53; }
 
-struct Triangle {
-    Vec2 a, b, c;
-    double area() const { return 0.5 * std::abs(cross(b - a, c - a)); }
-    // distance from p to the edge (p0, p1), positive inside
-    static double edge_distance(const Vec2& p, const Vec2& p0, const Vec2& p1, const Vec2& inside) {
-        const Vec2 n = perp((p1 - p0).normalized());
-        const double side = (inside - p0).dot(n) > 0 ? 1.0 : -1.0;
-        return side * (p - p0).dot(n);
+// A convex polygon (the release box), counter-clockwise or not.
+struct Polygon {
+    std::vector<Vec2> v;
+    double area() const {
+        double a = 0;
+        for (size_t i = 0; i < v.size(); ++i) a += cross(v[i], v[(i + 1) % v.size()]);
+        return 0.5 * std::abs(a);
     }
+    // distance from p to the nearest edge, positive inside
     double inset(const Vec2& p) const {
-        const Vec2 g = (a + b + c) / 3.0;
-        return std::min({edge_distance(p, a, b, g), edge_distance(p, b, c, g), edge_distance(p, c, a, g)});
+        Vec2 g = Vec2::Zero();
+        for (const Vec2& q : v) g += q;
+        g /= double(v.size());
+        double d = INFINITY;
+        for (size_t i = 0; i < v.size(); ++i) {
+            const Vec2 a = v[i], b = v[(i + 1) % v.size()];
+            const Vec2 n = perp((b - a).normalized());
+            const double side = (g - a).dot(n) > 0 ? 1.0 : -1.0;
+            d = std::min(d, side * (p - a).dot(n));
+        }
+        return d;
     }
     Vec2 sample(std::mt19937_64& rng) const {
-        double u = uniform01(rng), v = uniform01(rng);
-        if (u + v > 1.0) {
-            u = 1.0 - u;
-            v = 1.0 - v;
+        Vec2 lo = v[0], hi = v[0];
+        for (const Vec2& q : v) {
+            lo = lo.cwiseMin(q);
+            hi = hi.cwiseMax(q);
         }
-        return a + u * (b - a) + v * (c - a);
+        while (true) {
+            const Vec2 p(lo.x() + (hi.x() - lo.x()) * uniform01(rng), lo.y() + (hi.y() - lo.y()) * uniform01(rng));
+            if (inset(p) >= 0) return p;
+        }
     }
 };
 
 // Random sequential addition of discs of the given radii (scaled by s) without overlap.
-std::vector<Vec2> place_without_overlap(const Triangle& tri, const std::vector<double>& radius, double s,
+std::vector<Vec2> place_without_overlap(const Polygon& tri, const std::vector<double>& radius, double s,
                                         std::mt19937_64& rng) {
     const double cell = 2.0 * s * *std::max_element(radius.begin(), radius.end());
     std::unordered_map<long long, std::vector<int>> grid;
@@ -91,7 +103,8 @@ std::vector<Vec2> place_without_overlap(const Triangle& tri, const std::vector<d
 ReleaseMass generate_release(const Scenario& s) {
     const auto t0 = std::chrono::steady_clock::now();
     const ReleaseDef& rd = s.release;
-    const Triangle tri{s.flume.w1_p0, s.flume.gate_p1, s.flume.gate_p0};
+    const ReleaseBox box = release_box(s);
+    const Polygon tri{box.polygon};
     ReleaseMass m;
     m.box_area = tri.area();
     m.porosity_target = rd.porosity;
@@ -121,11 +134,11 @@ ReleaseMass generate_release(const Scenario& s) {
     slick.friction = 0.0;
     const int mat = expand.add_material(slick);
     for (size_t i = 0; i < radius.size(); ++i) expand.add_disc({start[i], s0 * radius[i], Vec2::Zero(), 0, 0, mat});
-    std::vector<WallDef> walls = flume_walls(s, true);
-    for (WallDef& w : walls) w.friction = 0.0;
-    expand.add_wall(walls[kW1]);
-    expand.add_wall(walls[kGate]);
-    expand.add_wall(walls[kLid]);
+    std::vector<WallDef> walls = box.walls;
+    for (WallDef& w : walls) {
+        w.friction = 0.0;
+        expand.add_wall(w);
+    }
     expand.finalize();
     Progress progress(1.0, "of generation");
     const int stages = 60, steps_per_stage = 150;
@@ -163,15 +176,19 @@ ReleaseMass generate_release(const Scenario& s) {
         if (phase == 0) mat_phase.friction = 0.0;
         const int mat2 = w.add_material(mat_phase);
         for (size_t i = 0; i < radius.size(); ++i) w.add_disc({positions[i], radius[i], Vec2::Zero(), 0, 0, mat2});
-        walls = flume_walls(s, true);
-        if (phase == 0)
-            for (WallDef& wd : walls) wd.friction = 0.0;
-        w.add_wall(walls[kW1]);
-        w.add_wall(walls[kGate]);
+        walls = box.walls;
         // the lid only holds the mass while it compacts; the second phase goes without it, so
         // prestress locked in by the lid (a small mass of large discs jams looser than the
         // generated density) is released gently here rather than at the release
-        if (phase == 0) w.add_wall(walls[kLid]);
+        int lid_index = -1;
+        for (int k = 0; k < int(walls.size()); ++k) {
+            if (phase == 0) walls[size_t(k)].friction = 0.0;
+            if (k == box.lid) {
+                if (phase != 0) continue;
+                lid_index = int(w.wall_count());
+            }
+            w.add_wall(walls[size_t(k)]);
+        }
         w.finalize();
         const double t_phase = 0.5 * rd.settle_max_time;
         bool done = false;
@@ -188,7 +205,7 @@ ReleaseMass generate_release(const Scenario& s) {
         if (phase == 0) {
             double weight = 0;
             for (double mi : w.masses()) weight += mi * s.world.gravity.norm();
-            m.lid_load_fraction = w.wall_force(2).norm() / weight;
+            m.lid_load_fraction = w.wall_force(lid_index).norm() / weight;
         }
         positions = w.positions();
         settled_time += w.time();

@@ -217,6 +217,11 @@ Image Renderer::render(const Frame& f) {
         for (size_t k = 0; k + 1 < line.size(); ++k) thick_segment(line[k], line[k + 1], wall_half);
         for (const Vec2& p : line) filled_circle(p, wall_half, 12);
     }
+    // analysis overlays, 2 px wide
+    for (const auto& ov : f.overlays) {
+        glColor3d(ov.r, ov.g, ov.b);
+        for (size_t k = 0; k + 1 < ov.line.size(); ++k) thick_segment(ov.line[k], ov.line[k + 1], 0.66 * wall_half);
+    }
     // 10 cm marks along W1, arc, W3 (walls 0, 1, 2), on the solid side; longer every 0.5 m
     std::vector<std::pair<Vec2, std::string>> labels;
     if (style_.flume_marks) {
@@ -279,6 +284,10 @@ Image Renderer::render(const Frame& f) {
     for (const auto& [p, s] : labels) {
         const auto [x, y] = to_pixel(p);
         im.text(img, s + " m", x - font_px, y + font_px / 2, std::max(8, font_px * 2 / 3), kWall);
+    }
+    for (const auto& [p, text] : f.notes) {
+        const auto [x, y] = to_pixel(p);
+        im.text(img, text, x, y, std::max(9, font_px * 3 / 4), {0.6, 0.05, 0.05});
     }
     if (style_.show_time) {
         char buf[32];

@@ -7,6 +7,7 @@
 #include <sstream>
 #include <unordered_map>
 
+#include "deposit.h"
 #include "error.h"
 #include "fileio.h"
 #include "flume.h"
@@ -20,42 +21,6 @@
 namespace demlab {
 
 namespace {
-
-// Discs that belong to the mass: those with another disc within r_i + r_j + gap. Lone discs
-// that left the mass (a few bounce ahead) do not count for the front, run-out or run-up.
-std::vector<uint8_t> connected_discs(const World& w, double gap) {
-    const size_t n = w.disc_count();
-    std::vector<uint8_t> ok(n, 0);
-    if (n == 0) return ok;
-    double r_max = 0;
-    for (double r : w.radii()) r_max = std::max(r_max, r);
-    const double cell = 2.0 * r_max + gap;
-    std::unordered_map<long long, std::vector<int>> grid;
-    grid.reserve(n);
-    auto key = [](long long ix, long long iy) { return ix * 2000003LL + iy; };
-    const auto& p = w.positions();
-    for (size_t i = 0; i < n; ++i)
-        grid[key((long long)std::floor(p[i].x() / cell), (long long)std::floor(p[i].y() / cell))].push_back(int(i));
-    for (size_t i = 0; i < n; ++i) {
-        if (ok[i]) continue;
-        const long long ix = (long long)std::floor(p[i].x() / cell), iy = (long long)std::floor(p[i].y() / cell);
-        for (long long dx = -1; dx <= 1 && !ok[i]; ++dx)
-            for (long long dy = -1; dy <= 1 && !ok[i]; ++dy) {
-                auto it = grid.find(key(ix + dx, iy + dy));
-                if (it == grid.end()) continue;
-                for (int j : it->second) {
-                    if (size_t(j) == i) continue;
-                    const double reach = w.radii()[i] + w.radii()[size_t(j)] + gap;
-                    if ((p[size_t(j)] - p[i]).squaredNorm() <= reach * reach) {
-                        ok[i] = 1;
-                        ok[size_t(j)] = 1;
-                        break;
-                    }
-                }
-            }
-    }
-    return ok;
-}
 
 std::string json_number(double v) {
     if (!std::isfinite(v)) return "null";
@@ -75,31 +40,27 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
 
     // --- the release mass
     ReleaseMass mass;
-    if (s.flume.enabled) {
+    if (has_release(s)) {
         if (!s.release.from_file.empty()) {
             mass = load_release(s.release.from_file);
             // a mass settled against other walls (another geometry's W1 differs by ~0.1 mm at
             // the box) would start with overlaps of tens of micrometres: kilonewtons per disc
-            const auto walls = flume_walls(s, true);
-            const Vec2 here[3][2] = {{walls[kW1].p0, walls[kW1].p1}, {walls[kGate].p0, walls[kGate].p1},
-                                     {walls[kLid].p0, walls[kLid].p1}};
-            if (mass.box_walls.size() != 3)
-                throw InputError(s.release.from_file + ": no '# wall' lines: not a release mass written by demlab run");
-            for (int k = 0; k < 3; ++k)
-                for (int e = 0; e < 2; ++e)
-                    if ((mass.box_walls[size_t(k)][size_t(e)] - here[k][e]).norm() > 1e-6)
-                        throw InputError(s.release.from_file + ": the mass was settled against other walls (" +
-                                         std::string(k == 0 ? "W1" : (k == 1 ? "gate" : "lid")) + " differs by " +
-                                         format_number((mass.box_walls[size_t(k)][size_t(e)] - here[k][e]).norm()) +
-                                         " m): it fits another geometry. Generate it for this scenario (omit --release-from)");
+            const auto walls = release_box(s).walls;
+            if (mass.box_walls.size() != walls.size())
+                throw InputError(s.release.from_file + ": its '# wall' lines do not match this set-up: not a release mass for it");
+            for (size_t k = 0; k < walls.size(); ++k) {
+                const double d = std::max((mass.box_walls[k][0] - walls[k].p0).norm(), (mass.box_walls[k][1] - walls[k].p1).norm());
+                if (d > 1e-6)
+                    throw InputError(s.release.from_file + ": the mass was settled against other walls (" + walls[k].name +
+                                     " differs by " + format_number(d) +
+                                     " m): it fits another geometry. Generate it for this scenario (omit --release-from)");
+            }
         } else {
             if (terminal) std::fprintf(stderr, "generating the release mass ...\n");
             mass = generate_release(s);
         }
-        {
-            const auto walls = flume_walls(s, true);
-            mass.box_walls = {{walls[kW1].p0, walls[kW1].p1}, {walls[kGate].p0, walls[kGate].p1}, {walls[kLid].p0, walls[kLid].p1}};
-        }
+        mass.box_walls.clear();
+        for (const WallDef& wd : release_box(s).walls) mass.box_walls.push_back({wd.p0, wd.p1});
         if (!mass.settled)
             std::fprintf(stderr, "demlab: warning: the release mass did not reach settle_ratio %.3g within %.3g s (ratio %.3g)\n",
                          s.release.settle_ratio, s.release.settle_max_time, mass.settle_ratio);
@@ -120,6 +81,8 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
         grow(wd.shape == WallShape::Segment ? wd.p0 : wd.centre - Vec2(wd.radius, wd.radius));
         grow(wd.shape == WallShape::Segment ? wd.p1 : wd.centre + Vec2(wd.radius, wd.radius));
     }
+    for (const WallDef& wd : lab_walls(s))
+        for (const Vec2& p : {wd.p0, wd.p1}) grow(p);
     if (s.flume.enabled)
         for (const Vec2& p : {s.flume.w1_p0, s.flume.w1_p1, s.flume.w3_p0, s.flume.w3_p1}) grow(p);
     def.domain_lo = lo - Vec2(0.5, 0.5);
@@ -139,8 +102,7 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
         layer.push_back(0);
         grid.push_back(0);
     }
-    if (s.flume.enabled)
-        for (const WallDef& wd : flume_walls(s, false)) w.add_wall(wd);
+    for (const WallDef& wd : lab_walls(s)) w.add_wall(wd);
     for (WallDef wd : s.walls) w.add_wall(wd);
     w.finalize();
     const size_t n = w.disc_count();
@@ -180,7 +142,7 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
     RunSummary sum;
     sum.n_discs = long(n);
     sum.total_mass = total_mass;
-    sum.porosity = s.flume.enabled ? mass.porosity_settled : -1.0;
+    sum.porosity = has_release(s) ? mass.porosity_settled : -1.0;
     sum.dt_min = INFINITY;
     double peak_fx_barrier = -1, peak_fy_arc = -1, peak_ke = 0, rest_since = -1;
     const double e0 = w.energy().balance();
@@ -216,7 +178,7 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
                      << e.dissipated_rotation << ',' << e.work_by_walls << ',' << e.removed_with_walls << ','
                      << e.balance() << '\n';
         if (path) {
-            const auto conn = connected_discs(w, gap);
+            const auto conn = connected_discs(w.positions(), w.radii(), gap);
             double s_front = -INFINITY, disp = 0, runup = 0;
             for (size_t i = 0; i < n; ++i) {
                 if (!conn[i]) continue;
@@ -299,7 +261,7 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
 
     // --- the deposit
     if (path) {
-        const auto conn = connected_discs(w, gap);
+        const auto conn = connected_discs(w.positions(), w.radii(), gap);
         const int bins = int(std::ceil(path->length() / s.output.deposit_bin)) + 1;
         std::vector<double> top(size_t(bins), 0.0);
         for (size_t i = 0; i < n; ++i) {
@@ -318,15 +280,27 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
         write_file_atomic(dir + "/deposit.csv", d.str());
     }
 
+    SlopeAngles angles{};
+    if (s.dam_break.enabled) {
+        const auto conn = connected_discs(w.positions(), w.radii(), gap);
+        const Envelope env = upper_envelope(w.positions(), w.radii(), conn, 0.0, s.dam_break.floor_length, 0.001);
+        angles = slope_angles(env);
+        sum.runout_s = angles.toe_x;
+        std::ostringstream d;
+        d << "x_m,surface_m\n";
+        for (size_t k = 0; k < env.y.size(); ++k)
+            if (!std::isnan(env.y[k])) d << env.x(k) << ',' << env.y[k] << '\n';
+        write_file_atomic(dir + "/envelope.csv", d.str());
+    }
     std::ostringstream j;
     j << "{\n"
       << "  \"scenario\": \"" << s.name << "\",\n"
       << "  \"n_discs\": " << sum.n_discs << ",\n"
       << "  \"total_mass\": " << json_number(sum.total_mass) << ",\n"
       << "  \"porosity\": " << json_number(sum.porosity) << ",\n"
-      << "  \"release_porosity_generated\": " << json_number(s.flume.enabled ? mass.porosity_generated : NAN) << ",\n"
-      << "  \"release_settle_time\": " << json_number(s.flume.enabled ? mass.settle_time : NAN) << ",\n"
-      << "  \"release_wall_seconds\": " << json_number(s.flume.enabled ? mass.wall_seconds : NAN) << ",\n"
+      << "  \"release_porosity_generated\": " << json_number(has_release(s) ? mass.porosity_generated : NAN) << ",\n"
+      << "  \"release_settle_time\": " << json_number(has_release(s) ? mass.settle_time : NAN) << ",\n"
+      << "  \"release_wall_seconds\": " << json_number(has_release(s) ? mass.wall_seconds : NAN) << ",\n"
       << "  \"dt\": " << json_number(sum.dt) << ",\n"
       << "  \"dt_min\": " << json_number(sum.dt_min) << ",\n"
       << "  \"dt_max\": " << json_number(sum.dt_max) << ",\n"
@@ -341,8 +315,13 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
       << "  \"t_front_at_barrier\": " << json_number(sum.t_front_at_barrier) << ",\n"
       << "  \"t_peak_fx_barrier\": " << json_number(sum.t_peak_fx_barrier) << ",\n"
       << "  \"t_peak_fy_arc\": " << json_number(sum.t_peak_fy_arc) << ",\n"
-      << "  \"energy_balance_error\": " << json_number(sum.energy_balance_error) << "\n"
-      << "}\n";
+      << "  \"energy_balance_error\": " << json_number(sum.energy_balance_error);
+    if (s.dam_break.enabled) {
+        j << ",\n  \"gamma_ges\": " << json_number(angles.gamma_ges);
+        for (int i = 0; i < 5; ++i) j << ",\n  \"gamma_" << i + 1 << "\": " << json_number(angles.gamma[i]);
+        j << ",\n  \"toe_x\": " << json_number(angles.toe_x) << ",\n  \"surface_at_back_wall\": " << json_number(angles.h_wall);
+    }
+    j << "\n}\n";
     write_file_atomic(dir + "/summary.json", j.str());
     return sum;
 }

@@ -230,6 +230,10 @@ const std::vector<Key>& registry() {
         k.push_back(vec2("flume.gate_end", "m", "gate W4, upper end", [](Scenario& s) -> Vec2& { return s.flume.gate_p1; }));
         k.push_back(vec2("flume.lid_start", "m", "lid W5, end at the gate", [](Scenario& s) -> Vec2& { return s.flume.lid_p0; }));
         k.push_back(vec2("flume.lid_end", "m", "lid W5, end at W1's upper end", [](Scenario& s) -> Vec2& { return s.flume.lid_p1; }));
+        // dam break
+        k.push_back(real("dam_break.width", "m", "column width: back wall at x = 0, gate at x = width (assumed: 0.20)", [](Scenario& s) -> double& { return s.dam_break.width; }, 0, 10, true));
+        k.push_back(real("dam_break.height", "m", "column height (assumed: 0.40; 0.08 m2 holds the thesis' 9,439 discs)", [](Scenario& s) -> double& { return s.dam_break.height; }, 0, 10, true));
+        k.push_back(real("dam_break.floor_length", "m", "length of the floor from the back wall", [](Scenario& s) -> double& { return s.dam_break.floor_length; }, 0, 100, true));
         // release
         k.push_back(integer("release.scale", "-", "upscaling of the sand (Table 14): radii [0.25, 0.5] mm times this (2: 36,403 discs; 4: 9,099; 20: 364)", [](Scenario& s) -> int& { return s.release.scale; }, 1, 100));
         k.push_back(real("release.r_min", "m", "smallest radius before the reduction; 0 = from the scale", [](Scenario& s) -> double& { return s.release.r_min; }, 0, 1));
@@ -428,6 +432,7 @@ void read_table(Scenario& s, const toml::table& t, const std::string& prefix, co
             continue;
         }
         if (key == "flume") s.flume.enabled = true;
+        if (key == "dam_break") s.dam_break.enabled = true;
         if (const toml::table* sub = node.as_table()) {
             read_table(s, *sub, key, file);
             continue;
@@ -479,6 +484,7 @@ void apply_override(Scenario& s, const std::string& assignment) {
     }
     spec->set(s, *t.get("v"), "--set key '" + key + "'");
     if (key.rfind("flume.", 0) == 0) s.flume.enabled = true;
+    if (key.rfind("dam_break.", 0) == 0) s.dam_break.enabled = true;
 }
 
 void finish_scenario(Scenario& s) {
@@ -487,14 +493,29 @@ void finish_scenario(Scenario& s) {
     ReleaseDef& r = s.release;
     if (r.r_min == 0.0) r.r_min = scale_r_min(r.scale);
     if (r.r_max == 0.0) r.r_max = scale_r_max(r.scale);
-    if (s.flume.enabled && !(r.r_min <= r.r_max))
+    if (s.flume.enabled && s.dam_break.enabled)
+        throw InputError(where + "a scenario is a [flume] or a [dam_break], not both");
+    if (has_release(s) && !(r.r_min <= r.r_max))
         throw InputError(where + "release.r_min = " + format_number(r.r_min) + " m must be <= release.r_max = " +
                          format_number(r.r_max) + " m");
     if (s.stop.rest_duration >= s.stop.t_max)
         throw InputError(where + "stop.rest_duration = " + format_number(s.stop.rest_duration) +
                          " s must be shorter than stop.t_max = " + format_number(s.stop.t_max) + " s");
-    if (!s.flume.enabled && s.discs.empty() && r.from_file.empty())
-        throw InputError(where + "no discs: give a [flume] (its release mass is generated), [[discs]], or release.from_file");
+    if (!has_release(s) && s.discs.empty())
+        throw InputError(where + "no discs: give a [flume] or [dam_break] (its release mass is generated), or [[discs]]");
+    if (s.dam_break.enabled) {
+        const DamBreakDef& d = s.dam_break;
+        if (2.0 * r.r_max > 0.25 * std::min(d.width, d.height))
+            throw InputError(where + "release.r_max = " + format_number(r.r_max) + " m is too large for the " +
+                             format_number(d.width) + " m x " + format_number(d.height) + " m column: at most " +
+                             format_number(std::min(d.width, d.height) / 8) + " m");
+        if (d.floor_length <= d.width)
+            throw InputError(where + "dam_break.floor_length = " + format_number(d.floor_length) +
+                             " m must exceed dam_break.width = " + format_number(d.width) + " m");
+        if (s.world.rotation.model >= 2 && !(s.world.rotation.u_rr < 0.6 * r.r_min * (1.0 - r.radius_reduction)))
+            throw InputError(where + "rotation.u_rr = " + format_number(s.world.rotation.u_rr) +
+                             " m must be < 0.6 times the smallest radius after the reduction");
+    }
     if (s.flume.enabled) {
         // the release box must close: the gate stands on W1 and meets the lid, the lid meets W1's start
         const double tol = std::max(s.world.joint_tolerance, 1e-6);
@@ -533,11 +554,11 @@ std::string resolved_toml(const Scenario& s) {
         const auto dot = k.name.find('.');
         const std::string sec = k.name.substr(0, dot);
         if (sec != section) {
-            if (sec == "flume" && !s.flume.enabled) continue;
+            if ((sec == "flume" && !s.flume.enabled) || (sec == "dam_break" && !s.dam_break.enabled)) continue;
             o << "\n[" << sec << "]\n";
             section = sec;
         }
-        if (sec == "flume" && !s.flume.enabled) continue;
+        if ((sec == "flume" && !s.flume.enabled) || (sec == "dam_break" && !s.dam_break.enabled)) continue;
         o << k.name.substr(dot + 1) << " = " << k.get(s) << "\n";
     }
     for (const WallDef& w : s.walls) {

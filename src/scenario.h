@@ -23,6 +23,15 @@ struct FlumeDef {
     Vec2 lid_p0{0.5276, 1.1150}, lid_p1{0.0, 1.1150};       // W5, m
 };
 
+// The dam break of the calibration (section 4.3.3; geometry assumed, data/dam_break_geometry.md):
+// a column between a back wall at x = 0 and a gate at x = width, on a horizontal floor.
+struct DamBreakDef {
+    bool enabled = false;                  // a [dam_break] table was given
+    double width = 0.20;                   // m, back wall to gate
+    double height = 0.40;                  // m, height of the column (the lid while it is generated)
+    double floor_length = 1.5;             // m, floor from the back wall
+};
+
 struct ReleaseDef {
     int scale = 4;                         // upscaling factor of the sand (Table 14): radii [0.25, 0.5] mm * scale
     double r_min = 0.0;                    // m; 0 = from the scale
@@ -64,6 +73,7 @@ struct Scenario {
     double wall_friction_deg = 21.7;
     double wall_kn = 1.0e8, wall_ks = 1.0e8;
     FlumeDef flume;
+    DamBreakDef dam_break;
     ReleaseDef release;
     StopDef stop;
     OutputDef output;
@@ -83,6 +93,9 @@ void finish_scenario(Scenario& s);
 std::string resolved_toml(const Scenario& s);
 // The reference page: every key with its unit, default, range and meaning (Markdown).
 std::string scenario_reference_markdown();
+
+// A scenario whose discs come from a generated (or saved) release mass.
+inline bool has_release(const Scenario& s) { return s.flume.enabled || s.dam_break.enabled; }
 
 // Radii of the release mass for a scale factor (Table 14): [0.25, 0.5] mm times the scale.
 inline double scale_r_min(int scale) { return 0.00025 * scale; }

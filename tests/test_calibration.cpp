@@ -1,0 +1,134 @@
+// The dam-break calibration: envelope and slope angles of known deposits; the sweep end to end
+// at scale 20; resuming; applying the result.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "calibration.h"
+#include "deposit.h"
+#include "error.h"
+#include "scenario.h"
+
+using namespace demlab;
+namespace fs = std::filesystem;
+
+namespace {
+// discs of radius r in columns 2r apart under a surface y(x), the top disc touching it
+void stack_under(double (*surface)(double), double r, double x_end, std::vector<Vec2>& pos, std::vector<double>& rad) {
+    for (double x = r; x < x_end; x += 2 * r) {
+        const double top = surface(x) - r;
+        for (double y = top; y > r * 0.5; y -= 2 * r) {
+            pos.emplace_back(x, y);
+            rad.push_back(r);
+        }
+    }
+}
+
+// sections (from the wall): 5 at 35 deg, 4 at 30, 3 at 25, 2 at 18, 1 at 10; toe at 0.5 m
+const double kAngles[5] = {10, 18, 25, 30, 35};  // gamma_1 .. gamma_5
+double known_surface(double x) {
+    // integrate the slopes from the toe (height 0.01 m at x = 0.5) back to the wall
+    double y = 0.01, xs = 0.5;
+    for (int i = 1; i <= 5; ++i) {
+        const double lo = (5 - i) * 0.1;
+        const double t = std::tan(kAngles[i - 1] * kPi / 180.0);
+        if (x >= lo) return y + (xs - x) * t;
+        y += (xs - lo) * t;
+        xs = lo;
+    }
+    return y;
+}
+}  // namespace
+
+TEST(Envelope, ExactTopOfTheOutlines) {
+    const std::vector<Vec2> pos{Vec2(0.1, 0.1), Vec2(0.12, 0.05)};
+    const std::vector<double> rad{0.01, 0.03};
+    const Envelope e = upper_envelope(pos, rad, {}, 0.0, 0.2, 0.001);
+    EXPECT_NEAR(e.y[100], 0.11, 1e-12);                                                  // top of the first disc
+    EXPECT_NEAR(e.y[120], 0.08, 1e-12);                                                  // top of the second
+    EXPECT_NEAR(e.y[140], 0.05 + std::sqrt(0.03 * 0.03 - 0.02 * 0.02), 1e-12);          // on its side
+    EXPECT_TRUE(std::isnan(e.y[10]));                                                    // nothing there
+}
+
+TEST(Envelope, SlopeAnglesOfASyntheticDepositWithinHalfADegree) {
+    for (double r : {0.0005, 0.001}) {
+        std::vector<Vec2> pos;
+        std::vector<double> rad;
+        stack_under(known_surface, r, 0.5, pos, rad);
+        const auto conn = connected_discs(pos, rad, r);
+        const Envelope e = upper_envelope(pos, rad, conn, 0.0, 1.0, 0.0005);
+        const SlopeAngles a = slope_angles(e);
+        for (int i = 0; i < 5; ++i) EXPECT_NEAR(a.gamma[i], kAngles[i], 0.5) << "section " << i + 1 << ", r " << r;
+        EXPECT_NEAR(a.toe_x, 0.5, 2 * r);
+        EXPECT_NEAR(a.gamma_ges, std::atan(known_surface(0.0) / 0.5) * 180 / kPi, 0.5);
+    }
+}
+
+TEST(Envelope, LoneDiscsAheadOfTheToeAreIgnored) {
+    std::vector<Vec2> pos;
+    std::vector<double> rad;
+    stack_under(known_surface, 0.001, 0.5, pos, rad);
+    pos.emplace_back(0.9, 0.001);  // a disc that rolled away
+    rad.push_back(0.001);
+    const auto conn = connected_discs(pos, rad, 0.001);
+    EXPECT_FALSE(conn.back());
+    EXPECT_NEAR(slope_angles(upper_envelope(pos, rad, conn, 0.0, 1.0, 0.0005)).toe_x, 0.5, 0.002);
+}
+
+TEST(CalibrationConfig, BadKeysAreRefused) {
+    const fs::path p = fs::temp_directory_path() / ("demlab-cal-" + std::to_string(::getpid()) + ".toml");
+    std::ofstream(p) << "[calibration]\nscenario = \"x.toml\"\nangels = [15]\n";
+    EXPECT_THROW(load_calibration(p.string()), InputError);
+    std::ofstream(p) << "[calibration]\nscenario = \"x.toml\"\nangles = [15, 95]\n";
+    EXPECT_THROW(load_calibration(p.string()), InputError);
+    std::ofstream(p) << "[calibration]\nangles = [15]\n";
+    EXPECT_THROW(load_calibration(p.string()), InputError);  // no scenario
+    fs::remove(p);
+}
+
+TEST(Calibration, TinySweepEndToEndAndResume) {
+    CalibrationConfig c = load_calibration(std::string(DEMLAB_SOURCE_DIR) + "/calibration/dam-break.toml");
+    c.scale = 20;
+    c.angles = {15.0, 17.0};
+    c.refine = false;
+    CalibrationOptions o;
+    o.out = (fs::temp_directory_path() / ("demlab-calibrate-" + std::to_string(::getpid()))).string();
+    fs::remove_all(o.out);
+    o.jobs = 2;
+    const CalibrationResult r = calibrate(c, o);
+    EXPECT_EQ(r.runs_done, 2);
+    EXPECT_TRUE(r.best_angle == 15.0 || r.best_angle == 17.0);
+    // the table: a header and 7 rows (gamma_ges, gamma_1..5, objective), columns angle, lab, 2 angles
+    std::ifstream in(o.out + "/table.csv");
+    std::string line;
+    std::vector<std::string> lines;
+    while (std::getline(in, line)) lines.push_back(line);
+    ASSERT_EQ(lines.size(), 8u);
+    EXPECT_EQ(lines[0], "angle,lab,phi17.00,phi15.00");
+    EXPECT_EQ(lines[7].rfind("objective,", 0), 0u);
+    for (const auto& l : lines) EXPECT_EQ(std::count(l.begin(), l.end(), ','), 3) << l;
+    EXPECT_TRUE(fs::exists(o.out + "/table.md"));
+    EXPECT_TRUE(fs::exists(o.out + "/runs/phi15.00-seed1/deposit.png"));
+    // resuming a finished sweep runs nothing new
+    const CalibrationResult again = calibrate(c, o);
+    EXPECT_EQ(again.runs_done, 0);
+    EXPECT_EQ(again.runs_reused, 2);
+    EXPECT_EQ(again.best_angle, r.best_angle);
+    fs::remove_all(o.out);
+}
+
+TEST(Calibration, ApplyWritesACopyAndNeverOverwrites) {
+    const fs::path dir = fs::temp_directory_path() / ("demlab-apply-" + std::to_string(::getpid()));
+    fs::create_directories(dir);
+    fs::copy_file(std::string(DEMLAB_SOURCE_DIR) + "/scenarios/geometry-A.toml", dir / "geometry-A.toml");
+    const std::string out = apply_calibration((dir / "geometry-A.toml").string(), 15.7, false);
+    EXPECT_EQ(fs::path(out).filename(), "geometry-A-calibrated.toml");
+    Scenario s = load_scenario(out);
+    EXPECT_DOUBLE_EQ(s.disc_friction_deg, 15.7);
+    EXPECT_DOUBLE_EQ(load_scenario((dir / "geometry-A.toml").string()).disc_friction_deg, 15.5);  // original intact
+    EXPECT_THROW(apply_calibration((dir / "geometry-A.toml").string(), 16.0, false), InputError);
+    fs::remove_all(dir);
+}
