@@ -71,7 +71,7 @@ TEST(Scenario, EveryShippedScenarioLoadsAndResolves) {
         if (e.path().extension() != ".toml") continue;
         Scenario s = load_scenario(e.path().string());
         EXPECT_NO_THROW(finish_scenario(s)) << e.path();
-        EXPECT_TRUE(s.flume.enabled);
+        EXPECT_TRUE(has_release(s));
         // the resolved scenario parses back to the same values
         Scenario again = parse_scenario(resolved_toml(s), "resolved");
         finish_scenario(again);
@@ -79,7 +79,7 @@ TEST(Scenario, EveryShippedScenarioLoadsAndResolves) {
                   resolved_toml(s).substr(resolved_toml(s).find('\n', 80)));
         ++count;
     }
-    EXPECT_EQ(count, 11);  // 8 rows of Table 2 and the presets A, B, C
+    EXPECT_EQ(count, 12);  // 8 rows of Table 2, the presets A, B, C and the dam break
 }
 
 TEST(Release, CountFollowsPfcsRuleForTheThesisScales) {
