@@ -1,9 +1,22 @@
 #!/usr/bin/env bash
-# Installs the dependencies, builds demlab and its tests, and runs the tests.
-# usage: scripts/test.sh            (the fast suite: what CI runs)
+# Installs the dependencies, builds demlab and its tests, and runs the tests: first the
+# Release build, then the same suite under AddressSanitizer and UndefinedBehaviorSanitizer.
+# usage: scripts/test.sh            (what CI runs; ~10 minutes on 2 cores)
+#        DEMLAB_SANITIZE=0 scripts/test.sh   (skip the sanitizer pass)
+# Slow validation runs are labelled "slow" and left out: ctest --test-dir build -L slow
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/install-deps.sh
+jobs="$(nproc)"
 cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
-cmake --build build -j "$(nproc)"
-ctest --test-dir build --output-on-failure -j "$(nproc)" -LE slow
+cmake --build build -j "$jobs"
+ctest --test-dir build --output-on-failure -j "$jobs" -LE slow
+if [ "${DEMLAB_SANITIZE:-1}" = "1" ]; then
+  echo "== the same suite under AddressSanitizer + UndefinedBehaviorSanitizer"
+  cmake -S . -B build-asan -G Ninja -DCMAKE_BUILD_TYPE=Debug -DDEMLAB_SANITIZE=ON -DCMAKE_CXX_FLAGS=-O1 >/dev/null
+  cmake --build build-asan -j "$jobs"
+  ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 \
+  LSAN_OPTIONS="suppressions=$PWD/tests/lsan.supp" \
+  UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+    ctest --test-dir build-asan --output-on-failure -j "$jobs" -LE slow
+fi
