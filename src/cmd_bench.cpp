@@ -19,6 +19,7 @@ struct BenchOptions {
     long steps = 20000;
     std::string file;
     bool peer = false;
+    int threads = 1;
 };
 
 // Runs the LAMMPS script and returns its particle-steps/s (0 if it could not run).
@@ -43,7 +44,9 @@ int bench(const BenchOptions& o) {
     if (o.steps < 1) throw InputError("bench --steps = " + std::to_string(o.steps) + ": must be >= 1");
     const std::string path = o.file.empty() ? default_db9k_path() : o.file;
     const auto discs = read_xyr(path);
-    World world(db9k_world_def());
+    WorldDef def = db9k_world_def();
+    def.threads = o.threads;
+    World world(def);
     build_db9k(world, discs);
     world.finalize();
 
@@ -57,7 +60,7 @@ int bench(const BenchOptions& o) {
     progress.finish();
     const double rate = double(world.disc_count()) * double(o.steps) / secs;
     const auto& bs = world.broad_phase_stats();
-    std::printf("DB-9k: N=%zu steps=%ld dt=%g s threads=1\n", world.disc_count(), o.steps, world.dt());
+    std::printf("DB-9k: N=%zu steps=%ld dt=%g s threads=%d\n", world.disc_count(), o.steps, world.dt(), o.threads);
     std::printf("  wall time %.3f s, %.3e particle-steps/s, %.1f ns per particle-step\n", secs, rate,
                 1e9 * secs / (double(world.disc_count()) * double(o.steps)));
     std::printf("  broad phase: margin %.3g m, %ld updates, %ld re-insertions; contacts now %ld disc-disc, %ld disc-wall\n",
@@ -65,8 +68,9 @@ int bench(const BenchOptions& o) {
                 world.touching_wall_pairs());
     std::printf("  final-state checksum %016llx\n", static_cast<unsigned long long>(state_hash(world)));
     if (o.peer) {
-        std::printf("peer: LAMMPS, %ld steps, 1 rank\n", o.steps);
-        const double peer = run_peer(o.steps, 1);
+        const int ranks = o.threads > 1 ? 2 : 1;
+        std::printf("peer: LAMMPS, %ld steps, %d rank(s)\n", o.steps, ranks);
+        const double peer = run_peer(o.steps, ranks);
         if (peer > 0)
             std::printf("  demlab %.3e vs LAMMPS %.3e particle-steps/s: ratio %.2f\n", rate, peer, rate / peer);
         else
@@ -83,6 +87,8 @@ Command add_bench_command(CLI::App& app) {
     sub->add_option("--steps", opts->steps, "Number of time steps (20000: the quick figure; 100000: the reference)")
         ->capture_default_str();
     sub->add_option("--file", opts->file, "Initial state 'id x y r' (default: the repository's bench/db9k/db9k_initial.xyr)");
+    sub->add_option("--threads", opts->threads, "Worker threads (the final state is the same bits for any count)")
+        ->capture_default_str()->check(CLI::Range(1, 64));
     sub->add_flag("--peer", opts->peer, "Also run LAMMPS (bench/db9k/lammps/run.sh) on the same work and print the ratio");
     return [opts] { return bench(*opts); };
 }

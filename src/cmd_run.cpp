@@ -27,6 +27,7 @@ struct RunCliOptions {
     std::string release_from;
     bool force = false;
     bool frames = false;
+    int threads = 1;
     bool no_plots = false;
 };
 
@@ -38,6 +39,7 @@ int run_command(const RunCliOptions& o) {
     if (!o.release_from.empty()) s.release.from_file = o.release_from;
     for (const std::string& a : o.set) apply_override(s, a);
     finish_scenario(s);
+    s.world.threads = o.threads;
     RunOptions ro;
     ro.out_dir = o.out.empty() ? "runs/" + s.name : o.out;
     ro.force = o.force;
@@ -81,6 +83,8 @@ Command add_run_command(CLI::App& app) {
     sub->add_option("--set", o->set, "Override a scenario key: --set key=value (repeatable), e.g. --set material.friction_disc_deg=16");
     sub->add_option("--release-from", o->release_from, "Start from a settled release mass (release.csv of an earlier run)");
     sub->add_flag("--force", o->force, "Replace the files of an existing output folder");
+    sub->add_option("--threads", o->threads, "Worker threads (results are the same bits for any count)")
+        ->capture_default_str()->check(CLI::Range(1, 64));
     sub->add_flag("--frames", o->frames, "Render a PNG frame at every snapshot while running (RUN_DIR/frames)");
     sub->add_flag("--no-plots", o->no_plots, "Do not make the plots (RUN_DIR/plots) at the end");
     return [o] { return run_command(*o); };

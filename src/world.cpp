@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "error.h"
+#include "thread_pool.h"
 #include "timestep.h"
 #include "validate.h"
 
@@ -26,7 +27,10 @@ void validate(const WorldDef& d, const std::string& where) {
     require_range(where + ".max_overlap_ratio", d.max_overlap_ratio, 1e-6, 2.0, false, "(ratio)");
 }
 
-World::World(const WorldDef& def) : def_(def) {}
+World::World(const WorldDef& def) : def_(def), pool_(std::make_unique<ThreadPool>(def.threads)) {}
+
+World::~World() = default;
+World::World(World&&) noexcept = default;
 
 int World::add_material(const MaterialDef& m) {
     validate(m, "material[" + std::to_string(materials_.size()) + "]");
@@ -281,6 +285,27 @@ void World::refresh_contacts() {
                                dashpot_coefficient(def_.damping.beta_s, m_eff, pm.ks), 0.0f, 0.0f});
     }
     dw_.swap(dw_scratch_);
+
+    // adjacency for the gather: each disc's contacts in contact-list order (counting sort)
+    const size_t n = pos_.size();
+    adj_start_.assign(n + 1, 0);
+    for (const DiscContact& c : dd_) {
+        ++adj_start_[size_t(c.i) + 1];
+        ++adj_start_[size_t(c.j) + 1];
+    }
+    for (size_t d = 0; d < n; ++d) adj_start_[d + 1] += adj_start_[d];
+    adj_.resize(2 * dd_.size());
+    std::vector<int32_t> fill(adj_start_.begin(), adj_start_.end() - 1);
+    for (size_t k = 0; k < dd_.size(); ++k) {
+        adj_[size_t(fill[size_t(dd_[k].i)]++)] = int32_t(2 * k);
+        adj_[size_t(fill[size_t(dd_[k].j)]++)] = int32_t(2 * k + 1);
+    }
+    wadj_start_.assign(n + 1, 0);
+    for (const WallContact& c : dw_) ++wadj_start_[size_t(c.disc) + 1];
+    for (size_t d = 0; d < n; ++d) wadj_start_[d + 1] += wadj_start_[d];
+    wadj_.resize(dw_.size());
+    fill.assign(wadj_start_.begin(), wadj_start_.end() - 1);
+    for (size_t k = 0; k < dw_.size(); ++k) wadj_[size_t(fill[size_t(dw_[k].disc)]++)] = int32_t(k);
 }
 
 static std::string where_disc(long step, double t, int i, const Vec2& p) {
@@ -289,137 +314,211 @@ static std::string where_disc(long step, double t, int i, const Vec2& p) {
     return s.str();
 }
 
+// The contact pass is contact-centric: each contact writes its forces to its own slot
+// (dd_out_, dw_out_), then every disc gathers its contacts in the order of the contact list
+// (adjacency built in refresh_contacts). No sum depends on how the contacts are shared out
+// among threads, so any thread count gives the same bits.
 void World::compute_forces() {
     const size_t n = pos_.size(), nw = walls_.size(), nm = materials_.size();
-    std::fill(force_.begin(), force_.end(), Vec2::Zero());
-    std::fill(torque_.begin(), torque_.end(), 0.0);
-    std::fill(n_wall_.begin(), n_wall_.end(), 0);
-    std::fill(n_disc_.begin(), n_disc_.end(), 0);
-    std::fill(wall_normal_.begin(), wall_normal_.end(), 0.0);
-    std::fill(k_tran_.begin(), k_tran_.end(), 0.0);
-    std::fill(k_rot_.begin(), k_rot_.end(), 0.0);
-    std::fill(wall_force_.begin(), wall_force_.end(), Vec2::Zero());
-    std::fill(wall_moment_.begin(), wall_moment_.end(), 0.0);
-    (void)n;
-
     const DashpotMode mode = def_.damping.dp_mode;
     const double dt = dt_;
     const double last_dt = last_dt_;
     const double max_ratio = def_.max_overlap_ratio;
-    double dissipated = 0.0;
-    long touching = 0;
+    dd_out_.resize(dd_.size());
+    dw_out_.resize(dw_.size());
+    struct Fault {
+        size_t index = SIZE_MAX;
+        std::string message;
+    };
+    std::vector<Fault> dd_fault(size_t(pool_->size())), dw_fault(size_t(pool_->size()));
 
     // disc-disc: n from i (A) to j (B); the force on j is F = fn n + ft t, on i -F
-    for (DiscContact& c : dd_) {
-        const size_t i = size_t(c.i), j = size_t(c.j);
-        const Vec2 d = pos_[j] - pos_[i];
-        const double rsum = radius_[i] + radius_[j];
-        const double dist2 = d.squaredNorm();
-        if (dist2 >= rsum * rsum) {
-            // PFC deletes a contact that opens: its history starts again at zero. The last
-            // dashpot force still acted over the second half of the previous step.
-            if (c.damp_n != 0.0f || c.damp_s != 0.0f) {
-                const Vec2 vrel = vel_[j] - vel_[i];
-                const Vec2 nrm = d / std::sqrt(dist2);
-                const double vs = vrel.dot(perp(nrm)) - (omega_[i] * radius_[i] + omega_[j] * radius_[j]);
-                dissipated -= 0.5 * last_dt * (c.damp_n * vrel.dot(nrm) + c.damp_s * vs);
+    pool_->parallel_for(dd_.size(), [&](size_t begin, size_t end, int chunk) {
+        for (size_t k = begin; k < end; ++k) {
+            DiscContact& c = dd_[k];
+            PairOut& out = dd_out_[k];
+            const size_t i = size_t(c.i), j = size_t(c.j);
+            const Vec2 d = pos_[j] - pos_[i];
+            const double rsum = radius_[i] + radius_[j];
+            const double dist2 = d.squaredNorm();
+            out.touching = 0;
+            out.dissipated = 0.0;
+            if (dist2 >= rsum * rsum) {
+                // PFC deletes a contact that opens: its history starts again at zero. The last
+                // dashpot force still acted over the second half of the previous step.
+                if (c.damp_n != 0.0f || c.damp_s != 0.0f) {
+                    const Vec2 vrel = vel_[j] - vel_[i];
+                    const Vec2 nrm = d / std::sqrt(dist2);
+                    const double vs = vrel.dot(perp(nrm)) - (omega_[i] * radius_[i] + omega_[j] * radius_[j]);
+                    out.dissipated = -0.5 * last_dt * (c.damp_n * vrel.dot(nrm) + c.damp_s * vs);
+                }
+                c.fs = 0.0;
+                c.damp_n = c.damp_s = 0.0f;
+                continue;
             }
-            c.fs = 0.0;
-            c.damp_n = c.damp_s = 0.0f;
-            continue;
+            const double dist = std::sqrt(dist2);
+            const double overlap = rsum - dist;
+            if (!(overlap <= max_ratio * std::min(radius_[i], radius_[j])) || dist == 0.0) {
+                if (k < dd_fault[size_t(chunk)].index)
+                    dd_fault[size_t(chunk)] = {k, "blow-up: overlap " + format_number(overlap) + " m between discs " +
+                                                      std::to_string(i) + " and " + std::to_string(j) + " exceeds " +
+                                                      format_number(max_ratio) + " of the smaller radius at " +
+                                                      where_disc(steps_, time_, int(i), pos_[i]) +
+                                                      ". Likely cause: the time step is too large for the stiffness and "
+                                                      "speeds (use the automatic time step or a smaller safety factor)"};
+                continue;
+            }
+            const Vec2 nrm = d / dist;
+            const Vec2 t = perp(nrm);
+            // PFC's contact point: x_A + (r_A - U/2) n; the lever arms of both discs
+            const double ra = radius_[i] - 0.5 * overlap, rb = radius_[j] - 0.5 * overlap;
+            const Vec2 vrel = vel_[j] - vel_[i];
+            const double vn = vrel.dot(nrm);
+            // eq. 2.46: tangential velocity of B relative to A at the contact point
+            const double vs = vrel.dot(t) - (omega_[i] * ra + omega_[j] * rb);
+            const PairMaterial& pm = mat_dd_[size_t(material_[i]) * nm + size_t(material_[j])];
+            const LinearContactParams p{pm.kn, pm.ks, pm.mu, c.cn, c.cs, mode};
+            const LinearContactForce f = linear_contact(p, overlap, vn, vs, dt, c.fs);
+            c.fs = f.fs_spring;
+            // centred dashpot work: this step's force over the first half, the last step's
+            // force over the second half of the velocity interval around v(t - dt/2)
+            out.dissipated = f.slip_work -
+                             0.5 * ((f.damp_n * dt + c.damp_n * last_dt) * vn + (f.damp_s * dt + c.damp_s * last_dt) * vs);
+            c.damp_n = float(f.damp_n);
+            c.damp_s = float(f.damp_s);
+            out.f = f.fn * nrm + f.ft * t;
+            // torque = lever x force; both levers give -r * ft (docs/engine.md)
+            out.torque_i = -ra * f.ft;
+            out.torque_j = -rb * f.ft;
+            out.kt = std::max(pm.kn, pm.ks);
+            out.ks = pm.ks;
+            out.touching = 1;
         }
-        const double dist = std::sqrt(dist2);
-        const double overlap = rsum - dist;
-        if (!(overlap <= max_ratio * std::min(radius_[i], radius_[j])) || dist == 0.0)
-            throw RunError("blow-up: overlap " + format_number(overlap) + " m between discs " + std::to_string(i) +
-                           " and " + std::to_string(j) + " exceeds " + format_number(max_ratio) +
-                           " of the smaller radius at " + where_disc(steps_, time_, int(i), pos_[i]) +
-                           ". Likely cause: the time step is too large for the stiffness and speeds "
-                           "(use the automatic time step or a smaller safety factor)");
-        ++touching;
-        const Vec2 nrm = d / dist;
-        const Vec2 t = perp(nrm);
-        // PFC's contact point: x_A + (r_A - U/2) n; the lever arms of both discs
-        const double ra = radius_[i] - 0.5 * overlap, rb = radius_[j] - 0.5 * overlap;
-        const Vec2 vrel = vel_[j] - vel_[i];
-        const double vn = vrel.dot(nrm);
-        // eq. 2.46: tangential velocity of B relative to A at the contact point
-        const double vs = vrel.dot(t) - (omega_[i] * ra + omega_[j] * rb);
-        const PairMaterial& pm = mat_dd_[size_t(material_[i]) * nm + size_t(material_[j])];
-        const LinearContactParams p{pm.kn, pm.ks, pm.mu, c.cn, c.cs, mode};
-        const LinearContactForce f = linear_contact(p, overlap, vn, vs, dt, c.fs);
-        c.fs = f.fs_spring;
-        // centred dashpot work: this step's force over the first half, the last step's
-        // force over the second half of the velocity interval around v(t - dt/2)
-        dissipated -= 0.5 * ((f.damp_n * dt + c.damp_n * last_dt) * vn + (f.damp_s * dt + c.damp_s * last_dt) * vs);
-        dissipated += f.slip_work;
-        c.damp_n = float(f.damp_n);
-        c.damp_s = float(f.damp_s);
-        const Vec2 F = f.fn * nrm + f.ft * t;
-        force_[j] += F;
-        force_[i] -= F;
-        // torque = lever x force; both levers give -r * ft (see docs/contact-frame)
-        torque_[j] -= rb * f.ft;
-        torque_[i] -= ra * f.ft;
-        ++n_disc_[i];
-        ++n_disc_[j];
-        const double kt = std::max(pm.kn, pm.ks);
-        k_tran_[i] += kt;
-        k_tran_[j] += kt;
-        k_rot_[i] += pm.ks;
-        k_rot_[j] += pm.ks;
-    }
-    touching_dd_ = touching;
+    });
 
     // disc-wall: n from the wall (A) to the disc (B)
-    touching = 0;
-    for (WallContact& c : dw_) {
-        const size_t i = size_t(c.disc), w = size_t(c.wall);
-        WallHit hit;
-        if (!wall_active_[w] || !disc_wall_contact(geom_[w], pos_[i], radius_[i], hit)) {
-            if (c.damp_n != 0.0f || c.damp_s != 0.0f) {
-                // the last dashpot force's second half, along the normal it had
-                const Vec2 vrel = vel_[i] - (wall_moving_[w] ? walls_[w].velocity : Vec2::Zero());
-                const Vec2 q = closest_point(geom_[w], pos_[i]);
-                const Vec2 nrm = (pos_[i] - q).normalized();
-                const double vs = vrel.dot(perp(nrm)) - omega_[i] * radius_[i];
-                dissipated -= 0.5 * last_dt * (c.damp_n * vrel.dot(nrm) + c.damp_s * vs);
+    pool_->parallel_for(dw_.size(), [&](size_t begin, size_t end, int chunk) {
+        for (size_t k = begin; k < end; ++k) {
+            WallContact& c = dw_[k];
+            WallOut& out = dw_out_[k];
+            const size_t i = size_t(c.disc), w = size_t(c.wall);
+            out.touching = 0;
+            out.dissipated = 0.0;
+            WallHit hit;
+            if (!wall_active_[w] || !disc_wall_contact(geom_[w], pos_[i], radius_[i], hit)) {
+                if (c.damp_n != 0.0f || c.damp_s != 0.0f) {
+                    // the last dashpot force's second half, along the normal it had
+                    const Vec2 vrel = vel_[i] - (wall_moving_[w] ? walls_[w].velocity : Vec2::Zero());
+                    const Vec2 q = closest_point(geom_[w], pos_[i]);
+                    const Vec2 nrm = (pos_[i] - q).normalized();
+                    const double vs = vrel.dot(perp(nrm)) - omega_[i] * radius_[i];
+                    out.dissipated = -0.5 * last_dt * (c.damp_n * vrel.dot(nrm) + c.damp_s * vs);
+                }
+                c.fs = 0.0;
+                c.damp_n = c.damp_s = 0.0f;
+                continue;
             }
-            c.fs = 0.0;
-            c.damp_n = c.damp_s = 0.0f;
-            continue;
+            if (!(hit.overlap <= max_ratio * radius_[i])) {
+                if (k < dw_fault[size_t(chunk)].index)
+                    dw_fault[size_t(chunk)] = {k, "blow-up: overlap " + format_number(hit.overlap) + " m of disc " +
+                                                      std::to_string(i) + " with wall '" + walls_[w].name + "' exceeds " +
+                                                      format_number(max_ratio) + " of its radius at " +
+                                                      where_disc(steps_, time_, int(i), pos_[i]) +
+                                                      ". Likely cause: a time step too large for the stiffness, or a "
+                                                      "disc crossing the wall"};
+                continue;
+            }
+            const Vec2 nrm = hit.normal;
+            const Vec2 t = perp(nrm);
+            const double rb = radius_[i] - 0.5 * hit.overlap;
+            const Vec2 vwall = wall_moving_[w] ? walls_[w].velocity : Vec2::Zero();
+            const Vec2 vrel = vel_[i] - vwall;
+            const double vn = vrel.dot(nrm);
+            const double vs = vrel.dot(t) - omega_[i] * rb;
+            const PairMaterial& pm = mat_dw_[size_t(material_[i]) * nw + w];
+            const LinearContactParams p{pm.kn, pm.ks, pm.mu, c.cn, c.cs, mode};
+            const LinearContactForce f = linear_contact(p, hit.overlap, vn, vs, dt, c.fs);
+            c.fs = f.fs_spring;
+            out.dissipated = f.slip_work -
+                             0.5 * ((f.damp_n * dt + c.damp_n * last_dt) * vn + (f.damp_s * dt + c.damp_s * last_dt) * vs);
+            c.damp_n = float(f.damp_n);
+            c.damp_s = float(f.damp_s);
+            out.f = f.fn * nrm + f.ft * t;
+            out.torque = -rb * f.ft;
+            out.point = pos_[i] - rb * nrm;
+            out.fn_spring = f.fn_spring;
+            out.kt = std::max(pm.kn, pm.ks);
+            out.ks = pm.ks;
+            out.touching = 1;
         }
-        if (!(hit.overlap <= max_ratio * radius_[i]))
-            throw RunError("blow-up: overlap " + format_number(hit.overlap) + " m of disc " + std::to_string(i) +
-                           " with wall '" + walls_[w].name + "' exceeds " + format_number(max_ratio) +
-                           " of its radius at " + where_disc(steps_, time_, int(i), pos_[i]) +
-                           ". Likely cause: a time step too large for the stiffness, or a disc crossing the wall");
+    });
+    for (const auto* faults : {&dd_fault, &dw_fault}) {
+        const Fault* first = nullptr;
+        for (const Fault& f : *faults)
+            if (f.index != SIZE_MAX && (!first || f.index < first->index)) first = &f;
+        if (first) throw RunError(first->message);
+    }
+
+    // gather: every disc sums its contacts in contact-list order
+    pool_->parallel_for(n, [&](size_t begin, size_t end, int) {
+        for (size_t d = begin; d < end; ++d) {
+            Vec2 f = Vec2::Zero();
+            double tq = 0.0, kt = 0.0, ks = 0.0, wn = 0.0;
+            int nd = 0, nwc = 0;
+            for (int32_t e = adj_start_[d]; e < adj_start_[d + 1]; ++e) {
+                const int32_t code = adj_[size_t(e)];
+                const PairOut& o = dd_out_[size_t(code >> 1)];
+                if (!o.touching) continue;
+                if (code & 1) {  // disc d is j (B)
+                    f += o.f;
+                    tq += o.torque_j;
+                } else {
+                    f -= o.f;
+                    tq += o.torque_i;
+                }
+                kt += o.kt;
+                ks += o.ks;
+                ++nd;
+            }
+            for (int32_t e = wadj_start_[d]; e < wadj_start_[d + 1]; ++e) {
+                const WallOut& o = dw_out_[size_t(wadj_[size_t(e)])];
+                if (!o.touching) continue;
+                f += o.f;
+                tq += o.torque;
+                kt += o.kt;
+                ks += o.ks;
+                wn += o.fn_spring;
+                ++nwc;
+            }
+            force_[d] = f;
+            torque_[d] = tq;
+            k_tran_[d] = kt;
+            k_rot_[d] = ks;
+            wall_normal_[d] = wn;
+            n_disc_[d] = nd;
+            n_wall_[d] = nwc;
+        }
+    });
+
+    // the ledger and the wall loads, in contact-list order
+    double dissipated = 0.0;
+    long touching = 0;
+    for (const PairOut& o : dd_out_) {
+        dissipated += o.dissipated;
+        touching += o.touching;
+    }
+    touching_dd_ = touching;
+    touching = 0;
+    std::fill(wall_force_.begin(), wall_force_.end(), Vec2::Zero());
+    std::fill(wall_moment_.begin(), wall_moment_.end(), 0.0);
+    for (size_t k = 0; k < dw_.size(); ++k) {
+        const WallOut& o = dw_out_[k];
+        dissipated += o.dissipated;
+        if (!o.touching) continue;
         ++touching;
-        const Vec2 nrm = hit.normal;
-        const Vec2 t = perp(nrm);
-        const double rb = radius_[i] - 0.5 * hit.overlap;
-        const Vec2 vwall = wall_moving_[w] ? walls_[w].velocity : Vec2::Zero();
-        const Vec2 vrel = vel_[i] - vwall;
-        const double vn = vrel.dot(nrm);
-        const double vs = vrel.dot(t) - omega_[i] * rb;
-        const PairMaterial& pm = mat_dw_[size_t(material_[i]) * nw + w];
-        const LinearContactParams p{pm.kn, pm.ks, pm.mu, c.cn, c.cs, mode};
-        const LinearContactForce f = linear_contact(p, hit.overlap, vn, vs, dt, c.fs);
-        c.fs = f.fs_spring;
-        dissipated -= 0.5 * ((f.damp_n * dt + c.damp_n * last_dt) * vn + (f.damp_s * dt + c.damp_s * last_dt) * vs);
-        dissipated += f.slip_work;
-        c.damp_n = float(f.damp_n);
-        c.damp_s = float(f.damp_s);
-        const Vec2 F = f.fn * nrm + f.ft * t;
-        force_[i] += F;
-        torque_[i] -= rb * f.ft;
-        const Vec2 contact_point = pos_[i] - rb * nrm;
-        wall_force_[w] -= F;
-        wall_moment_[w] -= cross(contact_point, F);
-        ++n_wall_[i];
-        wall_normal_[i] += f.fn_spring;
-        k_tran_[i] += std::max(pm.kn, pm.ks);
-        k_rot_[i] += pm.ks;
+        const size_t w = size_t(dw_[k].wall);
+        wall_force_[w] -= o.f;
+        wall_moment_[w] -= cross(o.point, o.f);
     }
     touching_dw_ = touching;
     diss_contacts_ += dissipated;
@@ -450,8 +549,12 @@ void World::integrate() {
     const double alpha = def_.damping.local_alpha;
     const RotationDef& rot = def_.rotation;
     const double g_abs = g.norm();
-    double diss_local = 0.0, diss_rot = 0.0;
-    for (size_t i = 0; i < n; ++i) {
+    diss_local_disc_.resize(n);
+    diss_rot_disc_.resize(n);
+    std::vector<size_t> fault(size_t(pool_->size()), SIZE_MAX);
+    pool_->parallel_for(n, [&](size_t begin, size_t end, int chunk) {
+    for (size_t i = begin; i < end; ++i) {
+        double diss_local = 0.0, diss_rot = 0.0;
         Vec2 f = force_[i] + mass_[i] * g;
         Vec2 fd = Vec2::Zero();
         if (alpha > 0.0) {
@@ -492,19 +595,29 @@ void World::integrate() {
             omega_[i] = w;
             angle_[i] += w * dt;
         }
+        diss_local_disc_[i] = diss_local;
+        diss_rot_disc_[i] = diss_rot;
+        const Vec2& p = pos_[i];
+        const bool bad = !std::isfinite(p.x() + p.y() + vel_[i].x() + vel_[i].y()) || p.x() < def_.domain_lo.x() ||
+                         p.y() < def_.domain_lo.y() || p.x() > def_.domain_hi.x() || p.y() > def_.domain_hi.y();
+        if (bad && fault[size_t(chunk)] == SIZE_MAX) fault[size_t(chunk)] = i;
+    }
+    });
+    for (size_t i : fault) {
+        if (i == SIZE_MAX) continue;
         const Vec2& p = pos_[i];
         if (!std::isfinite(p.x() + p.y() + vel_[i].x() + vel_[i].y()))
             throw RunError("blow-up: non-finite state of disc " + std::to_string(i) + " at step " +
                            std::to_string(steps_) + ", t = " + format_number(time_) +
                            " s. Likely cause: a time step too large for the stiffness");
-        if (p.x() < def_.domain_lo.x() || p.y() < def_.domain_lo.y() || p.x() > def_.domain_hi.x() ||
-            p.y() > def_.domain_hi.y())
-            throw RunError("lost disc: " + where_disc(steps_, time_, int(i), p) +
-                           " left the domain. Likely cause: a disc crossed a wall (time step too large, or a gap "
-                           "between walls)");
+        throw RunError("lost disc: " + where_disc(steps_, time_, int(i), p) +
+                       " left the domain. Likely cause: a disc crossed a wall (time step too large, or a gap "
+                       "between walls)");
     }
-    diss_local_ += diss_local;
-    diss_rotation_ += diss_rot;
+    for (size_t i = 0; i < n; ++i) {
+        diss_local_ += diss_local_disc_[i];
+        diss_rotation_ += diss_rot_disc_[i];
+    }
 }
 
 void World::move_walls() {

@@ -3,6 +3,7 @@
 // time step, central-difference motion with the chosen rotation model, wall motion.
 #pragma once
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -14,6 +15,8 @@
 #include "wall.h"
 
 namespace demlab {
+
+class ThreadPool;
 
 struct DampingDef {
     double beta_n = 0.5;                   // -, normal critical damping ratio in [0, 1) (Table 15)
@@ -42,6 +45,7 @@ struct WorldDef {
     double max_overlap_ratio = 0.5;        // -, an overlap beyond this fraction of the smaller radius stops the run
     Vec2 domain_lo{-1e30, -1e30};          // m, a disc centre leaving [lo, hi] stops the run
     Vec2 domain_hi{1e30, 1e30};
+    int threads = 1;                       // worker threads; results are the same bits for any count
 };
 
 void validate(const WorldDef& d, const std::string& where);
@@ -93,6 +97,8 @@ struct EnergyReport {
 class World {
 public:
     explicit World(const WorldDef& def = WorldDef{});
+    ~World();
+    World(World&&) noexcept;
 
     int add_material(const MaterialDef& m);
     int add_disc(const DiscDef& d);
@@ -191,6 +197,22 @@ private:
     std::vector<double> wall_moment_;
 
     BroadPhase broad_;
+    std::unique_ptr<ThreadPool> pool_;
+    // per-contact results of the force pass and each disc's contacts (CSR), for the gather
+    struct PairOut {
+        Vec2 f;                     // force on j (B); i gets -f
+        double torque_i, torque_j, dissipated, kt, ks;
+        uint8_t touching;
+    };
+    struct WallOut {
+        Vec2 f, point;              // force on the disc, contact point
+        double torque, dissipated, kt, ks, fn_spring;
+        uint8_t touching;
+    };
+    std::vector<PairOut> dd_out_;
+    std::vector<WallOut> dw_out_;
+    std::vector<int32_t> adj_start_, adj_, wadj_start_, wadj_;
+    std::vector<double> diss_local_disc_, diss_rot_disc_;
     std::vector<DiscContact> dd_, dd_scratch_;
     std::vector<WallContact> dw_, dw_scratch_;
     long touching_dd_ = 0, touching_dw_ = 0;

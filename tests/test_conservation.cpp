@@ -126,6 +126,22 @@ TEST(Conservation, EnergyLedgerOfADampedFrictionalCollapseCloses) {
     }
 }
 
+TEST(Determinism, OneAndTwoThreadsGiveTheSameBits) {
+    // DB-9k, the whole column, 20,000 steps (0.1 s: the densest phase)
+    const auto discs = read_xyr(default_db9k_path());
+    uint64_t h[2];
+    for (int threads : {1, 2}) {
+        WorldDef def = db9k_world_def();
+        def.threads = threads;
+        World w(def);
+        build_db9k(w, discs);
+        w.finalize();
+        w.run(20000);
+        h[threads - 1] = state_hash(w);
+    }
+    EXPECT_EQ(h[0], h[1]);
+}
+
 TEST(Determinism, SameSetUpSameStateHash) {
     auto discs = read_xyr(default_db9k_path());
     discs.resize(1500);
