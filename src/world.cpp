@@ -459,6 +459,43 @@ void World::compute_forces() {
         if (first) throw RunError(first->message);
     }
 
+    if (pool_->size() == 1) {
+        // one thread: scatter in contact-list order. Every disc receives its terms in the
+        // same order as the gather below adds them, so the bits are the same either way.
+        std::fill(force_.begin(), force_.end(), Vec2::Zero());
+        std::fill(torque_.begin(), torque_.end(), 0.0);
+        std::fill(k_tran_.begin(), k_tran_.end(), 0.0);
+        std::fill(k_rot_.begin(), k_rot_.end(), 0.0);
+        std::fill(wall_normal_.begin(), wall_normal_.end(), 0.0);
+        std::fill(n_disc_.begin(), n_disc_.end(), 0);
+        std::fill(n_wall_.begin(), n_wall_.end(), 0);
+        for (size_t k = 0; k < dd_.size(); ++k) {
+            const PairOut& o = dd_out_[k];
+            if (!o.touching) continue;
+            const size_t i = size_t(dd_[k].i), j = size_t(dd_[k].j);
+            force_[j] += o.f;
+            force_[i] -= o.f;
+            torque_[j] += o.torque_j;
+            torque_[i] += o.torque_i;
+            k_tran_[i] += o.kt;
+            k_tran_[j] += o.kt;
+            k_rot_[i] += o.ks;
+            k_rot_[j] += o.ks;
+            ++n_disc_[i];
+            ++n_disc_[j];
+        }
+        for (size_t k = 0; k < dw_.size(); ++k) {
+            const WallOut& o = dw_out_[k];
+            if (!o.touching) continue;
+            const size_t i = size_t(dw_[k].disc);
+            force_[i] += o.f;
+            torque_[i] += o.torque;
+            k_tran_[i] += o.kt;
+            k_rot_[i] += o.ks;
+            wall_normal_[i] += o.fn_spring;
+            ++n_wall_[i];
+        }
+    } else
     // gather: every disc sums its contacts in contact-list order
     pool_->parallel_for(n, [&](size_t begin, size_t end, int) {
         for (size_t d = begin; d < end; ++d) {
