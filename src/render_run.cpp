@@ -68,6 +68,12 @@ int render_run(const RenderRunOptions& o) {
     style.speed_max = o.speed_max;
     const Frame first = read_frame(snaps.front().discs, snaps.front().walls);
     parse_view(o.view, first, style);
+    if (!style.view_set) {
+        // one view for the whole sequence: the walls at the first snapshot (a lifting gate
+        // would otherwise rescale every frame)
+        fit_view(first, style.view_lo, style.view_hi);
+        style.view_set = true;
+    }
     const std::string out = o.out.empty() ? o.run_dir + "/frames" : o.out;
     prepare_output_dir(out, o.force);
 
@@ -141,13 +147,21 @@ int render_run(const RenderRunOptions& o) {
 void attach_frame_hook(RunOptions& ro, bool flume) {
     // the same look as `demlab render RUN_DIR`, drawn from the snapshot files just written,
     // so replaying the run gives the same bytes
-    auto renderer = std::make_shared<Renderer>(default_render_style(flume));
+    // the view is fixed by the first snapshot, as in render_run
+    auto renderer = std::make_shared<std::unique_ptr<Renderer>>();
     const std::string dir = ro.out_dir;
-    ro.on_snapshot = [renderer, dir](const std::string& discs, const std::string& walls, int index) {
+    ro.on_snapshot = [renderer, dir, flume](const std::string& discs, const std::string& walls, int index) {
+        const Frame f = read_frame(discs, walls);
+        if (!*renderer) {
+            RenderStyle style = default_render_style(flume);
+            fit_view(f, style.view_lo, style.view_hi);
+            style.view_set = true;
+            *renderer = std::make_unique<Renderer>(style);
+        }
         std::filesystem::create_directories(dir + "/frames");
         char name[64];
         std::snprintf(name, sizeof name, "/frames/frame_%05d.png", index);
-        write_png(dir + name, renderer->render(read_frame(discs, walls)));
+        write_png(dir + name, (*renderer)->render(f));
     };
 }
 
