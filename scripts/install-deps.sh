@@ -11,6 +11,7 @@ PKGS=(
   libosmesa6-dev libpng-dev libfreetype-dev fonts-dejavu-core
   libgtest-dev libtomlplusplus-dev libcli11-dev
   gnuplot-nox
+  clang libclang-rt-14-dev
 )
 if [ "${1:-}" = "--peer" ]; then PKGS+=(lammps openmpi-bin python3); fi
 missing=()

@@ -2,7 +2,7 @@
 # Installs the dependencies, builds demlab and its tests, and runs the tests: first the
 # Release build, then the same suite under AddressSanitizer and UndefinedBehaviorSanitizer.
 # usage: scripts/test.sh            (what CI runs; ~10 minutes on 2 cores)
-#        DEMLAB_SANITIZE=0 scripts/test.sh   (skip the sanitizer pass)
+#        DEMLAB_SANITIZE=0 scripts/test.sh   (skip the sanitizer pass and the fuzz pass)
 # Slow validation runs are labelled "slow" and left out: ctest --test-dir build -L slow
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -19,4 +19,6 @@ if [ "${DEMLAB_SANITIZE:-1}" = "1" ]; then
   LSAN_OPTIONS="suppressions=$PWD/tests/lsan.supp" \
   UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
     ctest --test-dir build-asan --output-on-failure -j "$jobs" -LE slow
+  echo "== a short fuzz pass over scenario parsing (libFuzzer, 10,000 inputs)"
+  bash scripts/fuzz.sh 10000
 fi

@@ -334,8 +334,9 @@ WallDef read_wall(const toml::table& t, const std::string& file, size_t index) {
                                             "move_until", "remove_at", "cap_start", "cap_end"};
     std::string type = "segment", solid;
     double friction_deg = 21.7;
-    for (const auto& [k, node] : t) {
-        const std::string key(k.str());
+    for (const auto& entry : t) {  // not a structured binding: the lambdas below capture node
+        const toml::node& node = entry.second;
+        const std::string key(entry.first.str());
         const std::string where = where_of(file, node, "walls[" + std::to_string(index) + "]." + key);
         auto str = [&](std::vector<std::string> choices) {
             auto v = node.value_exact<std::string>();
