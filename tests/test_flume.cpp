@@ -59,53 +59,45 @@ FlumeRun run_geometry_a(const std::string& tag) {
 }
 }  // namespace
 
-class GeometryA20 : public ::testing::Test {
-protected:
-    static void SetUpTestSuite() { first_ = new FlumeRun(run_geometry_a("a20")); }
-    static void TearDownTestSuite() {
-        fs::remove_all(first_->dir);
-        delete first_;
+// One test, one run (ctest runs each test in its own process; a fixture would repeat the run).
+TEST(GeometryA20, GenerationToRestBalancesAndDeterminism) {
+    const FlumeRun first = run_geometry_a("a20");
+    const RunSummary& s = first.summary;
+    {
+        SCOPED_TRACE("from generation to rest with no disc lost");
+        EXPECT_EQ(s.n_discs, 364);
+        EXPECT_EQ(s.stop_reason, "rest");
+        // reached the barrier, stopped on the flume (a lost disc stops the run with an error)
+        EXPECT_GT(s.t_front_at_barrier, 0.0);
+        EXPECT_GT(s.runup_height, 0.05);
+        for (const char* f : {"scenario.toml", "release.csv", "forces.csv", "front.csv", "energy.csv", "deposit.csv",
+                              "summary.json", "snapshots/discs.pvd", "snapshots/walls.pvd"})
+            EXPECT_TRUE(fs::exists(first.dir / f)) << f;
+        EXPECT_LT(s.energy_balance_error, 0.01);
     }
-    static FlumeRun* first_;
-};
-FlumeRun* GeometryA20::first_ = nullptr;
-
-TEST_F(GeometryA20, RunsFromGenerationToRestWithNoDiscLost) {
-    const RunSummary& s = first_->summary;
-    EXPECT_EQ(s.n_discs, 364);
-    EXPECT_EQ(s.stop_reason, "rest");
-    // reached the barrier, stopped on the flume
-    EXPECT_GT(s.t_front_at_barrier, 0.0);
-    EXPECT_GT(s.runup_height, 0.05);
-    for (const char* f : {"scenario.toml", "release.csv", "forces.csv", "front.csv", "energy.csv", "deposit.csv",
-                          "summary.json", "snapshots/discs.pvd", "snapshots/walls.pvd"})
-        EXPECT_TRUE(fs::exists(first_->dir / f)) << f;
-    EXPECT_LT(s.energy_balance_error, 0.01);
-}
-
-TEST_F(GeometryA20, AtRestTheWallsCarryTheWeight) {
-    const auto rows = read_csv(first_->dir / "forces.csv");
+    const auto rows = read_csv(first.dir / "forces.csv");
     const auto& last = rows.back();
-    const double weight = first_->summary.total_mass * 9.81;
-    // fy_total (column 8): force of the discs on W1 + W2 + W3; the gate has gone
-    EXPECT_NEAR(-last[8], weight, 0.01 * weight);
-}
-
-TEST_F(GeometryA20, WallImpulsesBalanceGravityOverTheRun) {
-    // from rest to rest: the walls' impulse on the mass cancels gravity's, m g t_end
-    const auto rows = read_csv(first_->dir / "forces.csv");
-    const auto& last = rows.back();
-    const double t = last[0], weight = first_->summary.total_mass * 9.81;
-    const double ix = last[15] + last[19], iy = last[16] + last[20];  // W1..W3 plus the gate
-    EXPECT_NEAR(iy, -weight * t, 0.01 * weight * t);
-    EXPECT_NEAR(ix, 0.0, 0.01 * weight * t);
-}
-
-TEST_F(GeometryA20, SameSeedGivesIdenticalFiles) {
-    const FlumeRun again = run_geometry_a("a20-again");
-    for (const char* f : {"release.csv", "forces.csv", "front.csv", "energy.csv", "deposit.csv", "snapshots/discs_00001.vtp"})
-        EXPECT_EQ(read(first_->dir / f), read(again.dir / f)) << f;
-    fs::remove_all(again.dir);
+    const double weight = s.total_mass * 9.81;
+    {
+        SCOPED_TRACE("at rest the walls carry the weight");
+        // fy_total (column 8): force of the discs on W1 + W2 + W3; the gate has gone
+        EXPECT_NEAR(-last[8], weight, 0.01 * weight);
+    }
+    {
+        SCOPED_TRACE("the walls' impulse balances gravity's over the run (rest to rest)");
+        const double t = last[0];
+        const double ix = last[15] + last[19], iy = last[16] + last[20];  // W1..W3 plus the gate
+        EXPECT_NEAR(iy, -weight * t, 0.01 * weight * t);
+        EXPECT_NEAR(ix, 0.0, 0.01 * weight * t);
+    }
+    {
+        SCOPED_TRACE("the same seed gives identical files");
+        const FlumeRun again = run_geometry_a("a20-again");
+        for (const char* f : {"release.csv", "forces.csv", "front.csv", "energy.csv", "deposit.csv", "snapshots/discs_00001.vtp"})
+            EXPECT_EQ(read(first.dir / f), read(again.dir / f)) << f;
+        fs::remove_all(again.dir);
+    }
+    fs::remove_all(first.dir);
 }
 
 TEST(ExplicitScenario, TracerFallsFreely) {
