@@ -12,6 +12,7 @@
 #include <sstream>
 #include <thread>
 
+#include "deposit.h"
 #include "error.h"
 #include "fileio.h"
 #include "frame.h"
@@ -154,22 +155,17 @@ void render_deposit(const std::string& run_dir, const std::map<std::string, doub
         }
     }
     if (env.empty()) return;
+    Envelope e;  // the points again as an envelope, for the shared fit
+    e.x0 = env.front().x();
+    e.dx = 0.001;
+    e.y.assign(size_t(std::lround((env.back().x() - e.x0) / e.dx)) + 1, NAN);
+    for (const Vec2& p : env) e.y[size_t(std::lround((p.x() - e.x0) / e.dx))] = p.y();
     f.overlays.push_back({env, 0.85, 0.1, 0.1});
     for (int i = 1; i <= 5; ++i) {
         const double lo = (5 - i) * 0.1, hi = (6 - i) * 0.1;
-        double sx = 0, sy = 0, sxx = 0, sxy = 0;
-        int n = 0;
-        for (const Vec2& p : env)
-            if (p.x() >= lo && p.x() <= hi) {
-                sx += p.x();
-                sy += p.y();
-                sxx += p.x() * p.x();
-                sxy += p.x() * p.y();
-                ++n;
-            }
         f.overlays.push_back({{Vec2(lo, 0.0), Vec2(lo, 0.45)}, 0.5, 0.5, 0.5});
-        if (n < 3) continue;
-        const double slope = (n * sxy - sx * sy) / (n * sxx - sx * sx), icpt = (sy - slope * sx) / n;
+        double slope = 0, icpt = 0;
+        if (!fit_line(e, lo, hi, slope, icpt)) continue;
         f.overlays.push_back({{Vec2(lo, icpt + slope * lo), Vec2(hi, icpt + slope * hi)}, 0.1, 0.3, 0.9});
         char buf[48];
         auto it = summary.find("gamma_" + std::to_string(i));

@@ -59,23 +59,30 @@ Envelope upper_envelope(const std::vector<Vec2>& pos, const std::vector<double>&
     return e;
 }
 
+bool fit_line(const Envelope& e, double lo, double hi, double& slope, double& intercept) {
+    double sx = 0, sy = 0, sxx = 0, sxy = 0;
+    long n = 0;
+    for (size_t k = 0; k < e.y.size(); ++k) {
+        const double x = e.x(k);
+        if (x < lo || x > hi || std::isnan(e.y[k])) continue;
+        sx += x;
+        sy += e.y[k];
+        sxx += x * x;
+        sxy += x * e.y[k];
+        ++n;
+    }
+    const double den = double(n) * sxx - sx * sx;
+    if (n < 3 || !(den > 0)) return false;
+    slope = (double(n) * sxy - sx * sy) / den;
+    intercept = (sy - slope * sx) / double(n);
+    return true;
+}
+
 SlopeAngles slope_angles(const Envelope& e, double w) {
     SlopeAngles a;
     for (int i = 1; i <= 5; ++i) {
-        const double lo = (5 - i) * w, hi = (6 - i) * w;
-        double sx = 0, sy = 0, sxx = 0, sxy = 0;
-        long n = 0;
-        for (size_t k = 0; k < e.y.size(); ++k) {
-            const double x = e.x(k);
-            if (x < lo || x > hi || std::isnan(e.y[k])) continue;
-            sx += x;
-            sy += e.y[k];
-            sxx += x * x;
-            sxy += x * e.y[k];
-            ++n;
-        }
-        const double den = double(n) * sxx - sx * sx;
-        a.gamma[i - 1] = (n >= 3 && den > 0) ? std::atan(-(double(n) * sxy - sx * sy) / den) * 180.0 / kPi : NAN;
+        double slope = 0, intercept = 0;
+        a.gamma[i - 1] = fit_line(e, (5 - i) * w, (6 - i) * w, slope, intercept) ? std::atan(-slope) * 180.0 / kPi : NAN;
     }
     a.toe_x = NAN;
     a.h_wall = NAN;

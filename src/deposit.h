@@ -35,6 +35,10 @@ struct SlopeAngles {
     double h_wall;     // m, surface height at the back wall
 };
 
+// Least-squares line y = intercept + slope x through the envelope points in [lo, hi];
+// false when fewer than 3 points.
+bool fit_line(const Envelope& e, double lo, double hi, double& slope, double& intercept);
+
 // Least-squares line through the envelope points of each section (NaN if the section is empty).
 SlopeAngles slope_angles(const Envelope& e, double section_width = 0.1);
 

@@ -1,6 +1,10 @@
 // Small builders shared by the tests.
 #pragma once
+#include <gtest/gtest.h>
+
 #include <cmath>
+#include <functional>
+#include <string>
 
 #include "error.h"
 #include "world.h"
@@ -37,6 +41,17 @@ inline MaterialDef material(double friction, double k = 1e8, double density = 26
     m.ks = k;
     m.density = density;
     return m;
+}
+
+// Runs f and expects an InputError whose message contains every fragment.
+inline void expect_refused(const std::function<void()>& f, std::initializer_list<const char*> fragments) {
+    try {
+        f();
+        ADD_FAILURE() << "accepted, expected an InputError";
+    } catch (const InputError& e) {
+        const std::string msg = e.what();
+        for (const char* frag : fragments) EXPECT_NE(msg.find(frag), std::string::npos) << "message: " << msg;
+    }
 }
 
 // Restitution coefficient of the linear spring-dashpot for a damping ratio beta.

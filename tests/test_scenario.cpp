@@ -6,22 +6,12 @@
 #include <functional>
 
 #include "error.h"
+#include "helpers.h"
 #include "release.h"
 #include "scenario.h"
 
 using namespace demlab;
-
-namespace {
-void expect_refused(const std::function<void()>& f, std::initializer_list<const char*> fragments) {
-    try {
-        f();
-        ADD_FAILURE() << "accepted, expected an InputError";
-    } catch (const InputError& e) {
-        const std::string msg = e.what();
-        for (const char* frag : fragments) EXPECT_NE(msg.find(frag), std::string::npos) << "message: " << msg;
-    }
-}
-}  // namespace
+using demlab::test::expect_refused;
 
 TEST(Scenario, UnknownKeyNamesFileLineAndTheNearestKey) {
     expect_refused([] { parse_scenario("[material]\ndensity = 2600\ndensty = 2600\n", "a.toml"); },

@@ -10,16 +10,6 @@ using namespace demlab;
 using namespace demlab::test;
 
 namespace {
-// Runs f, expects an InputError whose message contains every fragment.
-void expect_refused(const std::function<void()>& f, std::initializer_list<const char*> fragments) {
-    try {
-        f();
-        ADD_FAILURE() << "accepted, expected an InputError";
-    } catch (const InputError& e) {
-        const std::string msg = e.what();
-        for (const char* frag : fragments) EXPECT_NE(msg.find(frag), std::string::npos) << "message: " << msg;
-    }
-}
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 }  // namespace
 
