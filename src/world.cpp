@@ -308,6 +308,22 @@ void World::refresh_contacts() {
     for (size_t k = 0; k < dw_.size(); ++k) wadj_[size_t(fill[size_t(dw_[k].disc)]++)] = int32_t(k);
 }
 
+// One step of the law for a touching contact (disc-disc or disc-wall): updates the contact's
+// history (shear spring, last dashpot forces) and returns the forces; `dissipated` receives
+// the energy the step took out: sliding, plus the dashpots' work centred on v(t - dt/2)
+// (this step's force over the first half of the velocity interval, the last step's over
+// the second half).
+template <typename Contact>
+static LinearContactForce step_contact(const LinearContactParams& p, double overlap, double vn, double vs, double dt,
+                                       double last_dt, Contact& c, double& dissipated) {
+    const LinearContactForce f = linear_contact(p, overlap, vn, vs, dt, c.fs);
+    c.fs = f.fs_spring;
+    dissipated = f.slip_work - 0.5 * ((f.damp_n * dt + c.damp_n * last_dt) * vn + (f.damp_s * dt + c.damp_s * last_dt) * vs);
+    c.damp_n = float(f.damp_n);
+    c.damp_s = float(f.damp_s);
+    return f;
+}
+
 static std::string where_disc(long step, double t, int i, const Vec2& p) {
     std::ostringstream s;
     s << "step " << step << ", t = " << t << " s, disc " << i << " at (" << p.x() << ", " << p.y() << ")";
@@ -377,15 +393,8 @@ void World::compute_forces() {
             // eq. 2.46: tangential velocity of B relative to A at the contact point
             const double vs = vrel.dot(t) - (omega_[i] * ra + omega_[j] * rb);
             const PairMaterial& pm = mat_dd_[size_t(material_[i]) * nm + size_t(material_[j])];
-            const LinearContactParams p{pm.kn, pm.ks, pm.mu, c.cn, c.cs, mode};
-            const LinearContactForce f = linear_contact(p, overlap, vn, vs, dt, c.fs);
-            c.fs = f.fs_spring;
-            // centred dashpot work: this step's force over the first half, the last step's
-            // force over the second half of the velocity interval around v(t - dt/2)
-            out.dissipated = f.slip_work -
-                             0.5 * ((f.damp_n * dt + c.damp_n * last_dt) * vn + (f.damp_s * dt + c.damp_s * last_dt) * vs);
-            c.damp_n = float(f.damp_n);
-            c.damp_s = float(f.damp_s);
+            const LinearContactForce f =
+                step_contact({pm.kn, pm.ks, pm.mu, c.cn, c.cs, mode}, overlap, vn, vs, dt, last_dt, c, out.dissipated);
             out.f = f.fn * nrm + f.ft * t;
             // torque = lever x force; both levers give -r * ft (docs/engine.md)
             out.torque_i = -ra * f.ft;
@@ -436,13 +445,8 @@ void World::compute_forces() {
             const double vn = vrel.dot(nrm);
             const double vs = vrel.dot(t) - omega_[i] * rb;
             const PairMaterial& pm = mat_dw_[size_t(material_[i]) * nw + w];
-            const LinearContactParams p{pm.kn, pm.ks, pm.mu, c.cn, c.cs, mode};
-            const LinearContactForce f = linear_contact(p, hit.overlap, vn, vs, dt, c.fs);
-            c.fs = f.fs_spring;
-            out.dissipated = f.slip_work -
-                             0.5 * ((f.damp_n * dt + c.damp_n * last_dt) * vn + (f.damp_s * dt + c.damp_s * last_dt) * vs);
-            c.damp_n = float(f.damp_n);
-            c.damp_s = float(f.damp_s);
+            const LinearContactForce f =
+                step_contact({pm.kn, pm.ks, pm.mu, c.cn, c.cs, mode}, hit.overlap, vn, vs, dt, last_dt, c, out.dissipated);
             out.f = f.fn * nrm + f.ft * t;
             out.torque = -rb * f.ft;
             out.point = pos_[i] - rb * nrm;
