@@ -82,6 +82,8 @@ CalibrationConfig load_calibration(const std::string& path) {
                 c.refine = *b;
             } else if (key == "calibration.tolerance") {
                 c.tolerance = number(v, 0.01, 5.0, "deg");
+            } else if (key == "calibration.wall_gap") {
+                c.wall_gap = number(v, 0.0, 0.05, "m");
             } else if (key == "calibration.scale") {
                 c.scale = int(number(v, 0, 100, "(scale factor)"));
             } else if (section == "lab") {
@@ -90,7 +92,7 @@ CalibrationConfig load_calibration(const std::string& path) {
                     throw InputError(w + ": unknown key; accepted: lab.gamma_ges, lab.gamma_1 ... lab.gamma_5");
                 c.lab[it - lab_keys.begin()] = number(v, -90, 90, "deg");
             } else {
-                throw InputError(w + ": unknown key; accepted: scenario, angles, seeds, sections, refine, tolerance, scale");
+                throw InputError(w + ": unknown key; accepted: scenario, angles, seeds, sections, refine, tolerance, scale, wall_gap");
             }
         }
     }
@@ -141,31 +143,20 @@ double objective_of(const std::map<std::string, double>& r, const CalibrationCon
 }
 
 // the deposit with its envelope, the 10 cm sections, their fitted lines and angles
-void render_deposit(const std::string& run_dir, const std::map<std::string, double>& summary) {
+void render_deposit(const std::string& run_dir, const std::map<std::string, double>& summary, double wall_gap) {
     const auto snaps = list_snapshots(run_dir);
     Frame f = read_frame(snaps.back().discs, snaps.back().walls);
+    const Envelope e = read_envelope_csv(run_dir + "/envelope.csv");
     std::vector<Vec2> env;
-    {
-        std::ifstream in(run_dir + "/envelope.csv");
-        std::string line;
-        std::getline(in, line);
-        while (std::getline(in, line)) {
-            const size_t comma = line.find(',');
-            env.emplace_back(std::stod(line.substr(0, comma)), std::stod(line.substr(comma + 1)));
-        }
-    }
+    for (size_t k = 0; k < e.y.size(); ++k)
+        if (!std::isnan(e.y[k])) env.emplace_back(e.x(k), e.y[k]);
     if (env.empty()) return;
-    Envelope e;  // the points again as an envelope, for the shared fit
-    e.x0 = env.front().x();
-    e.dx = 0.001;
-    e.y.assign(size_t(std::lround((env.back().x() - e.x0) / e.dx)) + 1, NAN);
-    for (const Vec2& p : env) e.y[size_t(std::lround((p.x() - e.x0) / e.dx))] = p.y();
     f.overlays.push_back({env, 0.85, 0.1, 0.1});
     for (int i = 1; i <= 5; ++i) {
         const double lo = (5 - i) * 0.1, hi = (6 - i) * 0.1;
         f.overlays.push_back({{Vec2(lo, 0.0), Vec2(lo, 0.45)}, 0.5, 0.5, 0.5});
         double slope = 0, icpt = 0;
-        if (!fit_line(e, lo, hi, slope, icpt)) continue;
+        if (!fit_line(e, std::max(lo, wall_gap), hi, slope, icpt)) continue;
         f.overlays.push_back({{Vec2(lo, icpt + slope * lo), Vec2(hi, icpt + slope * hi)}, 0.1, 0.3, 0.9});
         char buf[48];
         auto it = summary.find("gamma_" + std::to_string(i));
@@ -257,7 +248,12 @@ CalibrationResult calibrate(const CalibrationConfig& c, const CalibrationOptions
                         run_scenario(s, ro);
                     }
                     auto summary = read_summary(dir + "/summary.json");
-                    if (!fs::exists(dir + "/deposit.png")) render_deposit(dir, summary);
+                    // the angles from the saved envelope with this configuration's sections:
+                    // changing them needs no rerun
+                    const SlopeAngles a = slope_angles(read_envelope_csv(dir + "/envelope.csv"), 0.1, c.wall_gap);
+                    summary["gamma_ges"] = a.gamma_ges;
+                    for (int i = 0; i < 5; ++i) summary["gamma_" + std::to_string(i + 1)] = a.gamma[i];
+                    if (!fs::exists(dir + "/deposit.png")) render_deposit(dir, summary, c.wall_gap);
                     std::lock_guard<std::mutex> lock(mu);
                     done[{job.angle, job.seed}] = summary;
                     (reused ? res.runs_reused : res.runs_done) += 1;

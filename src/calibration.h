@@ -19,6 +19,7 @@ struct CalibrationConfig {
     double tolerance = 0.1;                // deg, of the refinement
     double lab[6] = {22.433, 9.271, 21.453, 21.562, 28.740, 30.644};  // gamma_ges, gamma_1..5 (Table 7)
     int scale = 0;                         // 0: the scenario's
+    double wall_gap = 0.0;                 // m, section 5 starts this far from the back wall (0: the thesis')
 };
 
 CalibrationConfig load_calibration(const std::string& path);

@@ -1,6 +1,9 @@
 #include "deposit.h"
 
 #include <cmath>
+#include <fstream>
+
+#include "error.h"
 #include <unordered_map>
 
 namespace demlab {
@@ -78,21 +81,48 @@ bool fit_line(const Envelope& e, double lo, double hi, double& slope, double& in
     return true;
 }
 
-SlopeAngles slope_angles(const Envelope& e, double w) {
+SlopeAngles slope_angles(const Envelope& e, double w, double wall_gap) {
     SlopeAngles a;
     for (int i = 1; i <= 5; ++i) {
         double slope = 0, intercept = 0;
-        a.gamma[i - 1] = fit_line(e, (5 - i) * w, (6 - i) * w, slope, intercept) ? std::atan(-slope) * 180.0 / kPi : NAN;
+        const double lo = std::max((5 - i) * w, wall_gap);
+        a.gamma[i - 1] = fit_line(e, lo, (6 - i) * w, slope, intercept) ? std::atan(-slope) * 180.0 / kPi : NAN;
     }
     a.toe_x = NAN;
     a.h_wall = NAN;
     for (size_t k = 0; k < e.y.size(); ++k)
         if (!std::isnan(e.y[k])) {
-            if (std::isnan(a.h_wall)) a.h_wall = e.y[k];
+            if (std::isnan(a.h_wall) && e.x(k) >= e.x0 + wall_gap) a.h_wall = e.y[k];
             a.toe_x = e.x(k);
         }
-    a.gamma_ges = std::isnan(a.toe_x) ? NAN : std::atan(a.h_wall / std::max(a.toe_x - e.x0, 1e-9)) * 180.0 / kPi;
+    a.gamma_ges = std::isnan(a.toe_x) ? NAN : std::atan(a.h_wall / std::max(a.toe_x - e.x0 - wall_gap, 1e-9)) * 180.0 / kPi;
     return a;
+}
+
+Envelope read_envelope_csv(const std::string& path) {
+    std::ifstream in(path);
+    if (!in) throw InputError(path + ": cannot open the envelope");
+    std::string line;
+    std::getline(in, line);
+    std::vector<Vec2> pts;
+    while (std::getline(in, line)) {
+        const size_t comma = line.find(',');
+        try {
+            pts.emplace_back(std::stod(line.substr(0, comma)), std::stod(line.substr(comma + 1)));
+        } catch (...) {
+            throw InputError(path + ": malformed row '" + line + "' (expected x_m,surface_m)");
+        }
+    }
+    Envelope e;
+    e.dx = 0.001;
+    if (pts.empty()) return e;
+    e.x0 = 0.0;  // the run samples from the back wall, x = 0, every 1 mm
+    e.y.assign(size_t(std::lround(pts.back().x() / e.dx)) + 1, NAN);
+    for (const Vec2& p : pts) {
+        const long k = std::lround(p.x() / e.dx);
+        if (k >= 0 && size_t(k) < e.y.size()) e.y[size_t(k)] = p.y();
+    }
+    return e;
 }
 
 }  // namespace demlab

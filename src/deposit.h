@@ -8,6 +8,7 @@
 // the mass are excluded (connected_discs).
 #pragma once
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "vec2.h"
@@ -40,6 +41,11 @@ struct SlopeAngles {
 bool fit_line(const Envelope& e, double lo, double hi, double& slope, double& intercept);
 
 // Least-squares line through the envelope points of each section (NaN if the section is empty).
-SlopeAngles slope_angles(const Envelope& e, double section_width = 0.1);
+// wall_gap (m): section 5 and the surface height for gamma_ges start this far from the back
+// wall, leaving out discs that cling to the wall above the deposit (0: the thesis' sections).
+SlopeAngles slope_angles(const Envelope& e, double section_width = 0.1, double wall_gap = 0.0);
+
+// An envelope written as "x_m,surface_m" rows (envelope.csv of a dam-break run), on its 1 mm grid.
+Envelope read_envelope_csv(const std::string& path);
 
 }  // namespace demlab

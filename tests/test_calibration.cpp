@@ -78,6 +78,21 @@ TEST(Envelope, LoneDiscsAheadOfTheToeAreIgnored) {
     EXPECT_NEAR(slope_angles(upper_envelope(pos, rad, conn, 0.0, 1.0, 0.0005)).toe_x, 0.5, 0.002);
 }
 
+TEST(Envelope, WallGapLeavesOutDiscsClingingToTheWall) {
+    std::vector<Vec2> pos;
+    std::vector<double> rad;
+    stack_under(known_surface, 0.001, 0.5, pos, rad);
+    for (double y = 0.2; y < 0.35; y += 0.002) {  // a thin column stuck to the back wall
+        pos.emplace_back(0.001, y);
+        rad.push_back(0.001);
+    }
+    const auto conn = connected_discs(pos, rad, 0.001);
+    const Envelope e = upper_envelope(pos, rad, conn, 0.0, 1.0, 0.0005);
+    EXPECT_GT(std::abs(slope_angles(e).gamma[4] - kAngles[4]), 2.0);   // the column spoils gamma_5 ...
+    EXPECT_NEAR(slope_angles(e, 0.1, 0.01).gamma[4], kAngles[4], 0.5);  // ... unless the fit starts 1 cm out
+    EXPECT_NEAR(slope_angles(e, 0.1, 0.01).gamma[0], kAngles[0], 0.5);  // other sections unchanged
+}
+
 TEST(CalibrationConfig, BadKeysAreRefused) {
     const fs::path p = fs::temp_directory_path() / ("demlab-cal-" + std::to_string(::getpid()) + ".toml");
     std::ofstream(p) << "[calibration]\nscenario = \"x.toml\"\nangels = [15]\n";
