@@ -5,7 +5,7 @@
 // number of threads.
 #pragma once
 #include <condition_variable>
-#include <functional>
+#include <type_traits>
 #include <mutex>
 #include <thread>
 #include <vector>
@@ -31,21 +31,24 @@ public:
 
     int size() const { return threads_; }
 
-    // fn(begin, end, chunk) for chunk = 0 .. size() - 1
-    void parallel_for(size_t n, const std::function<void(size_t, size_t, int)>& fn) {
+    // fn(begin, end, chunk) for chunk = 0 .. size() - 1. The job is passed as a pointer and a
+    // trampoline, not a std::function: no allocation per call (it runs every step).
+    template <typename F>
+    void parallel_for(size_t n, F&& fn) {
         if (threads_ == 1 || n < 256) {
-            fn(0, n, 0);
+            fn(size_t(0), n, 0);
             return;
         }
         {
             std::lock_guard<std::mutex> lock(mu_);
-            job_ = &fn;
+            job_ = static_cast<void*>(&fn);
+            call_ = [](void* f, size_t b, size_t e, int k) { (*static_cast<std::remove_reference_t<F>*>(f))(b, e, k); };
             n_ = n;
             pending_ = threads_ - 1;
             ++generation_;
         }
         cv_.notify_all();
-        fn(0, chunk_end(0), 0);
+        fn(size_t(0), chunk_end(0), 0);
         std::unique_lock<std::mutex> lock(mu_);
         done_.wait(lock, [this] { return pending_ == 0; });
         job_ = nullptr;
@@ -58,15 +61,17 @@ private:
     void loop(int k) {
         unsigned long seen = 0;
         while (true) {
-            const std::function<void(size_t, size_t, int)>* job;
+            void* job;
+            void (*call)(void*, size_t, size_t, int);
             {
                 std::unique_lock<std::mutex> lock(mu_);
                 cv_.wait(lock, [&] { return generation_ != seen; });
                 seen = generation_;
                 if (stop_) return;
                 job = job_;
+                call = call_;
             }
-            (*job)(chunk_begin(k), chunk_end(k), k);
+            call(job, chunk_begin(k), chunk_end(k), k);
             {
                 std::lock_guard<std::mutex> lock(mu_);
                 if (--pending_ == 0) done_.notify_one();
@@ -78,7 +83,8 @@ private:
     std::vector<std::thread> workers_;
     std::mutex mu_;
     std::condition_variable cv_, done_;
-    const std::function<void(size_t, size_t, int)>* job_ = nullptr;
+    void* job_ = nullptr;
+    void (*call_)(void*, size_t, size_t, int) = nullptr;
     size_t n_ = 0;
     int pending_ = 0;
     unsigned long generation_ = 0;

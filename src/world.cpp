@@ -342,11 +342,13 @@ void World::compute_forces() {
     const double max_ratio = def_.max_overlap_ratio;
     dd_out_.resize(dd_.size());
     dw_out_.resize(dw_.size());
-    struct Fault {
-        size_t index = SIZE_MAX;
-        std::string message;
-    };
-    std::vector<Fault> dd_fault(size_t(pool_->size())), dw_fault(size_t(pool_->size()));
+    // one fault record per chunk, kept between steps (no allocation in the step)
+    std::vector<Fault>& dd_fault = dd_fault_;
+    std::vector<Fault>& dw_fault = dw_fault_;
+    dd_fault.resize(size_t(pool_->size()));
+    dw_fault.resize(size_t(pool_->size()));
+    for (Fault& f : dd_fault) f.index = SIZE_MAX;
+    for (Fault& f : dw_fault) f.index = SIZE_MAX;
 
     // disc-disc: n from i (A) to j (B); the force on j is F = fn n + ft t, on i -F
     pool_->parallel_for(dd_.size(), [&](size_t begin, size_t end, int chunk) {
@@ -376,7 +378,7 @@ void World::compute_forces() {
             const double overlap = rsum - dist;
             if (!(overlap <= max_ratio * std::min(radius_[i], radius_[j])) || dist == 0.0) {
                 if (k < dd_fault[size_t(chunk)].index)
-                    dd_fault[size_t(chunk)] = {k, "blow-up: overlap " + format_number(overlap) + " m between discs " +
+                    dd_fault[size_t(chunk)] = Fault{k, "blow-up: overlap " + format_number(overlap) + " m between discs " +
                                                       std::to_string(i) + " and " + std::to_string(j) + " exceeds " +
                                                       format_number(max_ratio) + " of the smaller radius at " +
                                                       where_disc(steps_, time_, int(i), pos_[i]) +
@@ -429,7 +431,7 @@ void World::compute_forces() {
             }
             if (!(hit.overlap <= max_ratio * radius_[i])) {
                 if (k < dw_fault[size_t(chunk)].index)
-                    dw_fault[size_t(chunk)] = {k, "blow-up: overlap " + format_number(hit.overlap) + " m of disc " +
+                    dw_fault[size_t(chunk)] = Fault{k, "blow-up: overlap " + format_number(hit.overlap) + " m of disc " +
                                                       std::to_string(i) + " with wall '" + walls_[w].name + "' exceeds " +
                                                       format_number(max_ratio) + " of its radius at " +
                                                       where_disc(steps_, time_, int(i), pos_[i]) +
@@ -592,7 +594,8 @@ void World::integrate() {
     const double g_abs = g.norm();
     diss_local_disc_.resize(n);
     diss_rot_disc_.resize(n);
-    std::vector<size_t> fault(size_t(pool_->size()), SIZE_MAX);
+    std::vector<size_t>& fault = integrate_fault_;
+    fault.assign(size_t(pool_->size()), SIZE_MAX);  // no allocation after the first step
     pool_->parallel_for(n, [&](size_t begin, size_t end, int chunk) {
     for (size_t i = begin; i < end; ++i) {
         double diss_local = 0.0, diss_rot = 0.0;

@@ -213,6 +213,14 @@ private:
     std::vector<WallOut> dw_out_;
     std::vector<int32_t> adj_start_, adj_, wadj_start_, wadj_;
     std::vector<double> diss_local_disc_, diss_rot_disc_;
+    // the first fault each chunk met in the last pass (reported in index order, so the
+    // message does not depend on the thread count)
+    struct Fault {
+        size_t index = SIZE_MAX;
+        std::string message;
+    };
+    std::vector<Fault> dd_fault_, dw_fault_;
+    std::vector<size_t> integrate_fault_;
     std::vector<DiscContact> dd_, dd_scratch_;
     std::vector<WallContact> dw_, dw_scratch_;
     long touching_dd_ = 0, touching_dw_ = 0;
