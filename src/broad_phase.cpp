@@ -62,6 +62,10 @@ void BroadPhase::init(double margin_target, double wall_piece_length, const std:
                       const std::vector<double>& radius, const std::vector<WallGeom>& walls,
                       const std::vector<uint8_t>& wall_active) {
     // b2_aabbExtension (0.1 tree units) = margin in metres  =>  scale = 0.1 / margin
+    // a second init (a restored checkpoint) starts from an empty tree
+    for (int32_t proxy : disc_proxy_) tree_.DestroyProxy(proxy);
+    for (const Piece& pc : pieces_)
+        if (pc.proxy >= 0) tree_.DestroyProxy(pc.proxy);
     const int k = int(std::lround(std::log2(0.1 / margin_target)));
     scale_ = std::ldexp(1.0, k);
     margin_ = double(0.1f) / scale_;

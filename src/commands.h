@@ -11,6 +11,7 @@ using Command = std::function<int()>;
 Command add_bench_command(CLI::App& app);
 Command add_demo_command(CLI::App& app);
 Command add_run_command(CLI::App& app);
+Command add_resume_command(CLI::App& app);
 Command add_keys_command(CLI::App& app);
 Command add_render_command(CLI::App& app);
 Command add_plot_command(CLI::App& app);

@@ -28,6 +28,31 @@ void SeriesFile::open(const std::string& path) {
     out_.precision(10);
 }
 
+void SeriesFile::reopen(const std::string& path, uint64_t size) {
+    namespace fs = std::filesystem;
+    path_ = path;
+    const std::string part = path + ".part";
+    std::error_code ec;
+    const auto have = fs::file_size(part, ec);
+    if (ec || have < size)
+        throw RunError("cannot resume: " + part + " is missing or shorter than at the checkpoint (" +
+                       std::to_string(size) + " bytes)");
+    fs::resize_file(part, size, ec);
+    if (ec) throw RunError("cannot resume: cannot cut " + part + " back: " + ec.message());
+    // not ios::app: its position reads 0 until the first write, and flush() reports it
+    out_.open(part, std::ios::in | std::ios::out);
+    out_.seekp(0, std::ios::end);
+    if (!out_) throw RunError("cannot write " + part);
+    out_.precision(10);
+}
+
+uint64_t SeriesFile::flush() {
+    if (!out_.is_open()) return 0;
+    out_.flush();
+    if (!out_) throw RunError("cannot write " + path_ + ".part (disk full?)");
+    return uint64_t(out_.tellp());
+}
+
 void SeriesFile::close() {
     if (!out_.is_open()) return;
     out_.close();

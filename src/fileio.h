@@ -1,6 +1,7 @@
 // Files written whole and atomically: to a temporary name beside the target, then renamed,
 // so a run killed mid-write leaves either the old file or the complete new one.
 #pragma once
+#include <cstdint>
 #include <fstream>
 #include <string>
 
@@ -14,6 +15,11 @@ class SeriesFile {
 public:
     SeriesFile() = default;
     void open(const std::string& path);
+    // Continues PATH.part from a checkpoint: cuts it back to `size` bytes (what it held when the
+    // checkpoint was written) and appends from there.
+    void reopen(const std::string& path, uint64_t size);
+    // Flushes and returns the bytes written so far (for a checkpoint).
+    uint64_t flush();
     std::ofstream& out() { return out_; }
     void close();
     bool is_open() const { return out_.is_open(); }

@@ -5,6 +5,7 @@
 
 #include "commands.h"
 #include "error.h"
+#include "interrupt.h"
 
 int main(int argc, char** argv) {
     using namespace demlab;
@@ -17,6 +18,7 @@ int main(int argc, char** argv) {
         commands.emplace_back(app.get_subcommands([](CLI::App*) { return true; }).back(), std::move(c));
     };
     add(add_run_command);
+    add(add_resume_command);
     add(add_render_command);
     add(add_plot_command);
     add(add_calibrate_command);
@@ -32,6 +34,9 @@ int main(int argc, char** argv) {
     try {
         for (auto& [sub, run] : commands)
             if (sub->parsed()) return run();
+    } catch (const Interrupted& e) {
+        std::fprintf(stderr, "\ndemlab: interrupted: %s\n", e.what());
+        return kExitInterrupted;
     } catch (const InputError& e) {
         std::fprintf(stderr, "demlab: input error: %s\n", e.what());
         return kExitInput;

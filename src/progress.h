@@ -13,9 +13,10 @@ inline std::atomic<bool> g_progress_muted{false};
 
 class Progress {
 public:
-    explicit Progress(double total, const char* unit = "s")
-        : total_(total), unit_(unit), enabled_(isatty(STDERR_FILENO) != 0 && !g_progress_muted), start_(Clock::now()),
-          last_(start_) {}
+    // done0, steps0: where a resumed run starts (the rate and ETA count from there)
+    explicit Progress(double total, const char* unit = "s", double done0 = 0.0, long steps0 = 0)
+        : total_(total), done0_(done0), steps0_(steps0), unit_(unit),
+          enabled_(isatty(STDERR_FILENO) != 0 && !g_progress_muted), start_(Clock::now()), last_(start_) {}
 
     void update(double done, long steps) {
         if (!enabled_) return;
@@ -24,9 +25,9 @@ public:
         last_ = now;
         const double elapsed = std::chrono::duration<double>(now - start_).count();
         const double frac = total_ > 0 ? done / total_ : 0.0;
-        const double eta = frac > 0 ? elapsed * (1.0 - frac) / frac : 0.0;
+        const double eta = done > done0_ ? elapsed * (total_ - done) / (done - done0_) : 0.0;
         std::fprintf(stderr, "\r  %5.1f %%  %.3f / %.3f %s  %.0f steps/s  ETA %.0f s   ", 100.0 * frac, done, total_, unit_,
-                     elapsed > 0 ? double(steps) / elapsed : 0.0, eta);
+                     elapsed > 0 ? double(steps - steps0_) / elapsed : 0.0, eta);
         std::fflush(stderr);
         shown_ = true;
     }
@@ -38,7 +39,8 @@ public:
 
 private:
     using Clock = std::chrono::steady_clock;
-    double total_;
+    double total_, done0_;
+    long steps0_;
     const char* unit_;
     bool enabled_, shown_ = false;
     Clock::time_point start_, last_;

@@ -10,6 +10,7 @@
 #include "error.h"
 #include "fileio.h"
 #include "flume.h"
+#include "interrupt.h"
 #include "progress.h"
 #include "validate.h"
 #include "world.h"
@@ -100,6 +101,15 @@ std::vector<Vec2> place_without_overlap(const Polygon& tri, const std::vector<do
 
 }  // namespace
 
+namespace {
+// The generation is not checkpointed (at scale 4 it takes about a minute): a signal ends it
+// here, and `demlab resume` starts the run again (the seed gives the same mass).
+void throw_if_interrupted_in_generation() {
+    if (pending_interrupt())
+        throw Interrupted("stopped during the release generation, which is not checkpointed");
+}
+}  // namespace
+
 ReleaseMass generate_release(const Scenario& s) {
     const auto t0 = std::chrono::steady_clock::now();
     const ReleaseDef& rd = s.release;
@@ -147,6 +157,7 @@ ReleaseMass generate_release(const Scenario& s) {
         for (size_t i = 0; i < radius.size(); ++i) expand.set_radius(int(i), sk * radius[i]);
         expand.refresh_dashpots();
         expand.run(steps_per_stage);
+        throw_if_interrupted_in_generation();
         progress.update(0.5 * double(k) / stages, expand.step_count());
     }
     expand.run(3000);  // relax at full size
@@ -194,6 +205,7 @@ ReleaseMass generate_release(const Scenario& s) {
         bool done = false;
         while (w.time() < t_phase) {
             w.run(200);
+            throw_if_interrupted_in_generation();
             m.settle_ratio = w.unbalanced_force_ratio();
             progress.update(0.5 + 0.25 * phase + 0.25 * std::min(1.0, w.time() / t_phase), w.step_count());
             // the frictionless phase only compacts: it may stop at ten times the final ratio

@@ -154,7 +154,9 @@ void attach_frame_hook(RunOptions& ro, bool flume) {
         const Frame f = read_frame(discs, walls);
         if (!*renderer) {
             RenderStyle style = default_render_style(flume);
-            fit_view(f, style.view_lo, style.view_hi);
+            // a resumed run starts past the first snapshot: its view still comes from that one
+            fit_view(index == 0 ? f : read_frame(dir + "/snapshots/discs_00000.vtp", dir + "/snapshots/walls_00000.vtp"),
+                     style.view_lo, style.view_hi);
             style.view_set = true;
             *renderer = std::make_unique<Renderer>(style);
         }

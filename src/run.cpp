@@ -3,13 +3,17 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
+#include <fstream>
 #include <sstream>
 #include <unordered_map>
 
+#include "binary_io.h"
 #include "deposit.h"
 #include "error.h"
 #include "fileio.h"
+#include "interrupt.h"
 #include "flume.h"
 #include "output_dir.h"
 #include "progress.h"
@@ -30,17 +34,112 @@ std::string json_number(double v) {
     return o.str();
 }
 
+// Checkpoint layout: header (magic, version, byte order, the resolved scenario, the options to
+// resume with), the run's own state ("RUN "), then the world's (World::save_state).
+constexpr char kMagic[8] = {'D', 'E', 'M', 'L', 'A', 'B', 'C', 'K'};
+constexpr uint32_t kCheckpointVersion = 1;
+constexpr uint32_t kByteOrder = 0x01020304;
+
+void put_header(BinaryWriter& out, const std::string& scenario_text, double t, double t_max, long steps,
+                const RunOptions& o) {
+    out.put(kMagic);
+    out.put(kCheckpointVersion);
+    out.put(kByteOrder);
+    out.put(uint32_t(sizeof(double)));
+    out.put(scenario_text);
+    out.put(t);
+    out.put(t_max);
+    out.put(int64_t(steps));
+    out.put(o.checkpoint_every);
+    out.put(uint8_t(o.frames));
+    out.put(uint8_t(o.plots));
+}
+
+struct Header {
+    std::string scenario_text;
+    CheckpointInfo info;
+};
+
+Header get_header(BinaryReader& in, const std::string& path) {
+    char magic[8];
+    in.get(magic);
+    if (std::memcmp(magic, kMagic, 8) != 0) throw InputError(path + ": not a demlab checkpoint");
+    if (in.get<uint32_t>() != kCheckpointVersion) throw InputError(path + ": written by another version of demlab");
+    if (in.get<uint32_t>() != kByteOrder || in.get<uint32_t>() != sizeof(double))
+        throw InputError(path + ": written on a machine of another architecture (byte order or number size)");
+    Header h;
+    in.get(h.scenario_text);
+    in.get(h.info.time);
+    in.get(h.info.t_max);
+    h.info.steps = long(in.get<int64_t>());
+    in.get(h.info.checkpoint_every);
+    h.info.frames = in.get<uint8_t>() != 0;
+    h.info.plots = in.get<uint8_t>() != 0;
+    return h;
+}
+
+// The scenario's settings: its text without the comment lines (the header names the file the
+// scenario was read from, which is the run folder's copy when resuming).
+std::string without_comments(const std::string& text) {
+    std::istringstream in(text);
+    std::string line, out;
+    while (std::getline(in, line))
+        if (line.empty() || line[0] != '#') out += line + '\n';
+    return out;
+}
+
+std::string read_whole(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw InputError("cannot read " + path);
+    std::ostringstream b;
+    b << in.rdbuf();
+    return b.str();
+}
+
 }  // namespace
 
+CheckpointInfo read_checkpoint_info(const std::string& run_dir) {
+    const std::string path = run_dir + "/" + kCheckpointFile;
+    BinaryReader in(read_whole(path), path);
+    return get_header(in, path).info;
+}
+
 RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
-    prepare_output_dir(o.out_dir, o.force);
     const std::string dir = o.out_dir;
-    write_file_atomic(dir + "/scenario.toml", resolved_toml(s));
+    const std::string checkpoint_path = dir + "/" + kCheckpointFile;
+    const std::string scenario_text = resolved_toml(s);
+    std::unique_ptr<BinaryReader> restore;
+    if (o.resume) {
+        restore = std::make_unique<BinaryReader>(read_whole(checkpoint_path), checkpoint_path);
+        if (without_comments(get_header(*restore, checkpoint_path).scenario_text) != without_comments(scenario_text))
+            throw InputError(dir + "/scenario.toml differs from the scenario the checkpoint was written with "
+                             "(was it edited?); a resumed run must continue the same scenario");
+        restore->expect_tag("RUN ");
+        // a write the kill interrupted left its temporary file (the target is intact)
+        for (const auto& e : std::filesystem::recursive_directory_iterator(dir))
+            if (e.is_regular_file() && e.path().extension() == ".tmp") std::filesystem::remove(e.path());
+    } else {
+        prepare_output_dir(o.out_dir, o.force);
+        std::filesystem::remove(checkpoint_path);  // a stale one of a replaced run
+        write_file_atomic(dir + "/scenario.toml", scenario_text);
+    }
     const bool terminal = isatty(STDERR_FILENO) != 0;
+    std::unique_ptr<InterruptScope> interrupts;
+    if (o.handle_signals) interrupts = std::make_unique<InterruptScope>();
 
     // --- the release mass
     ReleaseMass mass;
-    if (has_release(s)) {
+    if (restore) {
+        // the discs as they were at the start (their motion is restored with the world)
+        restore->get(mass.pos);
+        restore->get(mass.radius, mass.pos.size());
+        restore->get(mass.layer, mass.pos.size());
+        restore->get(mass.grid, mass.pos.size());
+        restore->get(mass.porosity_settled);
+        restore->get(mass.porosity_generated);
+        restore->get(mass.settle_time);
+        restore->get(mass.wall_seconds);
+    } else if (has_release(s)) {
         if (!s.release.from_file.empty()) {
             mass = load_release(s.release.from_file);
             // a mass settled against other walls (another geometry's W1 differs by ~0.1 mm at
@@ -68,6 +167,8 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
     }
 
     // --- the world
+    // with a checkpoint, `mass` holds every disc at its start (explicit ones too)
+    const bool explicit_discs = !restore;
     WorldDef def = s.world;
     // the domain: the walls' and discs' box, padded by 0.5 m; leaving it stops the run
     Vec2 lo(INFINITY, INFINITY), hi(-INFINITY, -INFINITY);
@@ -95,13 +196,14 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
         layer.push_back(mass.layer[i]);
         grid.push_back(mass.grid[i]);
     }
-    for (const DiscDef& d : s.discs) {
-        DiscDef dd = d;
-        dd.material = mat;
-        w.add_disc(dd);
-        layer.push_back(0);
-        grid.push_back(0);
-    }
+    if (explicit_discs)
+        for (const DiscDef& d : s.discs) {
+            DiscDef dd = d;
+            dd.material = mat;
+            w.add_disc(dd);
+            layer.push_back(0);
+            grid.push_back(0);
+        }
     for (const WallDef& wd : lab_walls(s)) w.add_wall(wd);
     for (WallDef wd : s.walls) w.add_wall(wd);
     w.finalize();
@@ -110,6 +212,17 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
     for (long id : s.output.track)
         if (id >= long(n)) throw InputError(s.source + ": output.track: disc id " + std::to_string(id) + " does not exist (" + std::to_string(n) + " discs)");
     const std::vector<Vec2> start_pos = w.positions();
+    // what a checkpoint needs to rebuild this world: the discs at the start
+    auto put_start = [&](BinaryWriter& out) {
+        out.put(start_pos);
+        out.put(w.radii());
+        out.put(layer);
+        out.put(grid);
+        out.put(mass.porosity_settled);
+        out.put(mass.porosity_generated);
+        out.put(mass.settle_time);
+        out.put(mass.wall_seconds);
+    };
 
     std::unique_ptr<FlumePath> path;
     if (s.flume.enabled) path = std::make_unique<FlumePath>(w.wall_geom(kW1), w.wall_geom(kW2), w.wall_geom(kW3));
@@ -122,20 +235,6 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
 
     // --- output files
     SeriesFile forces, front, energy, track;
-    forces.open(dir + "/forces.csv");
-    forces.out() << "t,fx_slope,fy_slope,fx_arc,fy_arc,fx_barrier,fy_barrier,fx_total,fy_total,"
-                    "ix_slope,iy_slope,ix_arc,iy_arc,ix_barrier,iy_barrier,ix_total,iy_total,fx_gate,fy_gate,ix_gate,iy_gate\n";
-    energy.open(dir + "/energy.csv");
-    energy.out() << "t,kinetic_translation,kinetic_rotation,potential,elastic,dissipated_contacts,dissipated_local,"
-                    "dissipated_rotation,work_by_walls,removed_with_walls,balance\n";
-    if (path) {
-        front.open(dir + "/front.csv");
-        front.out() << "t,s_front,displacement\n";
-    }
-    if (!s.output.track.empty()) {
-        track.open(dir + "/track.csv");
-        track.out() << "t,id,x,y,vx,vy,angle,omega\n";
-    }
     std::unique_ptr<SnapshotWriter> snaps;
     if (s.output.snapshot_interval > 0) snaps = std::make_unique<SnapshotWriter>(dir + "/snapshots", layer, grid);
 
@@ -145,10 +244,72 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
     sum.porosity = has_release(s) ? mass.porosity_settled : -1.0;
     sum.dt_min = INFINITY;
     double peak_fx_barrier = -1, peak_fy_arc = -1, peak_ke = 0, rest_since = -1;
-    const double e0 = w.energy().balance();
-    double next_series = 0.0, next_snap = 0.0;
-    Progress progress(s.stop.t_max);
+    double e0 = w.energy().balance();
+    double next_series = 0.0, next_snap = 0.0, wall_seconds_before = 0.0;
+    // the run's own state between two steps: measurements so far and what is due next
+    auto run_state = [&](auto& io, auto&& field) {
+        for (double* v : {&peak_fx_barrier, &peak_fy_arc, &peak_ke, &rest_since, &e0, &next_series, &next_snap,
+                          &sum.dt_min, &sum.dt_max, &sum.t_peak_fx_barrier, &sum.t_peak_fy_arc,
+                          &sum.max_runup_height_during_run, &sum.t_front_at_barrier})
+            field(io, *v);
+    };
+    const char* forces_header =
+        "t,fx_slope,fy_slope,fx_arc,fy_arc,fx_barrier,fy_barrier,fx_total,fy_total,"
+        "ix_slope,iy_slope,ix_arc,iy_arc,ix_barrier,iy_barrier,ix_total,iy_total,fx_gate,fy_gate,ix_gate,iy_gate\n";
+    const char* energy_header =
+        "t,kinetic_translation,kinetic_rotation,potential,elastic,dissipated_contacts,dissipated_local,"
+        "dissipated_rotation,work_by_walls,removed_with_walls,balance\n";
+    if (restore) {
+        // the series files are cut back to what they held at the checkpoint
+        run_state(*restore, [](BinaryReader& in, double& v) { in.get(v); });
+        restore->get(wall_seconds_before);
+        std::vector<double> snap_times;
+        restore->get(snap_times);
+        if (snaps) snaps->restore_times(std::move(snap_times));
+        uint64_t size[4];
+        for (uint64_t& z : size) restore->get(z);
+        forces.reopen(dir + "/forces.csv", size[0]);
+        energy.reopen(dir + "/energy.csv", size[1]);
+        if (path) front.reopen(dir + "/front.csv", size[2]);
+        if (!s.output.track.empty()) track.reopen(dir + "/track.csv", size[3]);
+        w.load_state(*restore);
+        if (!restore->at_end()) throw InputError(checkpoint_path + ": corrupt checkpoint (trailing bytes)");
+        restore.reset();
+    } else {
+        forces.open(dir + "/forces.csv");
+        forces.out() << forces_header;
+        energy.open(dir + "/energy.csv");
+        energy.out() << energy_header;
+        if (path) {
+            front.open(dir + "/front.csv");
+            front.out() << "t,s_front,displacement\n";
+        }
+        if (!s.output.track.empty()) {
+            track.open(dir + "/track.csv");
+            track.out() << "t,id,x,y,vx,vy,angle,omega\n";
+        }
+    }
+    const double t_start = w.time();
+    const long steps_start = w.step_count();
+    Progress progress(s.stop.t_max, "s", t_start, steps_start);
     const auto t0 = std::chrono::steady_clock::now();
+    auto last_checkpoint = t0;
+    auto elapsed = [&] { return wall_seconds_before + std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(); };
+
+    // Between two steps: everything the loop carries, written atomically. The series files
+    // are flushed first and their lengths recorded, so a resume cuts off what came after.
+    auto write_checkpoint = [&]() {
+        BinaryWriter out;
+        put_header(out, scenario_text, w.time(), s.stop.t_max, w.step_count(), o);
+        out.tag("RUN ");
+        put_start(out);
+        run_state(out, [](BinaryWriter& b, double& v) { b.put(v); });
+        out.put(elapsed());
+        out.put(snaps ? snaps->times() : std::vector<double>{});
+        for (SeriesFile* f : {&forces, &energy, &front, &track}) out.put(f->flush());
+        w.save_state(out);
+        write_file_atomic(checkpoint_path, out.bytes());
+    };
 
     auto sample = [&]() {
         const double t = w.time();
@@ -236,6 +397,19 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
             }
             progress.update(w.time(), w.step_count());
         }
+        if (const int sig = o.handle_signals ? pending_interrupt() : 0) {
+            progress.finish();
+            write_checkpoint();
+            throw Interrupted("signal " + std::to_string(sig) + " at t = " + format_number(w.time()) + " s (step " +
+                              std::to_string(w.step_count()) + "): checkpoint written; continue with: demlab resume " + dir);
+        }
+        if (o.checkpoint_every > 0 && w.step_count() % 10 == 0) {
+            const auto now = std::chrono::steady_clock::now();
+            if (std::chrono::duration<double>(now - last_checkpoint).count() >= o.checkpoint_every) {
+                write_checkpoint();
+                last_checkpoint = now;
+            }
+        }
     }
     progress.finish();
     sample();
@@ -246,11 +420,13 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
         }
         snaps->finish();
     }
-    sum.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    sum.wall_seconds = elapsed();
     sum.steps = w.step_count();
     sum.t_end = w.time();
     sum.dt = w.dt();
-    sum.particle_steps_per_second = double(n) * double(sum.steps) / std::max(sum.wall_seconds, 1e-9);
+    // of this session (a resumed run: since the resume)
+    sum.particle_steps_per_second = double(n) * double(sum.steps - steps_start) /
+                                    std::max(sum.wall_seconds - wall_seconds_before, 1e-9);
     const EnergyReport e = w.energy();
     const double dissipated = e.dissipated_contacts + e.dissipated_local + e.dissipated_rotation;
     sum.energy_balance_error = dissipated > 0 ? std::abs(e.balance() - e0) / dissipated : 0.0;
@@ -323,6 +499,7 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
     }
     j << "\n}\n";
     write_file_atomic(dir + "/summary.json", j.str());
+    std::filesystem::remove(checkpoint_path);  // the run is complete: nothing to resume
     return sum;
 }
 

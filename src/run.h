@@ -2,6 +2,7 @@
 // walls and discs), runs it to rest or t_max and writes the run folder:
 //   scenario.toml (resolved), release.csv, forces.csv, front.csv, energy.csv, track.csv,
 //   deposit.csv, summary.json, snapshots/ (VTK).
+// With checkpoints it can be stopped (a signal, or killed) and resumed to the same bytes.
 #pragma once
 #include <functional>
 #include <string>
@@ -15,7 +16,25 @@ struct RunOptions {
     bool force = false;     // replace the files of an existing folder
     // called after each snapshot is written, with the two files and the snapshot's index
     std::function<void(const std::string& discs_vtp, const std::string& walls_vtp, int index)> on_snapshot;
+    // Checkpoints (RUN_DIR/checkpoint.bin, replaced atomically; removed when the run ends):
+    double checkpoint_every = 0.0;  // s of wall-clock time between checkpoints; 0: none on a timer
+    bool handle_signals = false;    // SIGINT/SIGTERM: a final checkpoint, then Interrupted (interrupt.h)
+    bool resume = false;            // continue out_dir from its checkpoint (the scenario must be its scenario.toml)
+    // recorded in the checkpoint for `demlab resume` (the caller acts on them)
+    bool frames = false, plots = true;
 };
+
+// The checkpoint's file name inside a run folder.
+inline constexpr const char* kCheckpointFile = "checkpoint.bin";
+
+// What `demlab resume` needs to know before it restores a checkpoint.
+struct CheckpointInfo {
+    double time = 0, t_max = 0;     // s, simulated
+    long steps = 0;
+    double checkpoint_every = 0;    // s, wall-clock, as the run was started
+    bool frames = false, plots = true;
+};
+CheckpointInfo read_checkpoint_info(const std::string& run_dir);
 
 struct RunSummary {
     long n_discs = 0;

@@ -18,6 +18,9 @@ public:
     // Writes the .pvd collections (call at the end; also safe to call repeatedly).
     void finish();
     int count() const { return int(times_.size()); }
+    // the instants written so far (checkpoints) and their restoration
+    const std::vector<double>& times() const { return times_; }
+    void restore_times(std::vector<double> t) { times_ = std::move(t); }
     // the files of the last snapshot written
     std::string last_discs() const;
     std::string last_walls() const;

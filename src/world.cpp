@@ -228,8 +228,7 @@ void World::finalize() {
     k_tran_.assign(n, 0.0);
     k_rot_.assign(n, 0.0);
 
-    const double margin = def_.broadphase_margin > 0.0 ? def_.broadphase_margin : (n > 0 ? 0.5 * r_min : 0.001);
-    broad_.init(margin, def_.wall_piece_length, pos_, radius_, geom_, wall_active_);
+    broad_.init(margin_target(), def_.wall_piece_length, pos_, radius_, geom_, wall_active_);
     refresh_contacts();
     finalized_ = true;
 
@@ -242,6 +241,12 @@ void World::finalize() {
     } else {
         dt_ = def_.timestep.fixed;
     }
+}
+
+double World::margin_target() const {
+    if (def_.broadphase_margin > 0.0) return def_.broadphase_margin;
+    if (radius_.empty()) return 0.001;
+    return 0.5 * *std::min_element(radius_.begin(), radius_.end());
 }
 
 double World::contact_mass_disc(int i, int j) const { return effective_mass(mass_[size_t(i)], mass_[size_t(j)]); }

@@ -17,6 +17,8 @@
 namespace demlab {
 
 class ThreadPool;
+class BinaryWriter;
+class BinaryReader;
 
 struct DampingDef {
     double beta_n = 0.5;                   // -, normal critical damping ratio in [0, 1) (Table 15)
@@ -163,6 +165,15 @@ public:
     void set_local_damping(double alpha);
     void set_gravity(const Vec2& g) { def_.gravity = g; }
 
+    // --- checkpoints (world_state.cpp) ---
+    // Writes the dynamic state: disc motion, time and step, the walls' positions, activity
+    // and loads, every contact's history and the energy ledger. load_state() restores it
+    // into a world built from the same set-up (same discs, walls and materials; finalized);
+    // the continued run then gives the same bits as one never stopped (the candidate lists
+    // are rebuilt: see world_state.cpp for why that changes nothing).
+    void save_state(BinaryWriter& out) const;
+    void load_state(BinaryReader& in);
+
 private:
     void compute_forces();
     void integrate();
@@ -170,6 +181,7 @@ private:
     void refresh_contacts();
     void join_wall_ends();
     double contact_mass_disc(int i, int j) const;
+    double margin_target() const;  // m, the broad phase's pad (WorldDef::broadphase_margin)
 
     WorldDef def_;
     bool finalized_ = false;

@@ -1,0 +1,226 @@
+// Checkpoint and resume: a run stopped by a signal, or killed outright, and resumed gives the
+// same bytes as a run never stopped; a killed run leaves only complete files under their
+// final names. Geometry A at scale 20 (364 discs) to t = 1.2 s: past the barrier impact.
+#include <gtest/gtest.h>
+#include <fcntl.h>
+#include <signal.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <csignal>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <thread>
+
+#include "error.h"
+#include "interrupt.h"
+#include "run.h"
+#include "scenario.h"
+
+extern char** environ;
+
+using namespace demlab;
+namespace fs = std::filesystem;
+
+namespace {
+std::string read(const fs::path& p) {
+    std::ifstream in(p, std::ios::binary);
+    std::stringstream b;
+    b << in.rdbuf();
+    return b.str();
+}
+
+fs::path temp_dir(const std::string& name) {
+    const fs::path p = fs::temp_directory_path() / ("demlab-test-" + name + "-" + std::to_string(::getpid()));
+    fs::remove_all(p);
+    return p;
+}
+
+const std::vector<std::string> kOverrides = {"release.scale=20", "stop.t_max=1.2", "output.snapshot_interval=0.2",
+                                             "output.track=[5, 200]"};
+
+Scenario scenario() {
+    Scenario s = load_scenario(std::string(DEMLAB_SOURCE_DIR) + "/scenarios/geometry-A.toml");
+    for (const std::string& a : kOverrides) apply_override(s, a);
+    finish_scenario(s);
+    return s;
+}
+
+// summary.json without the wall-clock figures (they differ between any two runs)
+std::string summary_without_timing(const fs::path& p) {
+    std::istringstream in(read(p));
+    std::string line, out;
+    while (std::getline(in, line))
+        if (line.find("wall_seconds") == std::string::npos && line.find("particle_steps_per_second") == std::string::npos)
+            out += line + '\n';
+    return out;
+}
+
+void expect_same_outputs(const fs::path& a, const fs::path& b) {
+    for (const char* f : {"forces.csv", "front.csv", "energy.csv", "track.csv", "deposit.csv", "release.csv",
+                          "snapshots/discs.pvd", "snapshots/walls.pvd"}) {
+        ASSERT_TRUE(fs::exists(a / f)) << f;
+        EXPECT_EQ(read(a / f), read(b / f)) << f << " differs";
+    }
+    int snapshots = 0;
+    for (const auto& e : fs::directory_iterator(a / "snapshots")) {
+        EXPECT_EQ(read(e.path()), read(b / "snapshots" / e.path().filename())) << e.path().filename();
+        ++snapshots;
+    }
+    EXPECT_GE(snapshots, 14);  // 7 instants, discs and walls, plus the two series
+    EXPECT_EQ(summary_without_timing(a / "summary.json"), summary_without_timing(b / "summary.json"));
+    EXPECT_FALSE(fs::exists(b / kCheckpointFile)) << "a finished run keeps no checkpoint";
+}
+
+// Runs the demlab executable; returns its pid.
+pid_t spawn(const std::vector<std::string>& args) {
+    std::vector<char*> argv;
+    std::string exe = DEMLAB_EXE;
+    argv.push_back(exe.data());
+    std::vector<std::string> copy = args;
+    for (std::string& a : copy) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    posix_spawn_file_actions_t fa;
+    posix_spawn_file_actions_init(&fa);
+    posix_spawn_file_actions_addopen(&fa, 1, "/dev/null", O_WRONLY, 0);
+    posix_spawn_file_actions_addopen(&fa, 2, "/dev/null", O_WRONLY, 0);
+    pid_t pid = -1;
+    EXPECT_EQ(posix_spawn(&pid, exe.c_str(), &fa, nullptr, argv.data(), environ), 0);
+    posix_spawn_file_actions_destroy(&fa);
+    return pid;
+}
+
+// exit code, or 128 + signal
+int wait_for(pid_t pid) {
+    int status = 0;
+    waitpid(pid, &status, 0);
+    return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+}
+
+std::vector<std::string> run_args(const fs::path& out) {
+    std::vector<std::string> a = {"run", std::string(DEMLAB_SOURCE_DIR) + "/scenarios/geometry-A.toml", "--out",
+                                  out.string(), "--no-plots"};
+    for (const std::string& o : kOverrides) {
+        a.push_back("--set");
+        a.push_back(o);
+    }
+    return a;
+}
+
+// Waits until the run folder holds a checkpoint (the flow phase has begun).
+bool wait_for_checkpoint(const fs::path& dir, pid_t pid) {
+    for (int k = 0; k < 6000; ++k) {  // 10 min under the sanitizers at worst
+        if (fs::exists(dir / kCheckpointFile)) return true;
+        int status;
+        if (waitpid(pid, &status, WNOHANG) == pid) return false;
+        std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    }
+    return false;
+}
+}  // namespace
+
+// In-process: a signal (simulated by request_interrupt, as the handler does) at the third
+// snapshot; the series files then get bytes a killed run could have written after the
+// checkpoint; the resume, on two threads, must cut them off and match the uninterrupted run.
+TEST(Checkpoint, ResumedRunIsByteIdentical) {
+    const Scenario s = scenario();
+    const fs::path ref = temp_dir("ck-ref"), cut = temp_dir("ck-cut");
+    run_scenario(s, {ref.string(), false, {}});
+
+    RunOptions ro{cut.string(), false, [](const std::string&, const std::string&, int index) {
+                      if (index == 2) request_interrupt(SIGTERM);
+                  }};
+    ro.handle_signals = true;
+    EXPECT_THROW(run_scenario(s, ro), Interrupted);
+    ASSERT_TRUE(fs::exists(cut / kCheckpointFile));
+    const CheckpointInfo info = read_checkpoint_info(cut.string());
+    EXPECT_NEAR(info.time, 0.4, 1e-4);
+    EXPECT_FALSE(fs::exists(cut / "forces.csv")) << "an unfinished series keeps its .part name";
+    EXPECT_FALSE(fs::exists(cut / "summary.json"));
+    for (const char* f : {"forces.csv.part", "energy.csv.part", "track.csv.part"}) {
+        std::ofstream junk(cut / f, std::ios::app);
+        junk << "9.99,written after the checkpoint by a run that was then killed\n";
+    }
+
+    Scenario s2 = load_scenario((cut / "scenario.toml").string());  // what `demlab resume` does
+    finish_scenario(s2);
+    s2.world.threads = 2;
+    RunOptions rr{cut.string(), false, {}};
+    rr.resume = true;
+    const RunSummary r = run_scenario(s2, rr);
+    EXPECT_NEAR(r.t_end, 1.2, 1e-4);
+    expect_same_outputs(ref, cut);
+    fs::remove_all(ref);
+    fs::remove_all(cut);
+}
+
+TEST(Checkpoint, EditedScenarioIsRefused) {
+    Scenario s = scenario();
+    const fs::path dir = temp_dir("ck-edit");
+    RunOptions ro{dir.string(), false, [](const std::string&, const std::string&, int index) {
+                      if (index == 1) request_interrupt(SIGINT);
+                  }};
+    ro.handle_signals = true;
+    EXPECT_THROW(run_scenario(s, ro), Interrupted);
+    apply_override(s, "material.friction_disc_deg=20");
+    finish_scenario(s);
+    RunOptions rr{dir.string(), false, {}};
+    rr.resume = true;
+    try {
+        run_scenario(s, rr);
+        FAIL() << "a checkpoint resumed with another scenario";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("differs from the scenario the checkpoint was written with"), std::string::npos)
+            << e.what();
+    }
+    fs::remove_all(dir);
+}
+
+// The executable, killed with SIGKILL (no chance to clean up) and stopped with SIGTERM:
+// only complete files under final names, exit code 4 for the signal, and `demlab resume`
+// finishes both to the bytes of an uninterrupted run.
+TEST(Checkpoint, KilledAndSignalledProcessesResumeToTheSameBytes) {
+    const fs::path ref = temp_dir("cli-ref"), killed = temp_dir("cli-killed"), stopped = temp_dir("cli-stopped");
+    ASSERT_EQ(wait_for(spawn(run_args(ref))), 0);
+
+    {
+        SCOPED_TRACE("SIGKILL");
+        auto args = run_args(killed);
+        args.insert(args.end(), {"--checkpoint-every", "0.05"});
+        const pid_t pid = spawn(args);
+        ASSERT_TRUE(wait_for_checkpoint(killed, pid));
+        std::this_thread::sleep_for(std::chrono::milliseconds(300));
+        kill(pid, SIGKILL);
+        EXPECT_EQ(wait_for(pid), 128 + SIGKILL);
+        // atomic outputs: series only as .part, whole-file outputs complete or absent
+        for (const char* f : {"forces.csv", "energy.csv", "front.csv", "track.csv", "deposit.csv", "summary.json"})
+            EXPECT_FALSE(fs::exists(killed / f)) << f << " exists under its final name in an unfinished run";
+        EXPECT_TRUE(fs::exists(killed / "forces.csv.part"));
+        for (const auto& e : fs::directory_iterator(killed / "snapshots")) {
+            if (e.path().extension() != ".vtp") continue;
+            const std::string text = read(e.path());
+            EXPECT_EQ(text.substr(text.size() - 11), "</VTKFile>\n") << e.path() << " is incomplete";
+        }
+        EXPECT_NO_THROW(read_checkpoint_info(killed.string()));
+        EXPECT_EQ(wait_for(spawn({"resume", killed.string(), "--threads", "2"})), 0);
+        expect_same_outputs(ref, killed);
+        EXPECT_EQ(wait_for(spawn({"resume", killed.string()})), 2) << "a finished run has nothing to resume";
+    }
+    {
+        SCOPED_TRACE("SIGTERM");
+        const pid_t pid = spawn(run_args(stopped));
+        // no timed checkpoints: wait for the flow phase (the first series lines), then signal
+        for (int k = 0; k < 6000 && !fs::exists(stopped / "forces.csv.part"); ++k)
+            std::this_thread::sleep_for(std::chrono::milliseconds(100));
+        std::this_thread::sleep_for(std::chrono::milliseconds(300));
+        kill(pid, SIGTERM);
+        EXPECT_EQ(wait_for(pid), int(kExitInterrupted));
+        ASSERT_TRUE(fs::exists(stopped / kCheckpointFile));
+        EXPECT_EQ(wait_for(spawn({"resume", stopped.string()})), 0);
+        expect_same_outputs(ref, stopped);
+    }
+    for (const fs::path& p : {ref, killed, stopped}) fs::remove_all(p);
+}
