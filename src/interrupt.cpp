@@ -28,6 +28,7 @@ InterruptScope::~InterruptScope() {
     using Handler = void (*)(int);
     std::signal(SIGINT, reinterpret_cast<Handler>(previous_[0]));
     std::signal(SIGTERM, reinterpret_cast<Handler>(previous_[1]));
+    clear_interrupt();  // handled: the next run in this process starts afresh
 }
 
 }  // namespace demlab

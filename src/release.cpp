@@ -102,7 +102,7 @@ std::vector<Vec2> place_without_overlap(const Polygon& tri, const std::vector<do
 }  // namespace
 
 namespace {
-// The generation is not checkpointed (at scale 4 it takes about a minute): a signal ends it
+// The generation is not checkpointed (minutes at scale 4): a signal ends it
 // here, and `demlab resume` starts the run again (the seed gives the same mass).
 void throw_if_interrupted_in_generation() {
     if (pending_interrupt())

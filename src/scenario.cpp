@@ -252,6 +252,7 @@ const std::vector<Key>& registry() {
         k.push_back(real("stop.t_max", "s", "simulated time after the release at most", [](Scenario& s) -> double& { return s.stop.t_max; }, 0, 1e4, true));
         k.push_back(real("stop.rest_ke_fraction", "-", "at rest when the kinetic energy stays below this fraction of its peak ...", [](Scenario& s) -> double& { return s.stop.rest_ke_fraction; }, 0, 1, true));
         k.push_back(real("stop.rest_duration", "s", "... for this long", [](Scenario& s) -> double& { return s.stop.rest_duration; }, 0, 100));
+        k.push_back(real("stop.max_energy_gain", "-", "blow-up watch: the run stops when the energy balance (kinetic + potential + elastic + dissipated - work of moving walls) has risen by more than this multiple of the energy turned over (peak kinetic + peak elastic + dissipated): the numerics are creating energy", [](Scenario& s) -> double& { return s.stop.max_energy_gain; }, 0, 10, true));
         // output
         k.push_back(real("output.series_interval", "s", "time between rows of forces.csv, front.csv, energy.csv, track.csv", [](Scenario& s) -> double& { return s.output.series_interval; }, 0, 100, true));
         k.push_back(real("output.snapshot_interval", "s", "time between snapshots (VTK .vtp with a .pvd series); 0 = none", [](Scenario& s) -> double& { return s.output.snapshot_interval; }, 0, 100));

@@ -52,6 +52,7 @@ struct StopDef {
     double t_max = 5.0;                    // s after release
     double rest_ke_fraction = 1e-3;        // at rest: kinetic energy below this fraction of its peak ...
     double rest_duration = 0.2;            // s ... for this long
+    double max_energy_gain = 1.0;          // -, energy created beyond this multiple of the energy turned over stops the run
 };
 
 struct OutputDef {
