@@ -572,21 +572,31 @@ void World::compute_forces() {
     diss_contacts_ += dissipated;
 }
 
-double World::automatic_dt() const {
-    const bool rotation_free = def_.rotation.model != 1;
+World::DtFactors World::dt_factors() const {
     const bool corr = def_.timestep.damping_correction;
     const double local = corr ? local_damping_factor(def_.damping.local_alpha) : 1.0;
     const double phi = local * (corr ? rotational_damping_factor(def_.damping.beta_s) : 1.0);
     const double phi_t = local * (corr ? translational_damping_factor(def_.damping.beta_n) : 1.0);
+    return {def_.rotation.model != 1, phi * phi, phi_t * phi_t};
+}
+
+double World::critical_step_squared_of(size_t i, const DtFactors& f) const {
+    const MaterialDef& m = materials_[size_t(material_[i])];
+    const double kt = k_tran_[i] > 0.0 ? k_tran_[i] : std::max(m.kn, m.ks);
+    const double kr = k_rot_[i] > 0.0 ? k_rot_[i] : m.ks;
+    return critical_step_squared(mass_[i], inertia_[i], radius_[i], kt, kr, f.rotation_free, f.phi_sq, f.phi_t_sq);
+}
+
+double World::step_from_critical_squared(double best_sq) const {
+    if (!std::isfinite(best_sq)) return def_.timestep.fixed;  // no discs
+    return def_.timestep.safety * std::sqrt(best_sq);
+}
+
+double World::automatic_dt() const {
+    const DtFactors f = dt_factors();
     double best = INFINITY;
-    for (size_t i = 0; i < pos_.size(); ++i) {
-        const MaterialDef& m = materials_[size_t(material_[i])];
-        const double kt = k_tran_[i] > 0.0 ? k_tran_[i] : std::max(m.kn, m.ks);
-        const double kr = k_rot_[i] > 0.0 ? k_rot_[i] : m.ks;
-        best = std::min(best, critical_step_squared(mass_[i], inertia_[i], radius_[i], kt, kr, rotation_free, phi * phi, phi_t * phi_t));
-    }
-    if (!std::isfinite(best)) return def_.timestep.fixed;  // no discs
-    return def_.timestep.safety * std::sqrt(best);
+    for (size_t i = 0; i < pos_.size(); ++i) best = std::min(best, critical_step_squared_of(i, f));
+    return step_from_critical_squared(best);
 }
 
 // PFC's central differences: v(t + dt/2) = v(t - dt/2) + (F(t)/m + g) dt, x(t + dt) = x(t) + v(t + dt/2) dt.
@@ -601,8 +611,16 @@ void World::integrate() {
     diss_rot_disc_.resize(n);
     std::vector<size_t>& fault = integrate_fault_;
     fault.assign(size_t(pool_->size()), SIZE_MAX);  // no allocation after the first step
+    // the next automatic step from this step's contacts (as automatic_dt(), but in the
+    // parallel loop: a minimum does not depend on the order it is taken in)
+    const bool auto_dt = def_.timestep.automatic;
+    const DtFactors dtf = dt_factors();
+    std::vector<double>& dt_sq_min = dt_sq_chunk_;
+    dt_sq_min.assign(size_t(pool_->size()), INFINITY);
     pool_->parallel_for(n, [&](size_t begin, size_t end, int chunk) {
+    double best_sq = INFINITY;
     for (size_t i = begin; i < end; ++i) {
+        if (auto_dt) best_sq = std::min(best_sq, critical_step_squared_of(i, dtf));
         double diss_local = 0.0, diss_rot = 0.0;
         Vec2 f = force_[i] + mass_[i] * g;
         Vec2 fd = Vec2::Zero();
@@ -651,6 +669,7 @@ void World::integrate() {
                          p.y() < def_.domain_lo.y() || p.x() > def_.domain_hi.x() || p.y() > def_.domain_hi.y();
         if (bad && fault[size_t(chunk)] == SIZE_MAX) fault[size_t(chunk)] = i;
     }
+    dt_sq_min[size_t(chunk)] = best_sq;
     });
     for (size_t i : fault) {
         if (i == SIZE_MAX) continue;
@@ -713,7 +732,11 @@ void World::step() {
     time_ += dt_;
     last_dt_ = dt_;
     ++steps_;
-    if (def_.timestep.automatic) dt_ = automatic_dt();
+    if (def_.timestep.automatic) {
+        double best_sq = INFINITY;
+        for (double b : dt_sq_chunk_) best_sq = std::min(best_sq, b);
+        dt_ = step_from_critical_squared(best_sq);
+    }
 }
 
 void World::run(long steps) {

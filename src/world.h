@@ -182,6 +182,14 @@ private:
     void join_wall_ends();
     double contact_mass_disc(int i, int j) const;
     double margin_target() const;  // m, the broad phase's pad (WorldDef::broadphase_margin)
+    // the automatic step (timestep.h): its constant factors, one disc's bound, the step
+    struct DtFactors {
+        bool rotation_free;
+        double phi_sq, phi_t_sq;
+    };
+    DtFactors dt_factors() const;
+    double critical_step_squared_of(size_t i, const DtFactors& f) const;
+    double step_from_critical_squared(double best_sq) const;
 
     WorldDef def_;
     bool finalized_ = false;
@@ -233,6 +241,7 @@ private:
     };
     std::vector<Fault> dd_fault_, dw_fault_;
     std::vector<size_t> integrate_fault_;
+    std::vector<double> dt_sq_chunk_;   // per chunk: the smallest critical step squared of this step
     std::vector<DiscContact> dd_, dd_scratch_;
     std::vector<WallContact> dw_, dw_scratch_;
     long touching_dd_ = 0, touching_dw_ = 0;
