@@ -127,7 +127,7 @@ void BroadPhase::init(double margin_target, double wall_piece_length, const std:
 
 bool BroadPhase::update(const std::vector<Vec2>& pos, const std::vector<double>& radius,
                         const std::vector<WallGeom>& walls, const std::vector<uint8_t>& wall_active,
-                        const std::vector<uint8_t>& wall_moving) {
+                        const std::vector<uint8_t>& wall_moving, bool discs_may_have_escaped) {
     // walls: removed ones leave the tree; moving ones are re-inserted whole when any of
     // their pieces leaves its fat box
     std::vector<uint8_t> changed(walls.size(), 0);
@@ -151,10 +151,9 @@ bool BroadPhase::update(const std::vector<Vec2>& pos, const std::vector<double>&
 
     escaped_list_.clear();
     const size_t n = pos.size();
-    for (size_t i = 0; i < n; ++i) {
-        const Vec2 rr(radius[i], radius[i]);
-        if (!contains(fat_lo_[i], fat_hi_[i], pos[i] - rr, pos[i] + rr)) escaped_list_.push_back(int32_t(i));
-    }
+    if (discs_may_have_escaped)
+        for (size_t i = 0; i < n; ++i)
+            if (!inside_fat_box(i, pos[i], radius[i])) escaped_list_.push_back(int32_t(i));
     if (escaped_list_.empty() && !any_wall) return false;
     // An update costs a pass over the candidate list whatever the number of escapes, so batch
     // them: with the escaped discs also re-insert every disc that has used up more than half

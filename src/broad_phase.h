@@ -42,9 +42,17 @@ public:
 
     // Re-inserts escaped discs and moved walls' pieces, drops removed walls, and refreshes
     // the candidate lists. Returns true if the lists changed.
+    // discs_may_have_escaped = false skips the scan of the discs (the caller has checked
+    // inside_fat_box() for every disc that moved).
     bool update(const std::vector<Vec2>& pos, const std::vector<double>& radius,
                 const std::vector<WallGeom>& walls, const std::vector<uint8_t>& wall_active,
-                const std::vector<uint8_t>& wall_moving);
+                const std::vector<uint8_t>& wall_moving, bool discs_may_have_escaped = true);
+
+    // Is disc i (centre p, radius r) still inside its fat box? Thread-safe (read-only).
+    bool inside_fat_box(size_t i, const Vec2& p, double r) const {
+        return fat_lo_[i].x() <= p.x() - r && fat_lo_[i].y() <= p.y() - r && p.x() + r <= fat_hi_[i].x() &&
+               p.y() + r <= fat_hi_[i].y();
+    }
 
     // Sorted, unique keys pair_key(i, j) with i < j.
     const std::vector<uint64_t>& disc_pairs() const { return dd_; }

@@ -86,6 +86,7 @@ void World::set_radius(int i, double r) {
     const size_t k = size_t(i);
     const double mass = materials_[size_t(material_[k])].density * kPi * r * r;
     radius_[k] = r;
+    discs_may_have_escaped_ = true;
     mass_[k] = mass;
     inv_mass_[k] = 1.0 / mass;
     inertia_[k] = 0.5 * mass * r * r;
@@ -227,6 +228,8 @@ void World::finalize() {
     wall_normal_.assign(n, 0.0);
     k_tran_.assign(n, 0.0);
     k_rot_.assign(n, 0.0);
+    diss_contact_disc_.assign(n, 0.0);
+    discs_may_have_escaped_ = true;
 
     broad_.init(margin_target(), def_.wall_piece_length, pos_, radius_, geom_, wall_active_);
     refresh_contacts();
@@ -480,10 +483,14 @@ void World::compute_forces() {
         std::fill(wall_normal_.begin(), wall_normal_.end(), 0.0);
         std::fill(n_disc_.begin(), n_disc_.end(), 0);
         std::fill(n_wall_.begin(), n_wall_.end(), 0);
+        std::fill(diss_contact_disc_.begin(), diss_contact_disc_.end(), 0.0);
         for (size_t k = 0; k < dd_.size(); ++k) {
             const PairOut& o = dd_out_[k];
-            if (!o.touching) continue;
             const size_t i = size_t(dd_[k].i), j = size_t(dd_[k].j);
+            // the ledger: half of a pair's dissipation to each disc (exact: a power of two)
+            diss_contact_disc_[i] += 0.5 * o.dissipated;
+            diss_contact_disc_[j] += 0.5 * o.dissipated;
+            if (!o.touching) continue;
             force_[j] += o.f;
             force_[i] -= o.f;
             torque_[j] += o.torque_j;
@@ -511,11 +518,12 @@ void World::compute_forces() {
     pool_->parallel_for(n, [&](size_t begin, size_t end, int) {
         for (size_t d = begin; d < end; ++d) {
             Vec2 f = Vec2::Zero();
-            double tq = 0.0, kt = 0.0, ks = 0.0, wn = 0.0;
+            double tq = 0.0, kt = 0.0, ks = 0.0, wn = 0.0, diss = 0.0;
             int nd = 0, nwc = 0;
             for (int32_t e = adj_start_[d]; e < adj_start_[d + 1]; ++e) {
                 const int32_t code = adj_[size_t(e)];
                 const PairOut& o = dd_out_[size_t(code >> 1)];
+                diss += 0.5 * o.dissipated;
                 if (!o.touching) continue;
                 if (code & 1) {  // disc d is j (B)
                     f += o.f;
@@ -545,17 +553,19 @@ void World::compute_forces() {
             wall_normal_[d] = wn;
             n_disc_[d] = nd;
             n_wall_[d] = nwc;
+            diss_contact_disc_[d] = diss;
         }
     });
 
-    // the ledger and the wall loads, in contact-list order
+    // the ledger: disc-disc contacts through the discs' halves, in disc order (a pass over
+    // the discs, not the longer contact list); then the wall loads, in contact-list order
     double dissipated = 0.0;
     long touching = 0;
-    for (const PairOut& o : dd_out_) {
-        dissipated += o.dissipated;
-        touching += o.touching;
+    for (size_t d = 0; d < n; ++d) {
+        dissipated += diss_contact_disc_[d];
+        touching += n_disc_[d];
     }
-    touching_dd_ = touching;
+    touching_dd_ = touching / 2;
     touching = 0;
     std::fill(wall_force_.begin(), wall_force_.end(), Vec2::Zero());
     std::fill(wall_moment_.begin(), wall_moment_.end(), 0.0);
@@ -617,8 +627,12 @@ void World::integrate() {
     const DtFactors dtf = dt_factors();
     std::vector<double>& dt_sq_min = dt_sq_chunk_;
     dt_sq_min.assign(size_t(pool_->size()), INFINITY);
+    // whether a disc left its fat box: the broad phase then need not scan them all
+    std::vector<uint8_t>& escaped = escaped_chunk_;
+    escaped.assign(size_t(pool_->size()), 0);
     pool_->parallel_for(n, [&](size_t begin, size_t end, int chunk) {
     double best_sq = INFINITY;
+    bool any_escaped = false;
     for (size_t i = begin; i < end; ++i) {
         if (auto_dt) best_sq = std::min(best_sq, critical_step_squared_of(i, dtf));
         double diss_local = 0.0, diss_rot = 0.0;
@@ -668,9 +682,13 @@ void World::integrate() {
         const bool bad = !std::isfinite(p.x() + p.y() + vel_[i].x() + vel_[i].y()) || p.x() < def_.domain_lo.x() ||
                          p.y() < def_.domain_lo.y() || p.x() > def_.domain_hi.x() || p.y() > def_.domain_hi.y();
         if (bad && fault[size_t(chunk)] == SIZE_MAX) fault[size_t(chunk)] = i;
+        any_escaped = any_escaped || !broad_.inside_fat_box(i, p, radius_[i]);
     }
     dt_sq_min[size_t(chunk)] = best_sq;
+    escaped[size_t(chunk)] = any_escaped ? 1 : 0;
     });
+    discs_may_have_escaped_ = false;
+    for (uint8_t e : escaped) discs_may_have_escaped_ = discs_may_have_escaped_ || e != 0;
     for (size_t i : fault) {
         if (i == SIZE_MAX) continue;
         const Vec2& p = pos_[i];
@@ -724,7 +742,7 @@ void World::step() {
             }
         }
     }
-    if (broad_.update(pos_, radius_, geom_, wall_active_, wall_moving_)) refresh_contacts();
+    if (broad_.update(pos_, radius_, geom_, wall_active_, wall_moving_, discs_may_have_escaped_)) refresh_contacts();
     compute_forces();
     integrate();
     move_walls();

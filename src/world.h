@@ -154,7 +154,10 @@ public:
     // --- direct edits (tests, generation); call between steps ---
     void set_velocity(int i, const Vec2& v) { vel_[size_t(i)] = v; }
     void set_omega(int i, double w) { omega_[size_t(i)] = w; }
-    void set_position(int i, const Vec2& p) { pos_[size_t(i)] = p; }
+    void set_position(int i, const Vec2& p) {
+        pos_[size_t(i)] = p;
+        discs_may_have_escaped_ = true;
+    }
     void set_dt(double dt);  // switches to a fixed step
     // Changes a disc's radius (mass and inertia follow); call refresh_dashpots() after a batch.
     void set_radius(int i, double r);
@@ -241,7 +244,10 @@ private:
     };
     std::vector<Fault> dd_fault_, dw_fault_;
     std::vector<size_t> integrate_fault_;
-    std::vector<double> dt_sq_chunk_;   // per chunk: the smallest critical step squared of this step
+    std::vector<double> dt_sq_chunk_;
+    std::vector<uint8_t> escaped_chunk_;
+    bool discs_may_have_escaped_ = true;  // false when integrate() saw every disc inside its fat box
+    std::vector<double> diss_contact_disc_;  // per disc: half the dissipation of its disc-disc contacts this step   // per chunk: the smallest critical step squared of this step
     std::vector<DiscContact> dd_, dd_scratch_;
     std::vector<WallContact> dw_, dw_scratch_;
     long touching_dd_ = 0, touching_dw_ = 0;
