@@ -5,6 +5,8 @@
 # usage: scripts/main-job.sh [OUT_DIR] [extra demlab run options]
 #   default OUT_DIR runs/geometry-A; an existing folder is refused (give another, or --force)
 #   a quick look: scripts/main-job.sh runs/geometry-A-20 --scale 20   (364 discs, seconds)
+# A checkpoint is written every 5 minutes and on Ctrl-C: `./build/demlab resume OUT_DIR`
+# continues an interrupted run to the same results.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/install-deps.sh
@@ -12,4 +14,4 @@ cmake -S . -B build -G Ninja -DCMAKE_BUILD_TYPE=Release >/dev/null
 cmake --build build -j "$(nproc)"
 out="${1:-runs/geometry-A}"
 shift || true
-./build/demlab run scenarios/geometry-A.toml --out "$out" --frames "$@"
+./build/demlab run scenarios/geometry-A.toml --out "$out" --frames --checkpoint-every 300 "$@"
