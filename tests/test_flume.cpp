@@ -7,20 +7,16 @@
 #include <sstream>
 
 #include "error.h"
+#include "files.h"
 #include "run.h"
 #include "scenario.h"
 
 using namespace demlab;
+using demlab::test::read_file;
+using demlab::test::temp_dir;
 namespace fs = std::filesystem;
 
 namespace {
-std::string read(const fs::path& p) {
-    std::ifstream in(p);
-    std::stringstream b;
-    b << in.rdbuf();
-    return b.str();
-}
-
 std::vector<std::vector<double>> read_csv(const fs::path& p) {
     std::ifstream in(p);
     std::string line;
@@ -34,12 +30,6 @@ std::vector<std::vector<double>> read_csv(const fs::path& p) {
         rows.push_back(row);
     }
     return rows;
-}
-
-fs::path temp_dir(const std::string& name) {
-    const fs::path p = fs::temp_directory_path() / ("demlab-test-" + name + "-" + std::to_string(::getpid()));
-    fs::remove_all(p);
-    return p;
 }
 
 struct FlumeRun {
@@ -94,7 +84,7 @@ TEST(GeometryA20, GenerationToRestBalancesAndDeterminism) {
         SCOPED_TRACE("the same seed gives identical files");
         const FlumeRun again = run_geometry_a("a20-again");
         for (const char* f : {"release.csv", "forces.csv", "front.csv", "energy.csv", "deposit.csv", "snapshots/discs_00001.vtp"})
-            EXPECT_EQ(read(first.dir / f), read(again.dir / f)) << f;
+            EXPECT_EQ(read_file(first.dir / f), read_file(again.dir / f)) << f;
         fs::remove_all(again.dir);
     }
     fs::remove_all(first.dir);
@@ -148,7 +138,7 @@ TEST(ExplicitScenario, ExistingOutputFolderIsNotOverwritten) {
     Scenario s = parse_scenario("[[discs]]\nposition = [0, 0]\nradius = 0.01\n[stop]\nt_max = 0.01\nrest_duration = 0.001\n", "x.toml");
     finish_scenario(s);
     EXPECT_THROW(run_scenario(s, {dir.string(), false, {}}), InputError);
-    EXPECT_EQ(read(dir / "mine.txt"), "keep");
+    EXPECT_EQ(read_file(dir / "mine.txt"), "keep");
     fs::remove_all(dir);
 }
 

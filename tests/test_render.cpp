@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "error.h"
+#include "files.h"
 #include "frame.h"
 #include "image.h"
 #include "plot.h"
@@ -17,6 +18,7 @@
 #include "scenario.h"
 
 using namespace demlab;
+using demlab::test::read_file;
 namespace fs = std::filesystem;
 
 namespace {
@@ -44,13 +46,6 @@ RenderStyle unit_view(int px) {
     s.view_hi = Vec2(1, 1);
     s.show_time = false;
     return s;
-}
-
-std::string read(const fs::path& p) {
-    std::ifstream in(p, std::ios::binary);
-    std::stringstream b;
-    b << in.rdbuf();
-    return b.str();
 }
 
 int colour_distance(const uint8_t* p, int r, int g, int b) { return std::abs(p[0] - r) + std::abs(p[1] - g) + std::abs(p[2] - b); }
@@ -160,7 +155,7 @@ TEST_F(SmallRun, ReplayEqualsTheFramesRenderedDuringTheRun) {
     for (int k = 0; k < n; ++k) {
         char name[32];
         std::snprintf(name, sizeof name, "frame_%05d.png", k);
-        const std::string during = read(*dir_ / "frames" / name), replay = read(*dir_ / "replay" / name);
+        const std::string during = read_file(*dir_ / "frames" / name), replay = read_file(*dir_ / "replay" / name);
         ASSERT_FALSE(during.empty()) << name;
         EXPECT_EQ(during, replay) << name;
     }
