@@ -20,14 +20,13 @@ void clear_interrupt() { g_signal.store(0, std::memory_order_relaxed); }
 
 InterruptScope::InterruptScope() {
     clear_interrupt();
-    previous_[0] = reinterpret_cast<void*>(std::signal(SIGINT, on_signal));
-    previous_[1] = reinterpret_cast<void*>(std::signal(SIGTERM, on_signal));
+    previous_[0] = std::signal(SIGINT, on_signal);
+    previous_[1] = std::signal(SIGTERM, on_signal);
 }
 
 InterruptScope::~InterruptScope() {
-    using Handler = void (*)(int);
-    std::signal(SIGINT, reinterpret_cast<Handler>(previous_[0]));
-    std::signal(SIGTERM, reinterpret_cast<Handler>(previous_[1]));
+    std::signal(SIGINT, previous_[0]);
+    std::signal(SIGTERM, previous_[1]);
     clear_interrupt();  // handled: the next run in this process starts afresh
 }
 

@@ -28,7 +28,8 @@ public:
     InterruptScope& operator=(const InterruptScope&) = delete;
 
 private:
-    void* previous_[2];
+    using Handler = void (*)(int);
+    Handler previous_[2];
 };
 
 }  // namespace demlab

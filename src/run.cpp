@@ -190,8 +190,6 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
     }
 
     // --- the world
-    // with a checkpoint, `mass` holds every disc at its start (explicit ones too)
-    const bool explicit_discs = !restore;
     WorldDef def = s.world;
     // the domain: the walls' and discs' box, padded by 0.5 m; leaving it stops the run
     Vec2 lo(INFINITY, INFINITY), hi(-INFINITY, -INFINITY);
@@ -219,7 +217,7 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
         layer.push_back(mass.layer[i]);
         grid.push_back(mass.grid[i]);
     }
-    if (explicit_discs)
+    if (!restore)  // a checkpoint's `mass` holds every disc at its start, the explicit ones too
         for (const DiscDef& d : s.discs) {
             DiscDef dd = d;
             dd.material = mat;

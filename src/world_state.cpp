@@ -28,7 +28,36 @@ namespace demlab {
 
 namespace {
 constexpr uint32_t kWorldStateVersion = 1;
+
+// A contact's history (DiscContact and WallContact share these fields), and its copy into a
+// contact of the rebuilt list.
+template <typename Contact>
+void put_history(BinaryWriter& out, const Contact& c) {
+    out.put(c.fs);
+    out.put(c.cn);
+    out.put(c.cs);
+    out.put(c.damp_n);
+    out.put(c.damp_s);
 }
+
+template <typename Contact>
+void get_history(BinaryReader& in, Contact& c) {
+    in.get(c.fs);
+    in.get(c.cn);
+    in.get(c.cs);
+    in.get(c.damp_n);
+    in.get(c.damp_s);
+}
+
+template <typename Contact>
+void copy_history(const Contact& from, Contact& to) {
+    to.fs = from.fs;
+    to.cn = from.cn;
+    to.cs = from.cs;
+    to.damp_n = from.damp_n;
+    to.damp_s = from.damp_s;
+}
+}  // namespace
 
 void World::save_state(BinaryWriter& out) const {
     out.tag("WRLD");
@@ -69,21 +98,13 @@ void World::save_state(BinaryWriter& out) const {
     for (const DiscContact& c : dd_) {
         out.put(c.i);
         out.put(c.j);
-        out.put(c.fs);
-        out.put(c.cn);
-        out.put(c.cs);
-        out.put(c.damp_n);
-        out.put(c.damp_s);
+        put_history(out, c);
     }
     out.put(uint64_t(dw_.size()));
     for (const WallContact& c : dw_) {
         out.put(c.disc);
         out.put(c.wall);
-        out.put(c.fs);
-        out.put(c.cn);
-        out.put(c.cs);
-        out.put(c.damp_n);
-        out.put(c.damp_s);
+        put_history(out, c);
     }
     out.put(int64_t(touching_dd_));
     out.put(int64_t(touching_dw_));
@@ -105,12 +126,7 @@ void merge_histories(const std::vector<Contact>& saved, std::vector<Contact>& fr
         const uint64_t k = key(s);
         while (o < fresh.size() && key(fresh[o]) < k) ++o;
         if (o < fresh.size() && key(fresh[o]) == k) {
-            Contact& f = fresh[o];
-            f.fs = s.fs;
-            f.cn = s.cn;
-            f.cs = s.cs;
-            f.damp_n = s.damp_n;
-            f.damp_s = s.damp_s;
+            copy_history(s, fresh[o]);
         } else if (s.fs != 0.0 || s.damp_n != 0.0f || s.damp_s != 0.0f) {
             throw RunError(std::string("checkpoint: a ") + what +
                            " contact with a history is not a candidate of the rebuilt broad phase (the checkpoint "
@@ -166,22 +182,14 @@ void World::load_state(BinaryReader& in) {
     for (DiscContact& c : dd) {
         in.get(c.i);
         in.get(c.j);
-        in.get(c.fs);
-        in.get(c.cn);
-        in.get(c.cs);
-        in.get(c.damp_n);
-        in.get(c.damp_s);
+        get_history(in, c);
         if (c.i < 0 || c.j <= c.i || size_t(c.j) >= n) throw InputError("checkpoint: corrupt contact list");
     }
     std::vector<WallContact> dw(in.get<uint64_t>());
     for (WallContact& c : dw) {
         in.get(c.disc);
         in.get(c.wall);
-        in.get(c.fs);
-        in.get(c.cn);
-        in.get(c.cs);
-        in.get(c.damp_n);
-        in.get(c.damp_s);
+        get_history(in, c);
         if (c.disc < 0 || size_t(c.disc) >= n || c.wall < 0 || size_t(c.wall) >= nw)
             throw InputError("checkpoint: corrupt contact list");
     }

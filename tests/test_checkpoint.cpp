@@ -16,6 +16,7 @@
 #include <thread>
 
 #include "error.h"
+#include "files.h"
 #include "interrupt.h"
 #include "run.h"
 #include "scenario.h"
@@ -23,22 +24,11 @@
 extern char** environ;
 
 using namespace demlab;
+using demlab::test::read_file;
+using demlab::test::temp_dir;
 namespace fs = std::filesystem;
 
 namespace {
-std::string read(const fs::path& p) {
-    std::ifstream in(p, std::ios::binary);
-    std::stringstream b;
-    b << in.rdbuf();
-    return b.str();
-}
-
-fs::path temp_dir(const std::string& name) {
-    const fs::path p = fs::temp_directory_path() / ("demlab-test-" + name + "-" + std::to_string(::getpid()));
-    fs::remove_all(p);
-    return p;
-}
-
 const std::vector<std::string> kOverrides = {"release.scale=20", "stop.t_max=1.2", "output.snapshot_interval=0.2",
                                              "output.track=[5, 200]"};
 
@@ -51,7 +41,7 @@ Scenario scenario() {
 
 // summary.json without the wall-clock figures (they differ between any two runs)
 std::string summary_without_timing(const fs::path& p) {
-    std::istringstream in(read(p));
+    std::istringstream in(read_file(p));
     std::string line, out;
     while (std::getline(in, line))
         if (line.find("wall_seconds") == std::string::npos && line.find("particle_steps_per_second") == std::string::npos)
@@ -63,11 +53,11 @@ void expect_same_outputs(const fs::path& a, const fs::path& b) {
     for (const char* f : {"forces.csv", "front.csv", "energy.csv", "track.csv", "deposit.csv", "release.csv",
                           "snapshots/discs.pvd", "snapshots/walls.pvd"}) {
         ASSERT_TRUE(fs::exists(a / f)) << f;
-        EXPECT_EQ(read(a / f), read(b / f)) << f << " differs";
+        EXPECT_EQ(read_file(a / f), read_file(b / f)) << f << " differs";
     }
     int snapshots = 0;
     for (const auto& e : fs::directory_iterator(a / "snapshots")) {
-        EXPECT_EQ(read(e.path()), read(b / "snapshots" / e.path().filename())) << e.path().filename();
+        EXPECT_EQ(read_file(e.path()), read_file(b / "snapshots" / e.path().filename())) << e.path().filename();
         ++snapshots;
     }
     EXPECT_GE(snapshots, 14);  // 7 instants, discs and walls, plus the two series
@@ -124,7 +114,8 @@ bool wait_for_checkpoint(const fs::path& dir, pid_t pid) {
 
 // In-process: a signal (simulated by request_interrupt, as the handler does) at the third
 // snapshot; the series files then get bytes a killed run could have written after the
-// checkpoint; the resume, on two threads, must cut them off and match the uninterrupted run.
+// checkpoint; the resume (asked for 2 threads; 364 discs stay below the pool's parallel
+// threshold, so this checks the option, not the gather) must cut them off and match.
 TEST(Checkpoint, ResumedRunIsByteIdentical) {
     const Scenario s = scenario();
     const fs::path ref = temp_dir("ck-ref"), cut = temp_dir("ck-cut");
@@ -157,7 +148,9 @@ TEST(Checkpoint, ResumedRunIsByteIdentical) {
     fs::remove_all(cut);
 }
 
-TEST(Checkpoint, EditedScenarioIsRefused) {
+// A resume is refused with a clear message when its scenario was edited, or when the
+// checkpoint was cut short (a full disk, a copy that did not finish).
+TEST(Checkpoint, EditedScenarioAndTruncatedCheckpointAreRefused) {
     Scenario s = scenario();
     const fs::path dir = temp_dir("ck-edit");
     RunOptions ro{dir.string(), false, [](const std::string&, const std::string&, int index) {
@@ -165,16 +158,30 @@ TEST(Checkpoint, EditedScenarioIsRefused) {
                   }};
     ro.handle_signals = true;
     EXPECT_THROW(run_scenario(s, ro), Interrupted);
-    apply_override(s, "material.friction_disc_deg=20");
-    finish_scenario(s);
     RunOptions rr{dir.string(), false, {}};
     rr.resume = true;
-    try {
-        run_scenario(s, rr);
-        FAIL() << "a checkpoint resumed with another scenario";
-    } catch (const InputError& e) {
-        EXPECT_NE(std::string(e.what()).find("differs from the scenario the checkpoint was written with"), std::string::npos)
-            << e.what();
+    auto expect_refused = [&](const Scenario& sc, const std::string& message) {
+        try {
+            run_scenario(sc, rr);
+            FAIL() << "resumed; expected: " << message;
+        } catch (const InputError& e) {
+            EXPECT_NE(std::string(e.what()).find(message), std::string::npos) << e.what();
+        }
+    };
+    {
+        SCOPED_TRACE("truncated");
+        const fs::path ck = dir / kCheckpointFile;
+        const std::string whole = read_file(ck);
+        std::ofstream(ck, std::ios::binary | std::ios::trunc) << whole.substr(0, whole.size() / 2);
+        expect_refused(s, "truncated checkpoint");
+        std::ofstream(ck, std::ios::binary | std::ios::trunc) << whole;
+    }
+    {
+        SCOPED_TRACE("edited");
+        Scenario edited = s;
+        apply_override(edited, "material.friction_disc_deg=20");
+        finish_scenario(edited);
+        expect_refused(edited, "differs from the scenario the checkpoint was written with");
     }
     fs::remove_all(dir);
 }
@@ -201,7 +208,7 @@ TEST(Checkpoint, KilledAndSignalledProcessesResumeToTheSameBytes) {
         EXPECT_TRUE(fs::exists(killed / "forces.csv.part"));
         for (const auto& e : fs::directory_iterator(killed / "snapshots")) {
             if (e.path().extension() != ".vtp") continue;
-            const std::string text = read(e.path());
+            const std::string text = read_file(e.path());
             EXPECT_EQ(text.substr(text.size() - 11), "</VTKFile>\n") << e.path() << " is incomplete";
         }
         EXPECT_NO_THROW(read_checkpoint_info(killed.string()));
