@@ -66,6 +66,8 @@ int bench(const BenchOptions& o) {
     std::printf("  broad phase: margin %.3g m, %ld updates, %ld re-insertions; contacts now %ld disc-disc, %ld disc-wall\n",
                 world.broad_phase_margin(), bs.updates, bs.disc_reinserts, world.touching_disc_pairs(),
                 world.touching_wall_pairs());
+    std::printf("  force pass: %d disc range(s), %zu of %zu candidate pairs cross ranges\n", world.force_pass_ranges(),
+                world.cross_contacts(), world.disc_contacts().size());
     std::printf("  final-state checksum %016llx\n", static_cast<unsigned long long>(state_hash(world)));
     if (o.peer) {
         const int ranks = o.threads > 1 ? 2 : 1;

@@ -11,6 +11,8 @@
 
 namespace demlab {
 
+static PairMaterial pair_material(double kn, double ks, double mu) { return {kn, ks, mu, std::max(kn, ks)}; }
+
 void validate(const WorldDef& d, const std::string& where) {
     require_finite(where + ".gravity", d.gravity, "m/s2");
     require_range(where + ".damping.beta_n", d.damping.beta_n, 0.0, 1.0, true, "(ratio)");
@@ -54,7 +56,6 @@ int World::add_disc(const DiscDef& d) {
     const double inertia = 0.5 * mass * d.radius * d.radius;
     pos_.push_back(d.pos);
     vel_.push_back(d.vel);
-    force_.push_back(Vec2::Zero());
     radius_.push_back(d.radius);
     mass_.push_back(mass);
     inv_mass_.push_back(1.0 / mass);
@@ -62,7 +63,6 @@ int World::add_disc(const DiscDef& d) {
     inv_inertia_.push_back(1.0 / inertia);
     angle_.push_back(d.angle);
     omega_.push_back(def_.rotation.model == 1 ? 0.0 : d.omega);
-    torque_.push_back(0.0);
     material_.push_back(d.material);
     return int(pos_.size()) - 1;
 }
@@ -114,10 +114,10 @@ double World::unbalanced_force_ratio() const {
     double net = 0.0, contact = 0.0;
     long touching = 0;
     for (size_t i = 0; i < pos_.size(); ++i) {
-        if (k_tran_[i] == 0.0) continue;  // no contacts
+        if (load_[i].k_tran == 0.0) continue;  // no contacts
         ++touching;
-        net += (force_[i] + mass_[i] * def_.gravity).norm();
-        contact += force_[i].norm();
+        net += (load_[i].force + mass_[i] * def_.gravity).norm();
+        contact += load_[i].force.norm();
     }
     return touching == 0 || contact == 0.0 ? 0.0 : net / contact;
 }
@@ -208,27 +208,22 @@ void World::finalize() {
     mat_dd_.resize(nm * nm);
     for (size_t a = 0; a < nm; ++a)
         for (size_t b = 0; b < nm; ++b)
-            mat_dd_[a * nm + b] = {series_stiffness(materials_[a].kn, materials_[b].kn),
-                                   series_stiffness(materials_[a].ks, materials_[b].ks),
-                                   combine_friction(def_.friction_rule_disc_disc, materials_[a].friction,
-                                                    materials_[b].friction)};
+            mat_dd_[a * nm + b] = pair_material(series_stiffness(materials_[a].kn, materials_[b].kn),
+                                                series_stiffness(materials_[a].ks, materials_[b].ks),
+                                                combine_friction(def_.friction_rule_disc_disc, materials_[a].friction,
+                                                                 materials_[b].friction));
     mat_dw_.resize(nm * nw);
     for (size_t a = 0; a < nm; ++a)
         for (size_t w = 0; w < nw; ++w)
-            mat_dw_[a * nw + w] = {series_stiffness(materials_[a].kn, walls_[w].kn),
-                                   series_stiffness(materials_[a].ks, walls_[w].ks),
-                                   combine_friction(def_.friction_rule_disc_wall, materials_[a].friction,
-                                                    walls_[w].friction)};
+            mat_dw_[a * nw + w] = pair_material(series_stiffness(materials_[a].kn, walls_[w].kn),
+                                                series_stiffness(materials_[a].ks, walls_[w].ks),
+                                                combine_friction(def_.friction_rule_disc_wall, materials_[a].friction,
+                                                                 walls_[w].friction));
 
     rr_factor_.assign(n, 0.0);
     if (def_.rotation.model >= 2 && def_.rotation.u_rr > 0.0)
         for (size_t i = 0; i < n; ++i) rr_factor_[i] = preh_poisel_factor(radius_[i], def_.rotation.u_rr);
-    n_wall_.assign(n, 0);
-    n_disc_.assign(n, 0);
-    wall_normal_.assign(n, 0.0);
-    k_tran_.assign(n, 0.0);
-    k_rot_.assign(n, 0.0);
-    diss_contact_disc_.assign(n, 0.0);
+    load_.assign(n, DiscLoad{});
     discs_may_have_escaped_ = true;
 
     broad_.init(margin_target(), def_.wall_piece_length, pos_, radius_, geom_, wall_active_);
@@ -294,42 +289,62 @@ void World::refresh_contacts() {
     }
     dw_.swap(dw_scratch_);
 
-    // adjacency for the gather: each disc's contacts in contact-list order (counting sort)
-    const size_t n = pos_.size();
-    adj_start_.assign(n + 1, 0);
-    for (const DiscContact& c : dd_) {
-        ++adj_start_[size_t(c.i) + 1];
-        ++adj_start_[size_t(c.j) + 1];
-    }
-    for (size_t d = 0; d < n; ++d) adj_start_[d + 1] += adj_start_[d];
-    adj_.resize(2 * dd_.size());
-    std::vector<int32_t> fill(adj_start_.begin(), adj_start_.end() - 1);
-    for (size_t k = 0; k < dd_.size(); ++k) {
-        adj_[size_t(fill[size_t(dd_[k].i)]++)] = int32_t(2 * k);
-        adj_[size_t(fill[size_t(dd_[k].j)]++)] = int32_t(2 * k + 1);
-    }
-    wadj_start_.assign(n + 1, 0);
-    for (const WallContact& c : dw_) ++wadj_start_[size_t(c.disc) + 1];
-    for (size_t d = 0; d < n; ++d) wadj_start_[d + 1] += wadj_start_[d];
-    wadj_.resize(dw_.size());
-    fill.assign(wadj_start_.begin(), wadj_start_.end() - 1);
-    for (size_t k = 0; k < dw_.size(); ++k) wadj_[size_t(fill[size_t(dw_[k].disc)]++)] = int32_t(k);
+    split_force_pass();
 }
 
-// One step of the law for a touching contact (disc-disc or disc-wall): updates the contact's
-// history (shear spring, last dashpot forces) and returns the forces; `dissipated` receives
-// the energy the step took out: sliding, plus the dashpots' work centred on v(t - dt/2)
-// (this step's force over the first half of the velocity interval, the last step's over
-// the second half).
-template <typename Contact>
-static LinearContactForce step_contact(const LinearContactParams& p, double overlap, double vn, double vs, double dt,
-                                       double last_dt, Contact& c, double& dissipated) {
-    const LinearContactForce f = linear_contact(p, overlap, vn, vs, dt, c.fs);
-    c.fs = f.fs_spring;
-    dissipated = f.slip_work - 0.5 * ((f.damp_n * dt + c.damp_n * last_dt) * vn + (f.damp_s * dt + c.damp_s * last_dt) * vs);
-    c.damp_n = float(f.damp_n);
-    c.damp_s = float(f.damp_s);
-    return f;
+// The force pass's ranges: one contiguous range of discs per thread, cut where the work
+// (contacts owned, plus discs) is shared evenly; the cross contacts and, per range, which
+// of them it receives. Rebuilt with the candidate lists. How the work is cut changes no bit:
+// every disc sums its terms in contact-list order in any case (compute_forces).
+void World::split_force_pass() {
+    const size_t n = pos_.size();
+    force_ranges_ = pool_->shares(n) ? pool_->size() : 1;
+    const size_t r = size_t(force_ranges_);
+    disc_split_.assign(r + 1, n);
+    disc_split_[0] = 0;
+    if (r > 1) {
+        // work of disc d: 1 + the contacts it owns (contacts are sorted by i)
+        const double total = double(n + dd_.size() + dw_.size());
+        size_t k = 0, kw = 0, part = 1;
+        double done = 0.0;
+        for (size_t d = 0; d < n && part < r; ++d) {
+            const size_t k0 = k, kw0 = kw;
+            while (k < dd_.size() && size_t(dd_[k].i) == d) ++k;
+            while (kw < dw_.size() && size_t(dw_[kw].disc) == d) ++kw;
+            done += double(1 + (k - k0) + (kw - kw0));
+            if (done >= total * double(part) / double(r)) disc_split_[part++] = d + 1;
+        }
+    }
+    contact_split_.assign(r + 1, dd_.size());
+    wall_split_.assign(r + 1, dw_.size());
+    for (size_t t = 0; t < r; ++t) {
+        const int32_t first = int32_t(disc_split_[t]);
+        contact_split_[t] = size_t(std::lower_bound(dd_.begin(), dd_.end(), first,
+                                                    [](const DiscContact& c, int32_t d) { return c.i < d; }) -
+                                   dd_.begin());
+        wall_split_[t] = size_t(std::lower_bound(dw_.begin(), dw_.end(), first,
+                                                 [](const WallContact& c, int32_t d) { return c.disc < d; }) -
+                                dw_.begin());
+    }
+    cross_.clear();
+    cross_in_start_.assign(r + 1, 0);
+    if (r > 1) {
+        auto range_of = [&](int32_t d) {
+            return size_t(std::upper_bound(disc_split_.begin(), disc_split_.end(), size_t(d)) - disc_split_.begin()) - 1;
+        };
+        for (size_t t = 0; t < r; ++t)
+            for (size_t k = contact_split_[t]; k < contact_split_[t + 1]; ++k)
+                if (size_t(dd_[k].j) >= disc_split_[t + 1]) {
+                    cross_.push_back(int32_t(k));
+                    ++cross_in_start_[range_of(dd_[k].j) + 1];
+                }
+        for (size_t t = 0; t < r; ++t) cross_in_start_[t + 1] += cross_in_start_[t];
+        cross_in_.resize(cross_.size());
+        std::vector<int32_t> fill(cross_in_start_.begin(), cross_in_start_.end() - 1);
+        for (size_t m = 0; m < cross_.size(); ++m)
+            cross_in_[size_t(fill[range_of(dd_[size_t(cross_[m])].j)]++)] = int32_t(m);
+    }
+    cross_out_.resize(cross_.size());
 }
 
 static std::string where_disc(long step, double t, int i, const Vec2& p) {
@@ -338,90 +353,107 @@ static std::string where_disc(long step, double t, int i, const Vec2& p) {
     return s.str();
 }
 
-// The contact pass is contact-centric: each contact writes its forces to its own slot
-// (dd_out_, dw_out_), then every disc gathers its contacts in the order of the contact list
-// (adjacency built in refresh_contacts). No sum depends on how the contacts are shared out
-// among threads, so any thread count gives the same bits.
+// The force pass. Every disc sums its terms from zero in contact-list order: its disc-disc
+// contacts (sorted by (i, j)), then its wall contacts. Each thread owns a range of discs and
+// the contacts whose first disc lies in it (split_force_pass), so it adds most pairs straight
+// into both discs' sums. A cross contact (j in a later range) is computed before the ranges
+// start, into a slot: the range owning j adds it first, which is its place in j's order
+// (every cross contact of j has i in an earlier range, so it precedes j's own contacts in
+// the list); the range owning i adds it when its loop reaches it. So the bits are the same
+// for any number of threads, and on one thread there are no slots at all: the fused loop
+// saves the 64-byte write and read per contact of a contact-centric pass with a gather
+// (docs/performance.md).
 void World::compute_forces() {
-    const size_t n = pos_.size(), nw = walls_.size(), nm = materials_.size();
+    const size_t nw = walls_.size();
     const DashpotMode mode = def_.damping.dp_mode;
     const double dt = dt_;
     const double last_dt = last_dt_;
     const double max_ratio = def_.max_overlap_ratio;
-    dd_out_.resize(dd_.size());
+    const DiscArrays discs{pos_.data(), vel_.data(), radius_.data(), omega_.data(), material_.data()};
+    const PairPassParams pp{mat_dd_.data(), materials_.size(), mode, dt, last_dt, max_ratio};
     dw_out_.resize(dw_.size());
     // one fault record per chunk, kept between steps (no allocation in the step)
-    std::vector<Fault>& dd_fault = dd_fault_;
-    std::vector<Fault>& dw_fault = dw_fault_;
-    dd_fault.resize(size_t(pool_->size()));
-    dw_fault.resize(size_t(pool_->size()));
-    for (Fault& f : dd_fault) f.index = SIZE_MAX;
-    for (Fault& f : dw_fault) f.index = SIZE_MAX;
+    dd_fault_.resize(size_t(pool_->size()));
+    dw_fault_.resize(size_t(pool_->size()));
+    for (Fault& f : dd_fault_) f.index = SIZE_MAX;
+    for (Fault& f : dw_fault_) f.index = SIZE_MAX;
+    auto disc_fault = [&](size_t k, double overlap, int chunk) {
+        if (k >= dd_fault_[size_t(chunk)].index) return;
+        const size_t i = size_t(dd_[k].i), j = size_t(dd_[k].j);
+        dd_fault_[size_t(chunk)] = Fault{k, "blow-up: overlap " + format_number(overlap) + " m between discs " +
+                                                std::to_string(i) + " and " + std::to_string(j) + " exceeds " +
+                                                format_number(max_ratio) + " of the smaller radius at " +
+                                                where_disc(steps_, time_, int(i), pos_[i]) +
+                                                ". Likely cause: the time step is too large for the stiffness and "
+                                                "speeds (use the automatic time step or a smaller safety factor)"};
+    };
 
-    // disc-disc: n from i (A) to j (B); the force on j is F = fn n + ft t, on i -F
-    pool_->parallel_for(dd_.size(), [&](size_t begin, size_t end, int chunk) {
-        for (size_t k = begin; k < end; ++k) {
-            DiscContact& c = dd_[k];
-            PairOut& out = dd_out_[k];
-            const size_t i = size_t(c.i), j = size_t(c.j);
-            const Vec2 d = pos_[j] - pos_[i];
-            const double rsum = radius_[i] + radius_[j];
-            const double dist2 = d.squaredNorm();
-            out.touching = 0;
-            out.dissipated = 0.0;
-            if (dist2 >= rsum * rsum) {
-                // PFC deletes a contact that opens: its history starts again at zero. The last
-                // dashpot force still acted over the second half of the previous step.
-                if (c.damp_n != 0.0f || c.damp_s != 0.0f) {
-                    const Vec2 vrel = vel_[j] - vel_[i];
-                    const Vec2 nrm = d / std::sqrt(dist2);
-                    const double vs = vrel.dot(perp(nrm)) - (omega_[i] * radius_[i] + omega_[j] * radius_[j]);
-                    out.dissipated = -0.5 * last_dt * (c.damp_n * vrel.dot(nrm) + c.damp_s * vs);
-                }
-                c.fs = 0.0;
-                c.damp_n = c.damp_s = 0.0f;
-                continue;
-            }
-            const double dist = std::sqrt(dist2);
-            const double overlap = rsum - dist;
-            if (!(overlap <= max_ratio * std::min(radius_[i], radius_[j])) || dist == 0.0) {
-                if (k < dd_fault[size_t(chunk)].index)
-                    dd_fault[size_t(chunk)] = Fault{k, "blow-up: overlap " + format_number(overlap) + " m between discs " +
-                                                      std::to_string(i) + " and " + std::to_string(j) + " exceeds " +
-                                                      format_number(max_ratio) + " of the smaller radius at " +
-                                                      where_disc(steps_, time_, int(i), pos_[i]) +
-                                                      ". Likely cause: the time step is too large for the stiffness and "
-                                                      "speeds (use the automatic time step or a smaller safety factor)"};
-                continue;
-            }
-            const Vec2 nrm = d / dist;
-            const Vec2 t = perp(nrm);
-            // PFC's contact point: x_A + (r_A - U/2) n; the lever arms of both discs
-            const double ra = radius_[i] - 0.5 * overlap, rb = radius_[j] - 0.5 * overlap;
-            const Vec2 vrel = vel_[j] - vel_[i];
-            const double vn = vrel.dot(nrm);
-            // eq. 2.46: tangential velocity of B relative to A at the contact point
-            const double vs = vrel.dot(t) - (omega_[i] * ra + omega_[j] * rb);
-            const PairMaterial& pm = mat_dd_[size_t(material_[i]) * nm + size_t(material_[j])];
-            const LinearContactForce f =
-                step_contact({pm.kn, pm.ks, pm.mu, c.cn, c.cs, mode}, overlap, vn, vs, dt, last_dt, c, out.dissipated);
-            out.f = f.fn * nrm + f.ft * t;
-            // torque = lever x force; both levers give -r * ft (docs/engine.md)
-            out.torque_i = -ra * f.ft;
-            out.torque_j = -rb * f.ft;
-            out.kt = std::max(pm.kn, pm.ks);
-            out.ks = pm.ks;
-            out.touching = 1;
+    // 1. the cross contacts, into their slots
+    pool_->parallel_for(cross_.size(), [&](size_t begin, size_t end, int chunk) {
+        for (size_t m = begin; m < end; ++m) {
+            const size_t k = size_t(cross_[m]);
+            double overlap = 0.0;
+            if (!disc_pair_force(discs, pp, dd_[k], cross_out_[m], overlap)) disc_fault(k, overlap, chunk);
         }
     });
 
-    // disc-wall: n from the wall (A) to the disc (B)
-    pool_->parallel_for(dw_.size(), [&](size_t begin, size_t end, int chunk) {
-        for (size_t k = begin; k < end; ++k) {
+    // 2. each range sums its discs' terms
+    DiscLoad* const load = load_.data();
+    auto add_to_i = [load](size_t i, const PairOut& o) {
+        DiscLoad& l = load[i];
+        l.dissipated += 0.5 * o.dissipated;  // the ledger: half to each disc (exact)
+        if (!o.touching) return;
+        l.force -= o.f;
+        l.torque += o.torque_i;
+        l.k_tran += o.k_tran;
+        l.k_rot += o.k_rot;
+        ++l.n_disc;
+    };
+    auto add_to_j = [load](size_t j, const PairOut& o) {
+        DiscLoad& l = load[j];
+        l.dissipated += 0.5 * o.dissipated;
+        if (!o.touching) return;
+        l.force += o.f;
+        l.torque += o.torque_j;
+        l.k_tran += o.k_tran;
+        l.k_rot += o.k_rot;
+        ++l.n_disc;
+    };
+    auto range_pass = [&](int t) {
+        const size_t d0 = disc_split_[size_t(t)], d1 = disc_split_[size_t(t) + 1];
+        std::fill(load + d0, load + d1, DiscLoad{});
+        // cross contacts into this range's discs come first in their order
+        for (int32_t e = cross_in_start_[size_t(t)]; e < cross_in_start_[size_t(t) + 1]; ++e) {
+            const size_t m = size_t(cross_in_[size_t(e)]);
+            add_to_j(size_t(dd_[size_t(cross_[m])].j), cross_out_[m]);
+        }
+        const size_t k0 = contact_split_[size_t(t)], k1 = contact_split_[size_t(t) + 1];
+        size_t next = size_t(std::lower_bound(cross_.begin(), cross_.end(), int32_t(k0)) - cross_.begin());
+        size_t next_k = next < cross_.size() ? size_t(cross_[next]) : SIZE_MAX;
+        for (size_t k = k0; k < k1; ++k) {
+            DiscContact& c = dd_[k];
+            if (k == next_k) {  // computed in 1.
+                add_to_i(size_t(c.i), cross_out_[next]);
+                ++next;
+                next_k = next < cross_.size() ? size_t(cross_[next]) : SIZE_MAX;
+                continue;
+            }
+            PairOut o;
+            double overlap = 0.0;
+            if (!disc_pair_force(discs, pp, c, o, overlap)) {
+                disc_fault(k, overlap, t);
+                continue;
+            }
+            add_to_i(size_t(c.i), o);
+            add_to_j(size_t(c.j), o);
+        }
+
+        // disc-wall: n from the wall (A) to the disc (B)
+        for (size_t k = wall_split_[size_t(t)]; k < wall_split_[size_t(t) + 1]; ++k) {
             WallContact& c = dw_[k];
             WallOut& out = dw_out_[k];
             const size_t i = size_t(c.disc), w = size_t(c.wall);
-            out.touching = 0;
+            out.touching = false;
             out.dissipated = 0.0;
             WallHit hit;
             if (!wall_active_[w] || !disc_wall_contact(geom_[w], pos_[i], radius_[i], hit)) {
@@ -438,132 +470,56 @@ void World::compute_forces() {
                 continue;
             }
             if (!(hit.overlap <= max_ratio * radius_[i])) {
-                if (k < dw_fault[size_t(chunk)].index)
-                    dw_fault[size_t(chunk)] = Fault{k, "blow-up: overlap " + format_number(hit.overlap) + " m of disc " +
-                                                      std::to_string(i) + " with wall '" + walls_[w].name + "' exceeds " +
-                                                      format_number(max_ratio) + " of its radius at " +
-                                                      where_disc(steps_, time_, int(i), pos_[i]) +
-                                                      ". Likely cause: a time step too large for the stiffness, or a "
-                                                      "disc crossing the wall"};
+                if (k < dw_fault_[size_t(t)].index)
+                    dw_fault_[size_t(t)] = Fault{k, "blow-up: overlap " + format_number(hit.overlap) + " m of disc " +
+                                                        std::to_string(i) + " with wall '" + walls_[w].name + "' exceeds " +
+                                                        format_number(max_ratio) + " of its radius at " +
+                                                        where_disc(steps_, time_, int(i), pos_[i]) +
+                                                        ". Likely cause: a time step too large for the stiffness, or a "
+                                                        "disc crossing the wall"};
                 continue;
             }
             const Vec2 nrm = hit.normal;
-            const Vec2 t = perp(nrm);
+            const Vec2 tan = perp(nrm);
             const double rb = radius_[i] - 0.5 * hit.overlap;
             const Vec2 vwall = wall_moving_[w] ? walls_[w].velocity : Vec2::Zero();
             const Vec2 vrel = vel_[i] - vwall;
             const double vn = vrel.dot(nrm);
-            const double vs = vrel.dot(t) - omega_[i] * rb;
+            const double vs = vrel.dot(tan) - omega_[i] * rb;
             const PairMaterial& pm = mat_dw_[size_t(material_[i]) * nw + w];
             const LinearContactForce f =
                 step_contact({pm.kn, pm.ks, pm.mu, c.cn, c.cs, mode}, hit.overlap, vn, vs, dt, last_dt, c, out.dissipated);
-            out.f = f.fn * nrm + f.ft * t;
-            out.torque = -rb * f.ft;
+            out.f = f.fn * nrm + f.ft * tan;
             out.point = pos_[i] - rb * nrm;
-            out.fn_spring = f.fn_spring;
-            out.kt = std::max(pm.kn, pm.ks);
-            out.ks = pm.ks;
-            out.touching = 1;
+            out.touching = true;
+            DiscLoad& l = load[i];
+            l.force += out.f;
+            l.torque += -rb * f.ft;
+            l.k_tran += pm.k_tran;
+            l.k_rot += pm.ks;
+            l.wall_normal += f.fn_spring;
+            ++l.n_wall;
         }
-    });
-    for (const auto* faults : {&dd_fault, &dw_fault}) {
+    };
+    if (force_ranges_ == 1)
+        range_pass(0);
+    else
+        pool_->for_each_thread(range_pass);
+    for (const auto* faults : {&dd_fault_, &dw_fault_}) {
         const Fault* first = nullptr;
         for (const Fault& f : *faults)
             if (f.index != SIZE_MAX && (!first || f.index < first->index)) first = &f;
         if (first) throw RunError(first->message);
     }
 
-    if (pool_->size() == 1) {
-        // one thread: scatter in contact-list order. Every disc receives its terms in the
-        // same order as the gather below adds them, so the bits are the same either way.
-        std::fill(force_.begin(), force_.end(), Vec2::Zero());
-        std::fill(torque_.begin(), torque_.end(), 0.0);
-        std::fill(k_tran_.begin(), k_tran_.end(), 0.0);
-        std::fill(k_rot_.begin(), k_rot_.end(), 0.0);
-        std::fill(wall_normal_.begin(), wall_normal_.end(), 0.0);
-        std::fill(n_disc_.begin(), n_disc_.end(), 0);
-        std::fill(n_wall_.begin(), n_wall_.end(), 0);
-        std::fill(diss_contact_disc_.begin(), diss_contact_disc_.end(), 0.0);
-        for (size_t k = 0; k < dd_.size(); ++k) {
-            const PairOut& o = dd_out_[k];
-            const size_t i = size_t(dd_[k].i), j = size_t(dd_[k].j);
-            // the ledger: half of a pair's dissipation to each disc (exact: a power of two)
-            diss_contact_disc_[i] += 0.5 * o.dissipated;
-            diss_contact_disc_[j] += 0.5 * o.dissipated;
-            if (!o.touching) continue;
-            force_[j] += o.f;
-            force_[i] -= o.f;
-            torque_[j] += o.torque_j;
-            torque_[i] += o.torque_i;
-            k_tran_[i] += o.kt;
-            k_tran_[j] += o.kt;
-            k_rot_[i] += o.ks;
-            k_rot_[j] += o.ks;
-            ++n_disc_[i];
-            ++n_disc_[j];
-        }
-        for (size_t k = 0; k < dw_.size(); ++k) {
-            const WallOut& o = dw_out_[k];
-            if (!o.touching) continue;
-            const size_t i = size_t(dw_[k].disc);
-            force_[i] += o.f;
-            torque_[i] += o.torque;
-            k_tran_[i] += o.kt;
-            k_rot_[i] += o.ks;
-            wall_normal_[i] += o.fn_spring;
-            ++n_wall_[i];
-        }
-    } else
-    // gather: every disc sums its contacts in contact-list order
-    pool_->parallel_for(n, [&](size_t begin, size_t end, int) {
-        for (size_t d = begin; d < end; ++d) {
-            Vec2 f = Vec2::Zero();
-            double tq = 0.0, kt = 0.0, ks = 0.0, wn = 0.0, diss = 0.0;
-            int nd = 0, nwc = 0;
-            for (int32_t e = adj_start_[d]; e < adj_start_[d + 1]; ++e) {
-                const int32_t code = adj_[size_t(e)];
-                const PairOut& o = dd_out_[size_t(code >> 1)];
-                diss += 0.5 * o.dissipated;
-                if (!o.touching) continue;
-                if (code & 1) {  // disc d is j (B)
-                    f += o.f;
-                    tq += o.torque_j;
-                } else {
-                    f -= o.f;
-                    tq += o.torque_i;
-                }
-                kt += o.kt;
-                ks += o.ks;
-                ++nd;
-            }
-            for (int32_t e = wadj_start_[d]; e < wadj_start_[d + 1]; ++e) {
-                const WallOut& o = dw_out_[size_t(wadj_[size_t(e)])];
-                if (!o.touching) continue;
-                f += o.f;
-                tq += o.torque;
-                kt += o.kt;
-                ks += o.ks;
-                wn += o.fn_spring;
-                ++nwc;
-            }
-            force_[d] = f;
-            torque_[d] = tq;
-            k_tran_[d] = kt;
-            k_rot_[d] = ks;
-            wall_normal_[d] = wn;
-            n_disc_[d] = nd;
-            n_wall_[d] = nwc;
-            diss_contact_disc_[d] = diss;
-        }
-    });
-
     // the ledger: disc-disc contacts through the discs' halves, in disc order (a pass over
     // the discs, not the longer contact list); then the wall loads, in contact-list order
+    const size_t n = pos_.size();
     double dissipated = 0.0;
     long touching = 0;
     for (size_t d = 0; d < n; ++d) {
-        dissipated += diss_contact_disc_[d];
-        touching += n_disc_[d];
+        dissipated += load_[d].dissipated;
+        touching += load_[d].n_disc;
     }
     touching_dd_ = touching / 2;
     touching = 0;
@@ -592,8 +548,8 @@ World::DtFactors World::dt_factors() const {
 
 double World::critical_step_squared_of(size_t i, const DtFactors& f) const {
     const MaterialDef& m = materials_[size_t(material_[i])];
-    const double kt = k_tran_[i] > 0.0 ? k_tran_[i] : std::max(m.kn, m.ks);
-    const double kr = k_rot_[i] > 0.0 ? k_rot_[i] : m.ks;
+    const double kt = load_[i].k_tran > 0.0 ? load_[i].k_tran : std::max(m.kn, m.ks);
+    const double kr = load_[i].k_rot > 0.0 ? load_[i].k_rot : m.ks;
     return critical_step_squared(mass_[i], inertia_[i], radius_[i], kt, kr, f.rotation_free, f.phi_sq, f.phi_t_sq);
 }
 
@@ -636,7 +592,8 @@ void World::integrate() {
     for (size_t i = begin; i < end; ++i) {
         if (auto_dt) best_sq = std::min(best_sq, critical_step_squared_of(i, dtf));
         double diss_local = 0.0, diss_rot = 0.0;
-        Vec2 f = force_[i] + mass_[i] * g;
+        const DiscLoad& l = load_[i];
+        Vec2 f = l.force + mass_[i] * g;
         Vec2 fd = Vec2::Zero();
         if (alpha > 0.0) {
             // eq. 2.51: F_d = -alpha |F| sign(v) per degree of freedom
@@ -651,7 +608,7 @@ void World::integrate() {
         if (alpha > 0.0) diss_local -= 0.5 * fd.dot(v_old + vel_[i]) * dt;  // centred work
         pos_[i] += vel_[i] * dt;
         if (rot.model != 1) {
-            double tq = torque_[i];
+            double tq = l.torque;
             double td = 0.0;
             const double w_old = omega_[i];
             if (alpha > 0.0) {
@@ -662,17 +619,17 @@ void World::integrate() {
             const double w_free = w;
             if (alpha > 0.0) diss_local -= 0.5 * td * (w_old + w_free) * dt;
             // Model 2/3: Preh-Poisel rolling resistance for a disc touching a wall (eq. 2.71, 2.73)
-            if (n_wall_[i] > 0 && rr_factor_[i] > 0.0) {
-                const double g_eff = rot.rolling_form == RollingForm::Literal ? g_abs : wall_normal_[i] * inv_mass_[i];
+            if (l.n_wall > 0 && rr_factor_[i] > 0.0) {
+                const double g_eff = rot.rolling_form == RollingForm::Literal ? g_abs : l.wall_normal * inv_mass_[i];
                 w = reduce_towards_zero(w, g_eff * rr_factor_[i] * dt);
             }
             // Model 3: rotational damping at disc-disc contacts (eq. 2.75)
-            if (rot.model == 3 && n_disc_[i] > 0)
-                w *= rot.damping_per == RotDampingPer::Disc ? rot.mu_br : std::pow(rot.mu_br, n_disc_[i]);
+            if (rot.model == 3 && l.n_disc > 0)
+                w *= rot.damping_per == RotDampingPer::Disc ? rot.mu_br : std::pow(rot.mu_br, l.n_disc);
             // Energy these velocity rules take out. The contact ledger credits the torque's work
             // over the mean of the old and the *final* omega; the dynamics moved it over the
             // mean of the old and the free one: the difference belongs here.
-            diss_rot += 0.5 * inertia_[i] * (w_free * w_free - w * w) - 0.5 * torque_[i] * dt * (w_free - w);
+            diss_rot += 0.5 * inertia_[i] * (w_free * w_free - w * w) - 0.5 * l.torque * dt * (w_free - w);
             omega_[i] = w;
             angle_[i] += w * dt;
         }

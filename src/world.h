@@ -10,6 +10,7 @@
 #include "broad_phase.h"
 #include "contact_law.h"
 #include "material.h"
+#include "pair_kernel.h"
 #include "rotation.h"
 #include "vec2.h"
 #include "wall.h"
@@ -59,15 +60,6 @@ struct DiscDef {
     double omega = 0.0;                    // rad/s, counter-clockwise
     double angle = 0.0;                    // rad
     int material = 0;                      // index returned by add_material
-};
-
-// A disc-disc contact candidate (i < j) and its history.
-struct DiscContact {
-    int32_t i, j;
-    double fs;   // shear spring force along t, N (history)
-    double cn;   // normal dashpot coefficient, N s/m
-    double cs;   // shear dashpot coefficient, N s/m
-    float damp_n, damp_s;  // last step's dashpot forces, N (energy ledger only)
 };
 
 // A disc-wall contact candidate and its history.
@@ -125,8 +117,8 @@ public:
     const std::vector<double>& masses() const { return mass_; }
     const std::vector<double>& angles() const { return angle_; }
     const std::vector<double>& omegas() const { return omega_; }
-    const std::vector<Vec2>& forces() const { return force_; }   // contact forces of the last step
-    const std::vector<double>& torques() const { return torque_; }
+    Vec2 force(size_t i) const { return load_[i].force; }      // contact force of the last step, N/m
+    double torque(size_t i) const { return load_[i].torque; }  // contact torque of the last step, N m/m
     const std::vector<DiscContact>& disc_contacts() const { return dd_; }
     const std::vector<WallContact>& wall_contacts() const { return dw_; }
     const WallDef& wall_def(int w) const { return walls_[size_t(w)]; }
@@ -145,6 +137,10 @@ public:
     long touching_wall_pairs() const { return touching_dw_; }
 
     EnergyReport energy() const;
+    // The force pass's split (world.cpp): disc ranges (one per thread when shared out) and how
+    // many candidate pairs cross from one range to another (computed into slots first).
+    int force_pass_ranges() const { return force_ranges_; }
+    size_t cross_contacts() const { return cross_.size(); }
     const BroadPhaseStats& broad_phase_stats() const { return broad_.stats(); }
     double broad_phase_margin() const { return broad_.margin(); }
 
@@ -200,17 +196,27 @@ private:
     long steps_ = 0;
 
     std::vector<MaterialDef> materials_;
-    struct PairMaterial { double kn, ks, mu; };
     std::vector<PairMaterial> mat_dd_;   // [mi * nm + mj]
     std::vector<PairMaterial> mat_dw_;   // [mi * nw + w]
 
     // discs, structure of arrays
-    std::vector<Vec2> pos_, vel_, force_;
-    std::vector<double> radius_, mass_, inv_mass_, inertia_, inv_inertia_, angle_, omega_, torque_;
+    std::vector<Vec2> pos_, vel_;
+    std::vector<double> radius_, mass_, inv_mass_, inertia_, inv_inertia_, angle_, omega_;
     std::vector<int32_t> material_;
     std::vector<double> rr_factor_;     // Preh-Poisel factor per disc, 1/m (0 without rolling resistance)
-    std::vector<int32_t> n_wall_, n_disc_;
-    std::vector<double> wall_normal_, k_tran_, k_rot_;
+    // What a disc's contacts add up to in a step, in one cache line: the force pass adds a
+    // contact's terms to two discs, and one line per disc instead of eight arrays cut its
+    // L1 misses (docs/performance.md).
+    struct alignas(64) DiscLoad {
+        Vec2 force{0.0, 0.0};    // N/m, contact forces
+        double torque = 0.0;     // N m/m
+        double k_tran = 0.0;     // N/m, sum of max(kn, ks) over touching contacts (automatic step)
+        double k_rot = 0.0;      // N/m, sum of ks
+        double wall_normal = 0.0;  // N/m, elastic normal force from walls (rolling resistance)
+        double dissipated = 0.0;   // J/m, half the dissipation of each of its disc-disc contacts
+        int32_t n_disc = 0, n_wall = 0;  // touching contacts
+    };
+    std::vector<DiscLoad> load_;
 
     // walls
     std::vector<WallDef> walls_;
@@ -221,20 +227,23 @@ private:
 
     BroadPhase broad_;
     std::unique_ptr<ThreadPool> pool_;
-    // per-contact results of the force pass and each disc's contacts (CSR), for the gather
-    struct PairOut {
-        Vec2 f;                     // force on j (B); i gets -f
-        double torque_i, torque_j, dissipated, kt, ks;
-        uint8_t touching;
-    };
+    // The force pass (compute_forces) splits the discs into one index range per thread; a
+    // thread owns the disc-disc contacts whose first disc i is in its range and the wall
+    // contacts of its discs, and adds them straight into its discs' sums. A contact whose
+    // second disc j belongs to a later range ("cross" contact) is computed first into a slot,
+    // so that each disc still receives its terms in contact-list order (world.cpp).
     struct WallOut {
         Vec2 f, point;              // force on the disc, contact point
-        double torque, dissipated, kt, ks, fn_spring;
-        uint8_t touching;
+        double dissipated;
+        bool touching;
     };
-    std::vector<PairOut> dd_out_;
     std::vector<WallOut> dw_out_;
-    std::vector<int32_t> adj_start_, adj_, wadj_start_, wadj_;
+    std::vector<size_t> disc_split_, contact_split_, wall_split_;  // per range: first disc, contact, wall contact
+    std::vector<int32_t> cross_;            // cross contacts, in list order
+    std::vector<PairOut> cross_out_;        // their results, same order
+    std::vector<int32_t> cross_in_start_, cross_in_;  // per range: the cross contacts whose j it owns (CSR)
+    int force_ranges_ = 1;
+    void split_force_pass();
     std::vector<double> diss_local_disc_, diss_rot_disc_;
     // the first fault each chunk met in the last pass (reported in index order, so the
     // message does not depend on the thread count)
@@ -244,10 +253,9 @@ private:
     };
     std::vector<Fault> dd_fault_, dw_fault_;
     std::vector<size_t> integrate_fault_;
-    std::vector<double> dt_sq_chunk_;
+    std::vector<double> dt_sq_chunk_;       // per chunk: the smallest critical step squared of this step
     std::vector<uint8_t> escaped_chunk_;
     bool discs_may_have_escaped_ = true;  // false when integrate() saw every disc inside its fat box
-    std::vector<double> diss_contact_disc_;  // per disc: half the dissipation of its disc-disc contacts this step   // per chunk: the smallest critical step squared of this step
     std::vector<DiscContact> dd_, dd_scratch_;
     std::vector<WallContact> dw_, dw_scratch_;
     long touching_dd_ = 0, touching_dw_ = 0;

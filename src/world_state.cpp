@@ -74,13 +74,20 @@ void World::save_state(BinaryWriter& out) const {
     out.put(angle_);
     out.put(omega_);
     out.put(radius_);
-    out.put(force_);
-    out.put(torque_);
-    out.put(k_tran_);
-    out.put(k_rot_);
-    out.put(wall_normal_);
-    out.put(n_wall_);
-    out.put(n_disc_);
+    // the last step's loads, field by field (the file's layout predates DiscLoad)
+    auto put_field = [&](auto member) {
+        std::vector<std::remove_cv_t<std::remove_reference_t<decltype(load_[0].*member)>>> v;
+        v.reserve(load_.size());
+        for (const DiscLoad& l : load_) v.push_back(l.*member);
+        out.put(v);
+    };
+    put_field(&DiscLoad::force);
+    put_field(&DiscLoad::torque);
+    put_field(&DiscLoad::k_tran);
+    put_field(&DiscLoad::k_rot);
+    put_field(&DiscLoad::wall_normal);
+    put_field(&DiscLoad::n_wall);
+    put_field(&DiscLoad::n_disc);
     out.tag("WALL");
     for (size_t w = 0; w < walls_.size(); ++w) {
         const WallGeom& g = geom_[w];
@@ -155,13 +162,19 @@ void World::load_state(BinaryReader& in) {
     std::vector<double> radius;
     in.get(radius, n);
     if (radius != radius_) throw InputError("checkpoint: its disc radii differ from the scenario's");
-    in.get(force_, n);
-    in.get(torque_, n);
-    in.get(k_tran_, n);
-    in.get(k_rot_, n);
-    in.get(wall_normal_, n);
-    in.get(n_wall_, n);
-    in.get(n_disc_, n);
+    load_.assign(n, DiscLoad{});
+    auto get_field = [&](auto member) {
+        std::vector<std::remove_cv_t<std::remove_reference_t<decltype(load_[0].*member)>>> v;
+        in.get(v, n);
+        for (size_t i = 0; i < n; ++i) load_[i].*member = v[i];
+    };
+    get_field(&DiscLoad::force);
+    get_field(&DiscLoad::torque);
+    get_field(&DiscLoad::k_tran);
+    get_field(&DiscLoad::k_rot);
+    get_field(&DiscLoad::wall_normal);
+    get_field(&DiscLoad::n_wall);
+    get_field(&DiscLoad::n_disc);
     in.expect_tag("WALL");
     for (size_t w = 0; w < nw; ++w) {
         WallGeom& g = geom_[w];
