@@ -1,5 +1,6 @@
 #include "release.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <fstream>
@@ -248,6 +249,32 @@ ReleaseMass generate_release(const Scenario& s) {
     }
     m.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     return m;
+}
+
+void order_in_space(ReleaseMass& m, double strip) {
+    const size_t n = m.pos.size();
+    if (n == 0 || !(strip > 0.0)) return;
+    double x_min = INFINITY;
+    for (const Vec2& p : m.pos) x_min = std::min(x_min, p.x());
+    std::vector<size_t> order(n);
+    std::vector<long> column(n);
+    for (size_t i = 0; i < n; ++i) {
+        order[i] = i;
+        column[i] = long(std::floor((m.pos[i].x() - x_min) / strip));
+    }
+    std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {
+        if (column[a] != column[b]) return column[a] < column[b];
+        return m.pos[a].y() < m.pos[b].y();
+    });
+    auto permute = [&](auto& v) {
+        if (v.size() != n) return;
+        auto old = v;
+        for (size_t k = 0; k < n; ++k) v[k] = old[order[k]];
+    };
+    permute(m.pos);
+    permute(m.radius);
+    permute(m.layer);
+    permute(m.grid);
 }
 
 void save_release(const ReleaseMass& m, const std::string& path) {

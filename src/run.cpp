@@ -186,6 +186,10 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
         if (!mass.settled)
             std::fprintf(stderr, "demlab: warning: the release mass did not reach settle_ratio %.3g within %.3g s (ratio %.3g)\n",
                          s.release.settle_ratio, s.release.settle_max_time, mass.settle_ratio);
+        // space order (release.h): strips two of the largest diameters wide
+        double r_max = 0.0;
+        for (double r : mass.radius) r_max = std::max(r_max, r);
+        order_in_space(mass, 4.0 * r_max);
         save_release(mass, dir + "/release.csv");
     }
 

@@ -11,7 +11,7 @@
 // changes no bit of the physics, because
 //  - every fat box contains its disc's tight box in both runs, so every touching pair is a
 //    candidate in both, and pairs that do not touch carry no history (the force pass zeroes
-//    it) and add nothing: the gather and the ledger skip them or add an exact 0.0;
+//    it) and add nothing: the force pass and the ledger skip them or add an exact 0.0;
 //  - the lists are sorted by key, so the touching contacts are visited in the same relative
 //    order, and every per-disc sum adds the same terms in the same order;
 //  - the time step depends only on touching contacts.
