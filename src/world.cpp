@@ -300,10 +300,13 @@ void World::split_force_pass() {
     const size_t n = pos_.size();
     force_ranges_ = pool_->shares(n) ? pool_->size() : 1;
     const size_t r = size_t(force_ranges_);
+    // the ranges' first disc, disc-disc contact and wall contact (both lists are sorted by disc)
     disc_split_.assign(r + 1, n);
-    disc_split_[0] = 0;
+    contact_split_.assign(r + 1, dd_.size());
+    wall_split_.assign(r + 1, dw_.size());
+    disc_split_[0] = contact_split_[0] = wall_split_[0] = 0;
     if (r > 1) {
-        // work of disc d: 1 + the contacts it owns (contacts are sorted by i)
+        // work of disc d: 1 + the contacts it owns
         const double total = double(n + dd_.size() + dw_.size());
         size_t k = 0, kw = 0, part = 1;
         double done = 0.0;
@@ -312,32 +315,30 @@ void World::split_force_pass() {
             while (k < dd_.size() && size_t(dd_[k].i) == d) ++k;
             while (kw < dw_.size() && size_t(dw_[kw].disc) == d) ++kw;
             done += double(1 + (k - k0) + (kw - kw0));
-            if (done >= total * double(part) / double(r)) disc_split_[part++] = d + 1;
+            if (done >= total * double(part) / double(r)) {
+                disc_split_[part] = d + 1;
+                contact_split_[part] = k;
+                wall_split_[part] = kw;
+                ++part;
+            }
         }
     }
-    contact_split_.assign(r + 1, dd_.size());
-    wall_split_.assign(r + 1, dw_.size());
-    for (size_t t = 0; t < r; ++t) {
-        const int32_t first = int32_t(disc_split_[t]);
-        contact_split_[t] = size_t(std::lower_bound(dd_.begin(), dd_.end(), first,
-                                                    [](const DiscContact& c, int32_t d) { return c.i < d; }) -
-                                   dd_.begin());
-        wall_split_[t] = size_t(std::lower_bound(dw_.begin(), dw_.end(), first,
-                                                 [](const WallContact& c, int32_t d) { return c.disc < d; }) -
-                                dw_.begin());
-    }
     cross_.clear();
+    cross_start_.assign(r + 1, 0);
     cross_in_start_.assign(r + 1, 0);
     if (r > 1) {
         auto range_of = [&](int32_t d) {
             return size_t(std::upper_bound(disc_split_.begin(), disc_split_.end(), size_t(d)) - disc_split_.begin()) - 1;
         };
-        for (size_t t = 0; t < r; ++t)
+        for (size_t t = 0; t < r; ++t) {
+            cross_start_[t] = cross_.size();
             for (size_t k = contact_split_[t]; k < contact_split_[t + 1]; ++k)
                 if (size_t(dd_[k].j) >= disc_split_[t + 1]) {
                     cross_.push_back(int32_t(k));
                     ++cross_in_start_[range_of(dd_[k].j) + 1];
                 }
+        }
+        cross_start_[r] = cross_.size();
         for (size_t t = 0; t < r; ++t) cross_in_start_[t + 1] += cross_in_start_[t];
         cross_in_.resize(cross_.size());
         std::vector<int32_t> fill(cross_in_start_.begin(), cross_in_start_.end() - 1);
@@ -429,7 +430,8 @@ void World::compute_forces() {
             add_to_j(size_t(dd_[size_t(cross_[m])].j), cross_out_[m]);
         }
         const size_t k0 = contact_split_[size_t(t)], k1 = contact_split_[size_t(t) + 1];
-        size_t next = size_t(std::lower_bound(cross_.begin(), cross_.end(), int32_t(k0)) - cross_.begin());
+        // this range's own cross contacts, in list order
+        size_t next = cross_start_[size_t(t)];
         size_t next_k = next < cross_.size() ? size_t(cross_[next]) : SIZE_MAX;
         for (size_t k = k0; k < k1; ++k) {
             DiscContact& c = dd_[k];

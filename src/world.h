@@ -240,6 +240,7 @@ private:
     std::vector<WallOut> dw_out_;
     std::vector<size_t> disc_split_, contact_split_, wall_split_;  // per range: first disc, contact, wall contact
     std::vector<int32_t> cross_;            // cross contacts, in list order
+    std::vector<size_t> cross_start_;       // per range: its first cross contact in cross_
     std::vector<PairOut> cross_out_;        // their results, same order
     std::vector<int32_t> cross_in_start_, cross_in_;  // per range: the cross contacts whose j it owns (CSR)
     int force_ranges_ = 1;

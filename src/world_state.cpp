@@ -29,33 +29,30 @@ namespace demlab {
 namespace {
 constexpr uint32_t kWorldStateVersion = 1;
 
-// A contact's history (DiscContact and WallContact share these fields), and its copy into a
-// contact of the rebuilt list.
+// A contact's history (DiscContact and WallContact share these fields), listed once: fn is
+// called on each field of one contact, or on the same field of two contacts.
+template <typename Fn, typename... Contact>
+void for_each_history_field(Fn fn, Contact&... c) {
+    fn(c.fs...);
+    fn(c.cn...);
+    fn(c.cs...);
+    fn(c.damp_n...);
+    fn(c.damp_s...);
+}
+
 template <typename Contact>
 void put_history(BinaryWriter& out, const Contact& c) {
-    out.put(c.fs);
-    out.put(c.cn);
-    out.put(c.cs);
-    out.put(c.damp_n);
-    out.put(c.damp_s);
+    for_each_history_field([&](const auto& v) { out.put(v); }, c);
 }
 
 template <typename Contact>
 void get_history(BinaryReader& in, Contact& c) {
-    in.get(c.fs);
-    in.get(c.cn);
-    in.get(c.cs);
-    in.get(c.damp_n);
-    in.get(c.damp_s);
+    for_each_history_field([&](auto& v) { in.get(v); }, c);
 }
 
 template <typename Contact>
 void copy_history(const Contact& from, Contact& to) {
-    to.fs = from.fs;
-    to.cn = from.cn;
-    to.cs = from.cs;
-    to.damp_n = from.damp_n;
-    to.damp_s = from.damp_s;
+    for_each_history_field([](const auto& f, auto& t) { t = f; }, from, to);
 }
 }  // namespace
 
