@@ -1,6 +1,7 @@
 // The flume study end to end at scale 20 (364 discs), and a hand-checkable explicit scenario.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -8,6 +9,7 @@
 
 #include "error.h"
 #include "files.h"
+#include "release.h"
 #include "run.h"
 #include "scenario.h"
 
@@ -49,6 +51,33 @@ FlumeRun run_geometry_a(const std::string& tag) {
 }
 }  // namespace
 
+TEST(ReleaseMass, OrderInSpaceMovesEachDiscWithItsData) {
+    // discs on a jittered 10 x 10 grid in a scrambled order; every field encodes the disc
+    ReleaseMass m;
+    for (int k = 0; k < 100; ++k) {
+        const int cell = (k * 37) % 100;
+        const double x = 0.01 * (cell % 10) + 0.001 * ((k * 7) % 5), y = 0.01 * (cell / 10) + 0.0005 * (k % 3);
+        m.pos.emplace_back(x, y);
+        m.radius.push_back(1e-4 * (k + 1));
+        m.layer.push_back(k);
+        m.grid.push_back(3 * k);
+    }
+    const ReleaseMass before = m;
+    order_in_space(m, 0.02);  // strips of two grid columns
+    std::vector<int> seen(100, 0);
+    for (size_t i = 0; i < 100; ++i) {
+        const int k = m.layer[i];
+        ++seen[size_t(k)];
+        EXPECT_EQ(m.grid[i], 3 * k);
+        EXPECT_EQ(m.radius[i], before.radius[size_t(k)]);
+        EXPECT_EQ(m.pos[i], before.pos[size_t(k)]);
+        if (i == 0) continue;
+        const double s0 = std::floor(m.pos[i - 1].x() / 0.02), s1 = std::floor(m.pos[i].x() / 0.02);
+        EXPECT_TRUE(s0 < s1 || (s0 == s1 && m.pos[i - 1].y() <= m.pos[i].y())) << "disc " << i;
+    }
+    EXPECT_EQ(std::count(seen.begin(), seen.end(), 1), 100);  // a permutation
+}
+
 // One test, one run (ctest runs each test in its own process; a fixture would repeat the run).
 TEST(GeometryA20, GenerationToRestBalancesAndDeterminism) {
     const FlumeRun first = run_geometry_a("a20");
@@ -64,6 +93,19 @@ TEST(GeometryA20, GenerationToRestBalancesAndDeterminism) {
                               "summary.json", "snapshots/discs.pvd", "snapshots/walls.pvd"})
             EXPECT_TRUE(fs::exists(first.dir / f)) << f;
         EXPECT_LT(s.energy_balance_error, 0.01);
+    }
+    {
+        SCOPED_TRACE("the run numbers its discs in space order (strips 4 r_max wide, up each strip)");
+        const ReleaseMass m = load_release((first.dir / "release.csv").string());
+        double x_min = INFINITY, r_max = 0.0;
+        for (size_t i = 0; i < m.pos.size(); ++i) {
+            x_min = std::min(x_min, m.pos[i].x());
+            r_max = std::max(r_max, m.radius[i]);
+        }
+        auto strip = [&](size_t i) { return std::floor((m.pos[i].x() - x_min) / (4.0 * r_max)); };
+        for (size_t i = 1; i < m.pos.size(); ++i)
+            ASSERT_TRUE(strip(i - 1) < strip(i) || (strip(i - 1) == strip(i) && m.pos[i - 1].y() <= m.pos[i].y()))
+                << "disc " << i;
     }
     const auto rows = read_csv(first.dir / "forces.csv");
     const auto& last = rows.back();
