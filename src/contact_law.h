@@ -6,7 +6,9 @@
 // velocity relative to A at the contact point along n and t (vn > 0: separating).
 #pragma once
 #include <algorithm>
+#include <bit>
 #include <cmath>
+#include <cstdint>
 
 namespace demlab {
 
@@ -27,6 +29,14 @@ struct LinearContactParams {
     double cn = 0.0;   // normal dashpot coefficient, N s/m: beta_n * 2 sqrt(m_eff kn) (eq. 2.56-2.57)
     double cs = 0.0;   // shear dashpot coefficient, N s/m: beta_s * 2 sqrt(m_eff ks)
     DashpotMode mode = DashpotMode::Full;
+    double inv_ks = 0.0;  // 1 / ks, m/N (for the slip work; a division per contact costs the
+                          // force pass 10 %, so the force passes take it per material pair)
+
+    LinearContactParams() = default;
+    LinearContactParams(double kn_, double ks_, double mu_, double cn_, double cs_, DashpotMode mode_)
+        : LinearContactParams(kn_, ks_, mu_, cn_, cs_, mode_, 1.0 / ks_) {}
+    LinearContactParams(double kn_, double ks_, double mu_, double cn_, double cs_, DashpotMode mode_, double inv_ks_)
+        : kn(kn_), ks(ks_), mu(mu_), cn(cn_), cs(cs_), mode(mode_), inv_ks(inv_ks_) {}
 };
 
 // Result of one evaluation; the caller stores fs_spring as the contact's shear history.
@@ -40,6 +50,14 @@ struct LinearContactForce {
     double slip_work = 0.0;  // energy dissipated by sliding in this step, J
     bool sliding = false;
 };
+
+// c ? a : b without a branch (the bits of a or b exactly). The dashpot modes' conditions
+// (tension, sliding) flip from step to step in a flow, and as branches they were mispredicted
+// often enough to show in perf (docs/performance.md, session 4).
+inline double select(bool c, double a, double b) {
+    const uint64_t m = uint64_t(0) - uint64_t(c);
+    return std::bit_cast<double>((std::bit_cast<uint64_t>(a) & m) | (std::bit_cast<uint64_t>(b) & ~m));
+}
 
 // Critical damping coefficient scaled by beta (eq. 2.56-2.57): c = beta * 2 sqrt(m k).
 inline double dashpot_coefficient(double beta, double m_eff, double k) { return beta * 2.0 * std::sqrt(m_eff * k); }
@@ -55,12 +73,12 @@ inline LinearContactForce linear_contact(const LinearContactParams& p, double ov
                                          double dt, double fs_old) {
     LinearContactForce out;
     const double fn_spring = p.kn * overlap;
-    double fn_damp = -p.cn * vn;
-    double fn = fn_spring + fn_damp;
-    if ((p.mode == DashpotMode::NoTension || p.mode == DashpotMode::NoTensionNoShearWhileSliding) && fn < 0.0) {
-        fn = 0.0;
-        fn_damp = -fn_spring;
-    }
+    const double fn_free = fn_spring + -p.cn * vn;
+    // dp_mode 1, 3: no tension; the dashpot then cancels the spring exactly
+    const bool no_tension = p.mode == DashpotMode::NoTension || p.mode == DashpotMode::NoTensionNoShearWhileSliding;
+    const bool cut_tension = no_tension && fn_free < 0.0;
+    const double fn = select(cut_tension, 0.0, fn_free);
+    const double fn_damp = select(cut_tension, -fn_spring, -p.cn * vn);
 
     const double fs_trial = fs_old - p.ks * vs * dt;
     const double fs_max = p.mu * fn_spring;
@@ -71,10 +89,11 @@ inline LinearContactForce linear_contact(const LinearContactParams& p, double ov
     out.sliding = excess > 0.0;
     const double fs = std::min(std::max(fs_trial, -fs_max), fs_max);
     // energy lost by the slider: the capped force times the slip it let through
-    const double slip_work = fs_max * std::max(excess, 0.0) / p.ks;
-    double fs_damp = -p.cs * vs;
-    if (out.sliding && (p.mode == DashpotMode::NoShearWhileSliding || p.mode == DashpotMode::NoTensionNoShearWhileSliding))
-        fs_damp = 0.0;
+    const double slip_work = fs_max * std::max(excess, 0.0) * p.inv_ks;
+    // dp_mode 2, 3: no shear dashpot while sliding
+    const bool no_shear_dashpot_sliding =
+        p.mode == DashpotMode::NoShearWhileSliding || p.mode == DashpotMode::NoTensionNoShearWhileSliding;
+    const double fs_damp = select(out.sliding && no_shear_dashpot_sliding, 0.0, -p.cs * vs);
 
     out.fn = fn;
     out.ft = fs + fs_damp;

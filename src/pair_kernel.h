@@ -16,6 +16,7 @@ namespace demlab {
 struct PairMaterial {
     double kn, ks, mu;
     double k_tran;  // max(kn, ks): the pair's share of the automatic step's translational stiffness
+    double inv_ks;  // 1 / ks, m/N
 };
 
 // A disc-disc contact candidate (i < j) and its history.
@@ -72,7 +73,10 @@ inline LinearContactForce step_contact(const LinearContactParams& p, double over
 // Pair (c.i, c.j): n from i (A) to j (B); the force on j is F = fn n + ft t, on i -F.
 // Returns false, with `overlap` set, when the overlap exceeds max_overlap_ratio of the smaller
 // radius (or the centres coincide): a blown-up run, which the caller reports.
-inline bool disc_pair_force(const DiscArrays& d, const PairPassParams& p, DiscContact& c, PairOut& out,
+// Inlined by force: GCC kept it out of line (it has two callers), and the PairOut then went
+// through the stack, with a call per candidate; perf put a third of the range pass on the
+// return and on reloading the result (docs/performance.md, session 4).
+[[gnu::always_inline]] inline bool disc_pair_force(const DiscArrays& d, const PairPassParams& p, DiscContact& c, PairOut& out,
                             double& overlap) {
     const size_t i = size_t(c.i), j = size_t(c.j);
     const Vec2 dx = d.pos[j] - d.pos[i];
@@ -106,7 +110,7 @@ inline bool disc_pair_force(const DiscArrays& d, const PairPassParams& p, DiscCo
     const double vs = vrel.dot(t) - (d.omega[i] * ra + d.omega[j] * rb);
     const PairMaterial& pm = p.materials[size_t(d.material[i]) * p.n_materials + size_t(d.material[j])];
     const LinearContactForce f =
-        step_contact({pm.kn, pm.ks, pm.mu, c.cn, c.cs, p.mode}, overlap, vn, vs, p.dt, p.last_dt, c, out.dissipated);
+        step_contact({pm.kn, pm.ks, pm.mu, c.cn, c.cs, p.mode, pm.inv_ks}, overlap, vn, vs, p.dt, p.last_dt, c, out.dissipated);
     out.f = f.fn * nrm + f.ft * t;
     // torque = lever x force; both levers give -r * ft (docs/engine.md)
     out.torque_i = -ra * f.ft;

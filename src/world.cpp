@@ -11,7 +11,7 @@
 
 namespace demlab {
 
-static PairMaterial pair_material(double kn, double ks, double mu) { return {kn, ks, mu, std::max(kn, ks)}; }
+static PairMaterial pair_material(double kn, double ks, double mu) { return {kn, ks, mu, std::max(kn, ks), 1.0 / ks}; }
 
 void validate(const WorldDef& d, const std::string& where) {
     require_finite(where + ".gravity", d.gravity, "m/s2");
@@ -491,7 +491,7 @@ void World::compute_forces() {
             const double vs = vrel.dot(tan) - omega_[i] * rb;
             const PairMaterial& pm = mat_dw_[size_t(material_[i]) * nw + w];
             const LinearContactForce f =
-                step_contact({pm.kn, pm.ks, pm.mu, c.cn, c.cs, mode}, hit.overlap, vn, vs, dt, last_dt, c, out.dissipated);
+                step_contact({pm.kn, pm.ks, pm.mu, c.cn, c.cs, mode, pm.inv_ks}, hit.overlap, vn, vs, dt, last_dt, c, out.dissipated);
             out.f = f.fn * nrm + f.ft * tan;
             out.point = pos_[i] - rb * nrm;
             out.touching = true;
