@@ -68,6 +68,11 @@ int bench(const BenchOptions& o) {
                 world.touching_wall_pairs());
     std::printf("  force pass: %d disc range(s), %zu of %zu candidate pairs cross ranges\n", world.force_pass_ranges(),
                 world.cross_contacts(), world.disc_contacts().size());
+    if (world.force_pass_ranges() > 1) {
+        std::printf("  force-pass shares after %ld re-cut(s) to balance the ranges' times:", world.force_pass_rebalances());
+        for (double s : world.force_pass_shares()) std::printf(" %.3f", s);
+        std::printf("\n");
+    }
     std::printf("  final-state checksum %016llx\n", static_cast<unsigned long long>(state_hash(world)));
     if (o.peer) {
         const int ranks = o.threads > 1 ? 2 : 1;

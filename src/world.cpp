@@ -1,6 +1,7 @@
 #include "world.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <sstream>
 
@@ -293,13 +294,18 @@ void World::refresh_contacts() {
 }
 
 // The force pass's ranges: one contiguous range of discs per thread, cut where the work
-// (contacts owned, plus discs) is shared evenly; the cross contacts and, per range, which
-// of them it receives. Rebuilt with the candidate lists. How the work is cut changes no bit:
-// every disc sums its terms in contact-list order in any case (compute_forces).
+// (contacts owned, plus discs) is shared in the ranges' target shares (equal at first, then
+// corrected from the measured times: balance_force_pass); the cross contacts and, per range,
+// which of them it receives. Rebuilt with the candidate lists. How the work is cut changes no
+// bit: every disc sums its terms in contact-list order in any case (compute_forces).
 void World::split_force_pass() {
     const size_t n = pos_.size();
     force_ranges_ = pool_->shares(n) ? pool_->size() : 1;
     const size_t r = size_t(force_ranges_);
+    if (range_share_.size() != r) range_share_.assign(r, 1.0 / double(r));
+    range_clock_.assign(r, RangeClock{});
+    balance_steps_ = 0;
+    ledger_blocks_.resize((n + kLedgerBlock - 1) / kLedgerBlock);
     // the ranges' first disc, disc-disc contact and wall contact (both lists are sorted by disc)
     disc_split_.assign(r + 1, n);
     contact_split_.assign(r + 1, dd_.size());
@@ -309,16 +315,18 @@ void World::split_force_pass() {
         // work of disc d: 1 + the contacts it owns
         const double total = double(n + dd_.size() + dw_.size());
         size_t k = 0, kw = 0, part = 1;
-        double done = 0.0;
+        double done = 0.0, target = total * range_share_[0];
         for (size_t d = 0; d < n && part < r; ++d) {
             const size_t k0 = k, kw0 = kw;
             while (k < dd_.size() && size_t(dd_[k].i) == d) ++k;
             while (kw < dw_.size() && size_t(dw_[kw].disc) == d) ++kw;
             done += double(1 + (k - k0) + (kw - kw0));
-            if (done >= total * double(part) / double(r)) {
+            // ranges hold whole ledger blocks, so the ledger's sums do not depend on the cut
+            if (done >= target && (d + 1) % kLedgerBlock == 0) {
                 disc_split_[part] = d + 1;
                 contact_split_[part] = k;
                 wall_split_[part] = kw;
+                target += total * range_share_[part];
                 ++part;
             }
         }
@@ -348,6 +356,50 @@ void World::split_force_pass() {
     cross_out_.resize(cross_.size());
 }
 
+// The ranges' work model (one unit per disc and per owned contact) misses what a unit costs:
+// a touching pair costs more than a candidate that does not touch, a wall contact more than
+// either, and the two cores need not run at the same speed. Measured on geometry A at
+// scale 4 on 2 threads, the worker's range took 16 % longer than the caller's, which then
+// waited. So every kBalanceWindow steps the ranges' times are compared, and when they differ
+// by more than kBalanceTolerance, each range's target share is moved halfway towards its
+// measured speed (work share per second) and the pass is cut again. The cut changes no bit.
+void World::balance_force_pass() {
+    const size_t r = range_clock_.size();
+    if (r < 2 || ++balance_steps_ < kBalanceWindow) return;
+    double sum = 0.0, longest = 0.0;
+    for (const RangeClock& c : range_clock_) {
+        sum += c.seconds;
+        longest = std::max(longest, c.seconds);
+    }
+    const double mean = sum / double(r);
+    if (mean > 0.0 && longest > (1.0 + kBalanceTolerance) * mean) {
+        std::vector<double>& share = range_share_;
+        double norm = 0.0;
+        std::vector<double> speed(r);
+        for (size_t t = 0; t < r; ++t) {
+            speed[t] = share[t] / std::max(range_clock_[t].seconds, 1e-12);
+            norm += speed[t];
+        }
+        for (size_t t = 0; t < r; ++t) share[t] = 0.5 * share[t] + 0.5 * speed[t] / norm;
+        ++rebalances_;
+        split_force_pass();  // also restarts the clocks
+        return;
+    }
+    range_clock_.assign(r, RangeClock{});
+    balance_steps_ = 0;
+}
+
+void World::cut_force_pass(const std::vector<double>& shares) {
+    if (!finalized_) finalize();
+    const size_t r = size_t(pool_->shares(pos_.size()) ? pool_->size() : 1);
+    double sum = 0.0;
+    for (double x : shares) sum += x > 0.0 ? x : 0.0;
+    if (shares.size() != r || !(std::abs(sum - 1.0) < 1e-9))
+        throw InputError("force-pass shares: " + std::to_string(r) + " positive shares summing to 1 expected");
+    range_share_ = shares;
+    split_force_pass();
+}
+
 static std::string where_disc(long step, double t, int i, const Vec2& p) {
     std::ostringstream s;
     s << "step " << step << ", t = " << t << " s, disc " << i << " at (" << p.x() << ", " << p.y() << ")";
@@ -365,7 +417,7 @@ static std::string where_disc(long step, double t, int i, const Vec2& p) {
 // 2 % of the pairs cross, and the threads share no cache lines but those few slots; the
 // earlier design (every pair to a slot, then a per-disc gather) moved 64 bytes per pair
 // between the cores and gained 1.1-1.4x on 2 threads (docs/performance.md).
-void World::compute_forces() {
+void World::compute_forces(bool then_integrate) {
     const size_t nw = walls_.size();
     const DashpotMode mode = def_.damping.dp_mode;
     const double dt = dt_;
@@ -389,6 +441,8 @@ void World::compute_forces() {
                                                 ". Likely cause: the time step is too large for the stiffness and "
                                                 "speeds (use the automatic time step or a smaller safety factor)"};
     };
+
+    const IntegrateConsts ic = then_integrate ? integrate_prepare() : IntegrateConsts{};
 
     // 1. the cross contacts, into their slots
     pool_->parallel_for(cross_.size(), [&](size_t begin, size_t end, int chunk) {
@@ -422,6 +476,7 @@ void World::compute_forces() {
         ++l.n_disc;
     };
     auto range_pass = [&](int t) {
+        const auto started = std::chrono::steady_clock::now();
         const size_t d0 = disc_split_[size_t(t)], d1 = disc_split_[size_t(t) + 1];
         std::fill(load + d0, load + d1, DiscLoad{});
         // cross contacts into this range's discs come first in their order
@@ -503,6 +558,29 @@ void World::compute_forces() {
             l.wall_normal += f.fn_spring;
             ++l.n_wall;
         }
+
+        // the ledger's share of this range: the contacts' dissipation per block of discs (in
+        // disc order, as a serial pass would add them) and the touching pairs
+        long touching = 0;
+        for (size_t b0 = d0; b0 < d1; b0 += kLedgerBlock) {
+            const size_t b1 = std::min(b0 + kLedgerBlock, d1);
+            double sum = 0.0;
+            for (size_t d = b0; d < b1; ++d) {
+                sum += load[d].dissipated;
+                touching += load[d].n_disc;
+            }
+            ledger_blocks_[b0 / kLedgerBlock].contacts = sum;
+        }
+        range_clock_[size_t(t)].touching_dd = touching;
+
+        // This range's sums are complete (its discs' other terms came from the cross slots),
+        // and no other range reads its discs' state from here on: integrate them now, on the
+        // thread whose cache holds their loads, without waiting for the other ranges. A range
+        // that met a fault leaves its discs alone (the pass then throws).
+        if (then_integrate && dd_fault_[size_t(t)].index == SIZE_MAX && dw_fault_[size_t(t)].index == SIZE_MAX)
+            integrate_discs(d0, d1, t, ic);
+        range_clock_[size_t(t)].seconds +=
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
     };
     if (force_ranges_ == 1)
         range_pass(0);
@@ -515,15 +593,15 @@ void World::compute_forces() {
         if (first) throw RunError(first->message);
     }
 
-    // the ledger: disc-disc contacts through the discs' halves, in disc order (a pass over
-    // the discs, not the longer contact list); then the wall loads, in contact-list order
-    const size_t n = pos_.size();
+    // the ledger: disc-disc contacts through the discs' halves, summed per block of discs in
+    // the ranges and here over the blocks in order (the same bits for any cut and thread
+    // count; a serial pass over all discs here made the caller read every line the other
+    // threads had written, and cost 2 threads a fifth of their speed); then the wall loads,
+    // in contact-list order
     double dissipated = 0.0;
+    for (const LedgerBlock& b : ledger_blocks_) dissipated += b.contacts;
     long touching = 0;
-    for (size_t d = 0; d < n; ++d) {
-        dissipated += load_[d].dissipated;
-        touching += load_[d].n_disc;
-    }
+    for (const RangeClock& c : range_clock_) touching += c.touching_dd;
     touching_dd_ = touching / 2;
     touching = 0;
     std::fill(wall_force_.begin(), wall_force_.end(), Vec2::Zero());
@@ -569,40 +647,40 @@ double World::automatic_dt() const {
 }
 
 // PFC's central differences: v(t + dt/2) = v(t - dt/2) + (F(t)/m + g) dt, x(t + dt) = x(t) + v(t + dt/2) dt.
-void World::integrate() {
-    const size_t n = pos_.size();
-    const double dt = dt_;
-    const Vec2 g = def_.gravity;
-    const double alpha = def_.damping.local_alpha;
+// The force pass calls integrate_discs for each range as soon as the range's sums are
+// complete (compute_forces): integrate_prepare before, integrate_finish after.
+World::IntegrateConsts World::integrate_prepare() {
+    const size_t chunks = size_t(pool_->size());
+    integrate_fault_.assign(chunks, SIZE_MAX);  // no allocation after the first step
+    dt_sq_chunk_.assign(chunks, INFINITY);
+    escaped_chunk_.assign(chunks, 0);
+    return {dt_, def_.gravity, def_.damping.local_alpha, def_.gravity.norm(), def_.timestep.automatic, dt_factors()};
+}
+
+void World::integrate_discs(size_t begin, size_t end, int chunk, const IntegrateConsts& k) {
+    const double dt = k.dt;
+    const Vec2 g = k.g;
+    const double alpha = k.alpha;
     const RotationDef& rot = def_.rotation;
-    const double g_abs = g.norm();
-    diss_local_disc_.resize(n);
-    diss_rot_disc_.resize(n);
-    std::vector<size_t>& fault = integrate_fault_;
-    fault.assign(size_t(pool_->size()), SIZE_MAX);  // no allocation after the first step
     // the next automatic step from this step's contacts (as automatic_dt(), but in the
     // parallel loop: a minimum does not depend on the order it is taken in)
-    const bool auto_dt = def_.timestep.automatic;
-    const DtFactors dtf = dt_factors();
-    std::vector<double>& dt_sq_min = dt_sq_chunk_;
-    dt_sq_min.assign(size_t(pool_->size()), INFINITY);
-    // whether a disc left its fat box: the broad phase then need not scan them all
-    std::vector<uint8_t>& escaped = escaped_chunk_;
-    escaped.assign(size_t(pool_->size()), 0);
-    pool_->parallel_for(n, [&](size_t begin, size_t end, int chunk) {
     double best_sq = INFINITY;
+    // whether a disc left its fat box: the broad phase then need not scan them all
     bool any_escaped = false;
+    size_t fault = SIZE_MAX;
+    // the ledger's shares per block of discs (see compute_forces' ledger)
+    double block_local = 0.0, block_rot = 0.0;
     for (size_t i = begin; i < end; ++i) {
-        if (auto_dt) best_sq = std::min(best_sq, critical_step_squared_of(i, dtf));
+        if (k.auto_dt) best_sq = std::min(best_sq, critical_step_squared_of(i, k.dtf));
         double diss_local = 0.0, diss_rot = 0.0;
         const DiscLoad& l = load_[i];
         Vec2 f = l.force + mass_[i] * g;
         Vec2 fd = Vec2::Zero();
         if (alpha > 0.0) {
             // eq. 2.51: F_d = -alpha |F| sign(v) per degree of freedom
-            for (int k = 0; k < 2; ++k) {
-                const double v = vel_[i][k];
-                fd[k] = v > 0.0 ? -alpha * std::abs(f[k]) : (v < 0.0 ? alpha * std::abs(f[k]) : 0.0);
+            for (int c = 0; c < 2; ++c) {
+                const double v = vel_[i][c];
+                fd[c] = v > 0.0 ? -alpha * std::abs(f[c]) : (v < 0.0 ? alpha * std::abs(f[c]) : 0.0);
             }
             f += fd;
         }
@@ -623,7 +701,7 @@ void World::integrate() {
             if (alpha > 0.0) diss_local -= 0.5 * td * (w_old + w_free) * dt;
             // Model 2/3: Preh-Poisel rolling resistance for a disc touching a wall (eq. 2.71, 2.73)
             if (l.n_wall > 0 && rr_factor_[i] > 0.0) {
-                const double g_eff = rot.rolling_form == RollingForm::Literal ? g_abs : l.wall_normal * inv_mass_[i];
+                const double g_eff = rot.rolling_form == RollingForm::Literal ? k.g_abs : l.wall_normal * inv_mass_[i];
                 w = reduce_towards_zero(w, g_eff * rr_factor_[i] * dt);
             }
             // Model 3: rotational damping at disc-disc contacts (eq. 2.75)
@@ -636,20 +714,29 @@ void World::integrate() {
             omega_[i] = w;
             angle_[i] += w * dt;
         }
-        diss_local_disc_[i] = diss_local;
-        diss_rot_disc_[i] = diss_rot;
+        block_local += diss_local;
+        block_rot += diss_rot;
+        if ((i + 1) % kLedgerBlock == 0 || i + 1 == end) {
+            LedgerBlock& b = ledger_blocks_[i / kLedgerBlock];
+            b.local = block_local;
+            b.rotation = block_rot;
+            block_local = block_rot = 0.0;
+        }
         const Vec2& p = pos_[i];
         const bool bad = !std::isfinite(p.x() + p.y() + vel_[i].x() + vel_[i].y()) || p.x() < def_.domain_lo.x() ||
                          p.y() < def_.domain_lo.y() || p.x() > def_.domain_hi.x() || p.y() > def_.domain_hi.y();
-        if (bad && fault[size_t(chunk)] == SIZE_MAX) fault[size_t(chunk)] = i;
+        if (bad && fault == SIZE_MAX) fault = i;
         any_escaped = any_escaped || !broad_.inside_fat_box(i, p, radius_[i]);
     }
-    dt_sq_min[size_t(chunk)] = best_sq;
-    escaped[size_t(chunk)] = any_escaped ? 1 : 0;
-    });
+    integrate_fault_[size_t(chunk)] = fault;
+    dt_sq_chunk_[size_t(chunk)] = best_sq;
+    escaped_chunk_[size_t(chunk)] = any_escaped ? 1 : 0;
+}
+
+void World::integrate_finish() {
     discs_may_have_escaped_ = false;
-    for (uint8_t e : escaped) discs_may_have_escaped_ = discs_may_have_escaped_ || e != 0;
-    for (size_t i : fault) {
+    for (uint8_t e : escaped_chunk_) discs_may_have_escaped_ = discs_may_have_escaped_ || e != 0;
+    for (size_t i : integrate_fault_) {
         if (i == SIZE_MAX) continue;
         const Vec2& p = pos_[i];
         if (!std::isfinite(p.x() + p.y() + vel_[i].x() + vel_[i].y()))
@@ -660,9 +747,9 @@ void World::integrate() {
                        " left the domain. Likely cause: a disc crossed a wall (time step too large, or a gap "
                        "between walls)");
     }
-    for (size_t i = 0; i < n; ++i) {
-        diss_local_ += diss_local_disc_[i];
-        diss_rotation_ += diss_rot_disc_[i];
+    for (const LedgerBlock& b : ledger_blocks_) {
+        diss_local_ += b.local;
+        diss_rotation_ += b.rotation;
     }
 }
 
@@ -703,8 +790,9 @@ void World::step() {
         }
     }
     if (broad_.update(pos_, radius_, geom_, wall_active_, wall_moving_, discs_may_have_escaped_)) refresh_contacts();
-    compute_forces();
-    integrate();
+    compute_forces(true);
+    integrate_finish();
+    balance_force_pass();
     move_walls();
     for (size_t w = 0; w < walls_.size(); ++w) wall_impulse_[w] += wall_force_[w] * dt_;
     time_ += dt_;

@@ -141,6 +141,13 @@ public:
     // many candidate pairs cross from one range to another (computed into slots first).
     int force_pass_ranges() const { return force_ranges_; }
     size_t cross_contacts() const { return cross_.size(); }
+    // per range: its share of the work model (discs + owned contacts) after the measured
+    // balancing, and how often the ranges were re-cut to balance their times
+    const std::vector<double>& force_pass_shares() const { return range_share_; }
+    long force_pass_rebalances() const { return rebalances_; }
+    // Re-cuts the ranges in these shares of the work model (one per range, summing to 1; the
+    // measured balancing continues from them). For tests and experiments: no bit depends on it.
+    void cut_force_pass(const std::vector<double>& shares);
     const BroadPhaseStats& broad_phase_stats() const { return broad_.stats(); }
     double broad_phase_margin() const { return broad_.margin(); }
 
@@ -174,18 +181,29 @@ public:
     void load_state(BinaryReader& in);
 
 private:
-    void compute_forces();
-    void integrate();
+    // The force pass; with then_integrate (a step), each range's discs are integrated as soon
+    // as their sums are complete, and integrate_finish() must follow.
+    void compute_forces(bool then_integrate = false);
+    struct DtFactors {
+        bool rotation_free;
+        double phi_sq, phi_t_sq;
+    };
+    struct IntegrateConsts {
+        double dt = 0.0;
+        Vec2 g{0.0, 0.0};
+        double alpha = 0.0, g_abs = 0.0;
+        bool auto_dt = false;
+        DtFactors dtf{};
+    };
+    IntegrateConsts integrate_prepare();
+    void integrate_discs(size_t begin, size_t end, int chunk, const IntegrateConsts& k);
+    void integrate_finish();
     void move_walls();
     void refresh_contacts();
     void join_wall_ends();
     double contact_mass_disc(int i, int j) const;
     double margin_target() const;  // m, the broad phase's pad (WorldDef::broadphase_margin)
     // the automatic step (timestep.h): its constant factors, one disc's bound, the step
-    struct DtFactors {
-        bool rotation_free;
-        double phi_sq, phi_t_sq;
-    };
     DtFactors dt_factors() const;
     double critical_step_squared_of(size_t i, const DtFactors& f) const;
     double step_from_critical_squared(double best_sq) const;
@@ -245,7 +263,25 @@ private:
     std::vector<int32_t> cross_in_start_, cross_in_;  // per range: the cross contacts whose j it owns (CSR)
     int force_ranges_ = 1;
     void split_force_pass();
-    std::vector<double> diss_local_disc_, diss_rot_disc_;
+    // measured balance of the ranges (balance_force_pass)
+    static constexpr int kBalanceWindow = 64;          // steps between checks
+    static constexpr double kBalanceTolerance = 0.03;  // longest range over the mean, - 1
+    struct alignas(64) RangeClock {
+        double seconds = 0.0;  // s, in the force pass and integration since the last check
+        long touching_dd = 0;  // touching disc-disc contacts counted by its discs (each pair twice)
+    };
+    // The energy ledger's per-step sums, per block of kLedgerBlock discs: the ranges are cut at
+    // block ends, each range sums its blocks, and the blocks are added in order.
+    static constexpr size_t kLedgerBlock = 64;
+    struct LedgerBlock {
+        double contacts = 0.0, local = 0.0, rotation = 0.0;  // J/m, dissipated in the last step
+    };
+    std::vector<LedgerBlock> ledger_blocks_;
+    std::vector<RangeClock> range_clock_;
+    std::vector<double> range_share_;  // per range: target share of the work model
+    int balance_steps_ = 0;
+    long rebalances_ = 0;
+    void balance_force_pass();
     // the first fault each chunk met in the last pass (reported in index order, so the
     // message does not depend on the thread count)
     struct Fault {
@@ -256,7 +292,7 @@ private:
     std::vector<size_t> integrate_fault_;
     std::vector<double> dt_sq_chunk_;       // per chunk: the smallest critical step squared of this step
     std::vector<uint8_t> escaped_chunk_;
-    bool discs_may_have_escaped_ = true;  // false when integrate() saw every disc inside its fat box
+    bool discs_may_have_escaped_ = true;  // false when integrate_discs() saw every disc inside its fat box
     std::vector<DiscContact> dd_, dd_scratch_;
     std::vector<WallContact> dw_, dw_scratch_;
     long touching_dd_ = 0, touching_dw_ = 0;
