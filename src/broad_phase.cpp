@@ -130,7 +130,8 @@ bool BroadPhase::update(const std::vector<Vec2>& pos, const std::vector<double>&
                         const std::vector<uint8_t>& wall_moving, bool discs_may_have_escaped) {
     // walls: removed ones leave the tree; moving ones are re-inserted whole when any of
     // their pieces leaves its fat box
-    std::vector<uint8_t> changed(walls.size(), 0);
+    std::vector<uint8_t>& changed = wall_changed_;  // kept between steps: no allocation in the step
+    changed.assign(walls.size(), 0);
     bool any_wall = false;
     for (Piece& pc : pieces_) {
         const int32_t w = pc.wall;

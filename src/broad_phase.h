@@ -82,6 +82,7 @@ private:
     std::vector<uint64_t> dd_, dw_, scratch_dd_, scratch_dw_;
     std::vector<uint8_t> escaped_;
     std::vector<int32_t> escaped_list_, hits_;
+    std::vector<uint8_t> wall_changed_;  // per wall, in update()
     BroadPhaseStats stats_;
 };
 
