@@ -55,6 +55,38 @@ TEST(Validation, WorldSettings) {
     expect_refused([&] { finalize_with([](WorldDef& d) { d.rotation.mu_br = 1.5; }); }, {"mu_br", "[0, 1]"});
     expect_refused([&] { finalize_with([](WorldDef& d) { d.timestep.safety = 0.0; }); }, {"safety"});
     expect_refused([&] { finalize_with([](WorldDef& d) { d.gravity = Vec2(0, kNaN); }); }, {"gravity", "finite"});
+    // the integrator's lost-disc test relies on a finite domain
+    expect_refused([&] { finalize_with([](WorldDef& d) { d.domain_hi = Vec2(INFINITY, 1.0); }); },
+                   {"domain_hi", "finite"});
+}
+
+// The integrator's one-test check (inside the finite domain) catches a disc that leaves the
+// domain and a disc whose state overflows, and tells them apart.
+TEST(BlowUp, LostAndNonFiniteDiscsStopTheRun) {
+    const auto run_one = [](double gravity_y, double dt) -> std::string {
+        WorldDef def;
+        def.gravity = Vec2(0, gravity_y);
+        def.timestep.automatic = false;
+        def.timestep.fixed = dt;
+        def.domain_lo = Vec2(-1, -1);
+        def.domain_hi = Vec2(1, 1);
+        World w(def);
+        const int m = w.add_material(material(0.3));
+        w.add_disc({Vec2(0, 0.5), 0.001, Vec2::Zero(), 0, 0, m});
+        w.add_disc({Vec2(0.5, 0.5), 0.001, Vec2::Zero(), 0, 0, m});
+        w.finalize();
+        try {
+            w.run(10);
+        } catch (const RunError& e) {
+            return e.what();
+        }
+        return "";
+    };
+    const std::string lost = run_one(-1e3, 0.1);  // falls 10 m in the first step
+    EXPECT_NE(lost.find("lost disc"), std::string::npos) << lost;
+    EXPECT_NE(lost.find("disc 0"), std::string::npos) << lost;
+    const std::string overflow = run_one(-1.7e308, 10.0);  // v = -inf after one step
+    EXPECT_NE(overflow.find("non-finite"), std::string::npos) << overflow;
 }
 
 TEST(BlowUp, TooLargeATimeStepStopsWithADiagnosis) {
