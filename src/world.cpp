@@ -490,50 +490,22 @@ void World::compute_forces(bool then_integrate) {
         // this range's own cross contacts, in list order
         size_t next = cross_start_[size_t(t)];
         size_t next_k = next < cross_.size() ? size_t(cross_[next]) : SIZE_MAX;
-        // In blocks of the list: first pick, without a branch, the candidates that need the
-        // law (touching, or with history to close, or computed in 1.), then run the law over
-        // those. Skipping the others changes no bit: they would add +0, and their history is
-        // zero already. About half the candidates touch, at random, and as a branch the test
-        // was mispredicted on every second candidate (cachegrind, docs/performance.md).
-        size_t cross_seen = next;
-        size_t cross_seen_k = next_k;
-        int32_t active[kNarrowBlock];
-        for (size_t kb = k0; kb < k1; kb += kNarrowBlock) {
-            const size_t ke = std::min(kb + kNarrowBlock, k1);
-            size_t n_active = 0;
-            for (size_t k = kb; k < ke; ++k) {
-                const DiscContact& c = dd_[k];
-                const size_t i = size_t(c.i), j = size_t(c.j);
-                const Vec2 dx = pos_[j] - pos_[i];
-                const double rsum = radius_[i] + radius_[j];
-                const bool is_cross = k == cross_seen_k;
-                if (is_cross) {  // rare: under 2 % of the pairs
-                    ++cross_seen;
-                    cross_seen_k = cross_seen < cross_.size() ? size_t(cross_[cross_seen]) : SIZE_MAX;
-                }
-                const bool keep = (dx.squaredNorm() < rsum * rsum) | (c.fs != 0.0) | (c.damp_n != 0.0f) |
-                                  (c.damp_s != 0.0f) | is_cross;
-                active[n_active] = int32_t(k);
-                n_active += keep ? 1 : 0;
+        for (size_t k = k0; k < k1; ++k) {
+            DiscContact& c = dd_[k];
+            if (k == next_k) {  // computed in 1.
+                add_to_i(size_t(c.i), cross_out_[next]);
+                ++next;
+                next_k = next < cross_.size() ? size_t(cross_[next]) : SIZE_MAX;
+                continue;
             }
-            for (size_t a = 0; a < n_active; ++a) {
-                const size_t k = size_t(active[a]);
-                DiscContact& c = dd_[k];
-                if (k == next_k) {  // computed in 1.
-                    add_to_i(size_t(c.i), cross_out_[next]);
-                    ++next;
-                    next_k = next < cross_.size() ? size_t(cross_[next]) : SIZE_MAX;
-                    continue;
-                }
-                PairOut o;
-                double overlap = 0.0;
-                if (!disc_pair_force(discs, pp, c, o, overlap)) {
-                    disc_fault(k, overlap, t);
-                    continue;
-                }
-                add_to_i(size_t(c.i), o);
-                add_to_j(size_t(c.j), o);
+            PairOut o;
+            double overlap = 0.0;
+            if (!disc_pair_force(discs, pp, c, o, overlap)) {
+                disc_fault(k, overlap, t);
+                continue;
             }
+            add_to_i(size_t(c.i), o);
+            add_to_j(size_t(c.j), o);
         }
 
         // disc-wall: n from the wall (A) to the disc (B)

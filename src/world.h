@@ -262,7 +262,6 @@ private:
     std::vector<PairOut> cross_out_;        // their results, same order
     std::vector<int32_t> cross_in_start_, cross_in_;  // per range: the cross contacts whose j it owns (CSR)
     int force_ranges_ = 1;
-    static constexpr size_t kNarrowBlock = 256;  // candidates per narrow-phase block (compute_forces)
     void split_force_pass();
     // measured balance of the ranges (balance_force_pass)
     static constexpr int kBalanceWindow = 64;          // steps between checks
