@@ -282,6 +282,7 @@ private:
     int balance_steps_ = 0;
     long rebalances_ = 0;
     void balance_force_pass();
+    void restart_balance_window();
     // the first fault each chunk met in the last pass (reported in index order, so the
     // message does not depend on the thread count)
     struct Fault {

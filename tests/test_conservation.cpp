@@ -3,9 +3,12 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <random>
 
 #include "db9k.h"
+#include "error.h"
+#include "range_balance.h"
 #include "helpers.h"
 
 using namespace demlab;
@@ -177,6 +180,44 @@ TEST(Determinism, ShuffledDiscsOnThreeThreadsGiveTheSameBits) {
     EXPECT_EQ(e[0].dissipated_local, e[1].dissipated_local);
     EXPECT_EQ(e[0].dissipated_rotation, e[1].dissipated_rotation);
     EXPECT_EQ(e[0].elastic, e[1].elastic);
+}
+
+TEST(ForcePassBalance, SharesMoveHalfwayTowardsTheMeasuredSpeeds) {
+    // range 0 took 3 s for half the work, range 1 took 1 s: speeds 1/6 and 1/2, i.e. the
+    // shares 0.25 and 0.75 would have equalised the times; halfway there: 0.375 and 0.625
+    double share[2] = {0.5, 0.5};
+    const double slow_first[2] = {3.0, 1.0};
+    EXPECT_TRUE(rebalance_shares(share, [&](size_t t) { return slow_first[t]; }, 2, 0.03));
+    EXPECT_DOUBLE_EQ(share[0], 0.375);
+    EXPECT_DOUBLE_EQ(share[1], 0.625);
+    EXPECT_DOUBLE_EQ(share[0] + share[1], 1.0);
+    // within the tolerance (2 % over the mean), and with no time measured: left alone
+    const double close[2] = {1.02, 0.98};
+    EXPECT_FALSE(rebalance_shares(share, [&](size_t t) { return close[t]; }, 2, 0.03));
+    EXPECT_FALSE(rebalance_shares(share, [](size_t) { return 0.0; }, 2, 0.03));
+    EXPECT_DOUBLE_EQ(share[0], 0.375);
+    // three ranges, repeated: converges to equal times for ranges of constant speed
+    double s3[3] = {1.0 / 3, 1.0 / 3, 1.0 / 3};
+    const double cost[3] = {1.0, 2.0, 1.0};  // seconds per unit share
+    for (int k = 0; k < 60; ++k) rebalance_shares(s3, [&](size_t t) { return cost[t] * s3[t]; }, 3, 1e-9);
+    EXPECT_NEAR(s3[0], 0.4, 1e-6);
+    EXPECT_NEAR(s3[1], 0.2, 1e-6);
+    EXPECT_NEAR(s3[2], 0.4, 1e-6);
+}
+
+TEST(ForcePassBalance, CutSharesAreChecked) {
+    auto discs = read_xyr(default_db9k_path());
+    WorldDef def = db9k_world_def();
+    def.threads = 2;
+    World w(def);
+    build_db9k(w, discs);
+    w.finalize();
+    EXPECT_THROW(w.cut_force_pass({1.0}), InputError);             // one share per range
+    EXPECT_THROW(w.cut_force_pass({0.7, 0.7}), InputError);        // sum 1
+    EXPECT_THROW(w.cut_force_pass({1.2, -0.2}), InputError);       // each >= 0
+    EXPECT_THROW(w.cut_force_pass({1.0, NAN}), InputError);        // finite
+    EXPECT_NO_THROW(w.cut_force_pass({0.3, 0.7}));
+    EXPECT_DOUBLE_EQ(w.force_pass_shares()[0], 0.3);
 }
 
 TEST(Determinism, SameSetUpSameStateHash) {
