@@ -7,7 +7,8 @@
 // 0.1 / scale metres (the margin) and converting the tree's float boxes back to metres is
 // exact. A disc is re-inserted only when its tight box leaves its fat box.
 //
-// Candidate pairs: every pair of discs (and disc-wall) whose fat boxes overlap. The set is
+// Candidate pairs: every pair of discs (and disc-wall) whose fat boxes overlap, less the disc
+// pairs that cannot touch while both discs stay in their fat boxes (may_touch). The set is
 // kept between updates: pairs of two discs that did not escape stay as they are (their fat
 // boxes did not change), and only the escaped discs are queried. The lists are sorted by
 // key, so the contact loop's order does not depend on the tree's internal layout.
@@ -72,12 +73,14 @@ private:
     b2AABB to_tree(const Vec2& lo, const Vec2& hi) const;
     void read_fat(int32_t proxy, Vec2& lo, Vec2& hi) const;
     void query(const Vec2& lo, const Vec2& hi, std::vector<int32_t>& hits);
+    bool may_touch(int32_t i, int32_t j) const;
 
     b2DynamicTree tree_;
     double scale_ = 1.0;
     double margin_ = 0.1;
     std::vector<int32_t> disc_proxy_;
     std::vector<Vec2> fat_lo_, fat_hi_;
+    std::vector<double> box_radius_;  // the radius each disc's fat box was made for, m
     std::vector<Piece> pieces_;
     std::vector<uint64_t> dd_, dw_, scratch_dd_, scratch_dw_;
     std::vector<uint8_t> escaped_;

@@ -390,6 +390,8 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
     };
 
     sum.stop_reason = "t_max";
+    double candidate_sum = 0, touching_sum = 0;
+    long pair_samples = 0;
     while (true) {
         if (w.time() >= next_series - 1e-12) {
             sample();
@@ -405,6 +407,9 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
         sum.dt_min = std::min(sum.dt_min, w.dt());
         sum.dt_max = std::max(sum.dt_max, w.dt());
         if (w.step_count() % 10 == 0) {
+            candidate_sum += double(w.disc_contacts().size());
+            touching_sum += double(w.touching_disc_pairs());
+            ++pair_samples;
             double ke = 0;
             for (size_t i = 0; i < n; ++i) ke += 0.5 * w.masses()[i] * w.velocities()[i].squaredNorm();
             if (s.world.rotation.model != 1)
@@ -447,6 +452,11 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
         snaps->finish();
     }
     sum.wall_seconds = elapsed();
+    sum.broadphase_margin = w.broad_phase_margin();
+    sum.broadphase_updates = w.broad_phase_stats().updates;
+    sum.broadphase_reinserts = w.broad_phase_stats().disc_reinserts;
+    sum.mean_disc_candidates = pair_samples > 0 ? candidate_sum / double(pair_samples) : 0.0;
+    sum.mean_disc_touching = pair_samples > 0 ? touching_sum / double(pair_samples) : 0.0;
     sum.steps = w.step_count();
     sum.t_end = w.time();
     sum.dt = w.dt();
@@ -517,7 +527,12 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
       << "  \"t_front_at_barrier\": " << json_number(sum.t_front_at_barrier) << ",\n"
       << "  \"t_peak_fx_barrier\": " << json_number(sum.t_peak_fx_barrier) << ",\n"
       << "  \"t_peak_fy_arc\": " << json_number(sum.t_peak_fy_arc) << ",\n"
-      << "  \"energy_balance_error\": " << json_number(sum.energy_balance_error);
+      << "  \"energy_balance_error\": " << json_number(sum.energy_balance_error) << ",\n"
+      << "  \"broadphase_margin\": " << json_number(sum.broadphase_margin) << ",\n"
+      << "  \"broadphase_updates\": " << sum.broadphase_updates << ",\n"
+      << "  \"broadphase_reinserts\": " << sum.broadphase_reinserts << ",\n"
+      << "  \"broadphase_mean_candidates\": " << json_number(sum.mean_disc_candidates) << ",\n"
+      << "  \"broadphase_mean_touching\": " << json_number(sum.mean_disc_touching);
     if (s.dam_break.enabled) {
         j << ",\n  \"gamma_ges\": " << json_number(angles.gamma_ges);
         for (int i = 0; i < 5; ++i) j << ",\n  \"gamma_" << i + 1 << "\": " << json_number(angles.gamma[i]);

@@ -106,3 +106,23 @@ TEST(BroadPhase, MarginIsAPowerOfTwoFractionOfTheTreePad) {
     // 0.1 / 2^k nearest to 0.5 mm: 2^8 -> 0.39 mm
     EXPECT_NEAR(w.broad_phase_margin(), 0.1 / 256.0, 1e-9);
 }
+
+// The candidates are the pairs that can touch while both discs stay in their fat boxes, not
+// every pair of overlapping boxes: on a square lattice (r = 1 mm, pitch 2.5 mm, margin
+// 0.39 mm) the boxes of diagonal neighbours overlap (the pitch is below 2 r + 2 margin) but
+// their centres, each held within 0.39 mm of where it was boxed, stay 2.43 mm > 2 r apart.
+TEST(BroadPhase, DiagonalNeighboursWhoseBoxesOverlapAreNotCandidates) {
+    WorldDef def;
+    def.broadphase_margin = 0.0005;
+    def.gravity = Vec2::Zero();
+    World w(def);
+    const int m = w.add_material(material(0.3));
+    const int n = 10;
+    for (int a = 0; a < n; ++a)
+        for (int b = 0; b < n; ++b) w.add_disc({Vec2(0.0025 * a, 0.0025 * b), 0.001, Vec2::Zero(), 0, 0, m});
+    w.finalize();
+    ASSERT_NEAR(w.broad_phase_margin(), 0.1 / 256.0, 1e-9);
+    // the orthogonal neighbours only: n (n - 1) per direction
+    EXPECT_EQ(w.disc_contacts().size(), size_t(2 * n * (n - 1)));
+    for (const DiscContact& c : w.disc_contacts()) EXPECT_TRUE(c.j == c.i + 1 || c.j == c.i + n) << c.i << "-" << c.j;
+}
