@@ -28,7 +28,7 @@ struct DiscContact {
     float damp_n, damp_s;  // last step's dashpot forces, N (energy ledger only)
 };
 
-// What one pair adds to its discs in a step (zeros but the ledger's share when not touching).
+// What one pair adds to its discs in a step.
 struct PairOut {
     Vec2 f;                      // force on j (B); i gets -f
     double torque_i, torque_j;   // N m / m
@@ -85,12 +85,6 @@ inline LinearContactForce step_contact(const LinearContactParams& p, double over
     out.touching = false;
     out.dissipated = 0.0;
     if (dist2 >= rsum * rsum) {
-        // an open pair adds zeros: the range pass adds every pair without asking (a branch
-        // there was mispredicted as often as this one), and +0.0 leaves a sum's bits alone
-        // (a sum that starts at +0.0 is never -0.0 in round-to-nearest)
-        out.f = Vec2::Zero();
-        out.torque_i = out.torque_j = 0.0;
-        out.k_tran = out.k_rot = 0.0;
         // PFC deletes a contact that opens: its history starts again at zero. The last
         // dashpot force still acted over the second half of the previous step.
         if (c.damp_n != 0.0f || c.damp_s != 0.0f) {

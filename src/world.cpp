@@ -6,14 +6,12 @@
 #include <sstream>
 
 #include "error.h"
-#include "pair_kernel_x2.h"
 #include "range_balance.h"
 #include "thread_pool.h"
 #include "timestep.h"
 #include "validate.h"
 
 namespace demlab {
-constexpr bool kUseX2 = true;  // the two-lane kernel (pair_kernel_x2.h)
 
 static PairMaterial pair_material(double kn, double ks, double mu) { return {kn, ks, mu, std::max(kn, ks), 1.0 / ks}; }
 
@@ -454,26 +452,25 @@ void World::compute_forces(bool then_integrate) {
 
     // 2. each range sums its discs' terms
     DiscLoad* const load = load_.data();
-    // Every candidate is added, touching or not, without a branch: an open pair's terms are
-    // +0.0 (both kernels), and adding +0.0 leaves a sum's bits alone, since a sum that starts
-    // at +0.0 (DiscLoad{}) can never be -0.0 in round-to-nearest.
     auto add_to_i = [load](size_t i, const PairOut& o) {
         DiscLoad& l = load[i];
         l.dissipated += 0.5 * o.dissipated;  // the ledger: half to each disc (exact)
+        if (!o.touching) return;
         l.force -= o.f;
         l.torque += o.torque_i;
         l.k_tran += o.k_tran;
         l.k_rot += o.k_rot;
-        l.n_disc += int(o.touching);
+        ++l.n_disc;
     };
     auto add_to_j = [load](size_t j, const PairOut& o) {
         DiscLoad& l = load[j];
         l.dissipated += 0.5 * o.dissipated;
+        if (!o.touching) return;
         l.force += o.f;
         l.torque += o.torque_j;
         l.k_tran += o.k_tran;
         l.k_rot += o.k_rot;
-        l.n_disc += int(o.touching);
+        ++l.n_disc;
     };
     auto range_pass = [&](int t) {
         const auto started = std::chrono::steady_clock::now();
@@ -488,46 +485,22 @@ void World::compute_forces(bool then_integrate) {
         // this range's own cross contacts, in list order
         size_t next = cross_start_[size_t(t)];
         size_t next_k = next < cross_.size() ? size_t(cross_[next]) : SIZE_MAX;
-        for (size_t k = k0; k < k1;) {
+        for (size_t k = k0; k < k1; ++k) {
             DiscContact& c = dd_[k];
             if (k == next_k) {  // computed in 1.
                 add_to_i(size_t(c.i), cross_out_[next]);
                 ++next;
                 next_k = next < cross_.size() ? size_t(cross_[next]) : SIZE_MAX;
-                ++k;
-                continue;
-            }
-            if (kUseX2 && k + 1 < k1 && k + 1 != next_k) {
-                // two of the range's own pairs at once (pair_kernel_x2.h: the same bits), added
-                // in list order
-                DiscContact& c1 = dd_[k + 1];
-                PairOut o[2];
-                double overlap[2];
-                const int faulted = disc_pair_force_x2(discs, pp, c, c1, o[0], o[1], overlap);
-                if (faulted & 1) {
-                    disc_fault(k, overlap[0], t);
-                } else {
-                    add_to_i(size_t(c.i), o[0]);
-                    add_to_j(size_t(c.j), o[0]);
-                }
-                if (faulted & 2) {
-                    disc_fault(k + 1, overlap[1], t);
-                } else {
-                    add_to_i(size_t(c1.i), o[1]);
-                    add_to_j(size_t(c1.j), o[1]);
-                }
-                k += 2;
                 continue;
             }
             PairOut o;
             double overlap = 0.0;
             if (!disc_pair_force(discs, pp, c, o, overlap)) {
                 disc_fault(k, overlap, t);
-            } else {
-                add_to_i(size_t(c.i), o);
-                add_to_j(size_t(c.j), o);
+                continue;
             }
-            ++k;
+            add_to_i(size_t(c.i), o);
+            add_to_j(size_t(c.j), o);
         }
 
         // disc-wall: n from the wall (A) to the disc (B)
