@@ -60,8 +60,8 @@ struct RunSummary {
     double broadphase_margin = 0;       // m, the fat boxes' pad
     long broadphase_updates = 0;        // candidate-list rebuilds
     long broadphase_reinserts = 0;      // discs re-inserted into the tree
-    double mean_disc_candidates = 0;    // disc-disc candidate pairs per step
-    double mean_disc_touching = 0;      // of which touching
+    double broadphase_mean_candidates = 0;    // disc-disc candidate pairs per step
+    double broadphase_mean_touching = 0;      // of which touching
 };
 
 RunSummary run_scenario(const Scenario& s, const RunOptions& o);

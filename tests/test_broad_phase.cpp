@@ -126,3 +126,29 @@ TEST(BroadPhase, DiagonalNeighboursWhoseBoxesOverlapAreNotCandidates) {
     EXPECT_EQ(w.disc_contacts().size(), size_t(2 * n * (n - 1)));
     for (const DiscContact& c : w.disc_contacts()) EXPECT_TRUE(c.j == c.i + 1 || c.j == c.i + n) << c.i << "-" << c.j;
 }
+
+// A disc that shrinks keeps its fat box, but its centre may then roam a larger part of it: the
+// pairs dropped for its old radius must be looked at again. Disc 0 (r 1 mm at the origin) and
+// disc 1 (r 1 mm at 2.2, 2.2 mm) cannot touch from within their boxes (centre boxes 2.008 mm
+// apart); after disc 0 shrinks to 0.5 mm both can move inside their boxes to 1.41 mm apart,
+// below the new sum of radii, 1.5 mm.
+TEST(BroadPhase, AShrunkDiscGetsItsCandidatesAgain) {
+    WorldDef def;
+    def.broadphase_margin = 0.0005;
+    def.gravity = Vec2::Zero();
+    World w(def);
+    const int m = w.add_material(material(0.3));
+    w.add_disc({Vec2(0.0, 0.0), 0.001, Vec2::Zero(), 0, 0, m});
+    w.add_disc({Vec2(0.0022, 0.0022), 0.001, Vec2::Zero(), 0, 0, m});
+    w.finalize();
+    ASSERT_NEAR(w.broad_phase_margin(), 0.1 / 256.0, 1e-9);
+    EXPECT_TRUE(w.disc_contacts().empty());
+    w.set_radius(0, 0.0005);
+    w.refresh_dashpots();
+    // both still inside their fat boxes (0.39 mm pad), so neither is re-inserted for moving
+    w.set_position(0, Vec2(0.00085, 0.00085));
+    w.set_position(1, Vec2(0.00185, 0.00185));
+    w.step();
+    ASSERT_EQ(w.disc_contacts().size(), 1u);
+    EXPECT_EQ(w.touching_disc_pairs(), 1);
+}

@@ -95,6 +95,19 @@ TEST(GeometryA20, GenerationToRestBalancesAndDeterminism) {
         EXPECT_LT(s.energy_balance_error, 0.01);
     }
     {
+        SCOPED_TRACE("the summary reports the broad phase");
+        EXPECT_GT(s.broadphase_margin, 0.0);
+        EXPECT_GT(s.broadphase_updates, 0);
+        EXPECT_GT(s.broadphase_reinserts, 0);
+        EXPECT_GT(s.broadphase_mean_touching, 0.0);
+        // a candidate may not touch, a touching pair is always a candidate
+        EXPECT_LE(s.broadphase_mean_touching, s.broadphase_mean_candidates);
+        const std::string json = read_file(first.dir / "summary.json");
+        for (const char* key : {"broadphase_margin", "broadphase_updates", "broadphase_reinserts",
+                                "broadphase_mean_candidates", "broadphase_mean_touching"})
+            EXPECT_NE(json.find(std::string("\"") + key + "\": "), std::string::npos) << key;
+    }
+    {
         SCOPED_TRACE("the run numbers its discs in space order (strips 4 r_max wide, up each strip)");
         const ReleaseMass m = load_release((first.dir / "release.csv").string());
         double x_min = INFINITY, r_max = 0.0;
