@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "thread_pool.h"
+
 namespace demlab {
 
 namespace {
@@ -47,7 +49,7 @@ void BroadPhase::read_fat(int32_t proxy, Vec2& lo, Vec2& hi) const {
     hi = Vec2(double(f.upperBound.x) / scale_, double(f.upperBound.y) / scale_);
 }
 
-void BroadPhase::query(const Vec2& lo, const Vec2& hi, std::vector<int32_t>& hits) {
+void BroadPhase::query(const Vec2& lo, const Vec2& hi, std::vector<int32_t>& hits) const {
     hits.clear();
     Collector c{&hits, &tree_};
     // the stored fat boxes are exactly representable in tree units
@@ -55,7 +57,27 @@ void BroadPhase::query(const Vec2& lo, const Vec2& hi, std::vector<int32_t>& hit
     box.lowerBound.Set(float(lo.x() * scale_), float(lo.y() * scale_));
     box.upperBound.Set(float(hi.x() * scale_), float(hi.y() * scale_));
     tree_.Query(&c, box);
-    ++stats_.queries;
+}
+
+// Read-only on the tree and the boxes (the re-insertions are done), so the threads can share
+// the escaped discs. A pair of two escaped discs is taken from the lower index.
+void BroadPhase::query_escaped(size_t begin, size_t end, QueryChunk& out) const {
+    out.dd.clear();
+    out.dw.clear();
+    for (size_t e = begin; e < end; ++e) {
+        const int32_t i = escaped_list_[e];
+        query(fat_lo_[size_t(i)], fat_hi_[size_t(i)], out.hits);
+        for (int32_t code : out.hits) {
+            const int32_t idx = code >> 1;
+            if (code & 1) {
+                out.dw.push_back(pair_key(i, pieces_[size_t(idx)].wall));
+            } else if (idx != i && !(escaped_[size_t(idx)] && idx < i) && may_touch(i, idx)) {
+                out.dd.push_back(idx < i ? pair_key(idx, i) : pair_key(i, idx));
+            }
+        }
+    }
+    out.queries = long(end - begin);
+    std::sort(out.dd.begin(), out.dd.end());
 }
 
 // Can discs i and j touch while each stays inside its fat box? The fat boxes of a dense pack
@@ -118,24 +140,10 @@ void BroadPhase::init(double margin_target, double wall_piece_length, const std:
     }
     dd_.clear();
     dw_.clear();
-    // all discs are in escaped_list_: the common path below finds every pair
-    std::vector<uint8_t> none(walls.size(), 0);
-    std::vector<int32_t> list = escaped_list_;
-    // run the query part of update()
+    // every disc is escaped: the query part of update() finds every pair
     scratch_dd_.clear();
     scratch_dw_.clear();
-    for (int32_t i : list) {
-        query(fat_lo_[i], fat_hi_[i], hits_);
-        for (int32_t code : hits_) {
-            const int32_t idx = code >> 1;
-            if (code & 1) {
-                scratch_dw_.push_back(pair_key(i, pieces_[idx].wall));
-            } else if (idx > i && may_touch(i, idx)) {
-                scratch_dd_.push_back(pair_key(i, idx));
-            }
-        }
-    }
-    std::sort(scratch_dd_.begin(), scratch_dd_.end());
+    query_all_escaped();
     std::sort(scratch_dw_.begin(), scratch_dw_.end());
     scratch_dw_.erase(std::unique(scratch_dw_.begin(), scratch_dw_.end()), scratch_dw_.end());
     dd_.swap(scratch_dd_);
@@ -143,6 +151,31 @@ void BroadPhase::init(double margin_target, double wall_piece_length, const std:
     std::fill(escaped_.begin(), escaped_.end(), 0);
     escaped_list_.clear();
     ++stats_.updates;
+}
+
+// The escaped discs' candidates, appended to scratch_dd_ (kept in key order: what it held
+// must be sorted) and scratch_dw_ (unsorted). Each thread takes a contiguous part of
+// escaped_list_ and sorts its pairs; the parts are merged in key order, so the list does not
+// depend on the number of threads.
+void BroadPhase::query_all_escaped() {
+    const size_t n = escaped_list_.size();
+    const int threads = pool_ && n >= kMinSharedQueries ? pool_->size() : 1;
+    if (chunks_.size() < size_t(threads)) chunks_.resize(size_t(threads));
+    auto part = [&](int k) {
+        query_escaped(n * size_t(k) / size_t(threads), n * size_t(k + 1) / size_t(threads), chunks_[size_t(k)]);
+    };
+    if (threads == 1)
+        part(0);
+    else
+        pool_->for_each_thread(part);
+    for (int k = 0; k < threads; ++k) {
+        const QueryChunk& c = chunks_[size_t(k)];
+        const auto mid = scratch_dd_.insert(scratch_dd_.end(), c.dd.begin(), c.dd.end());
+        std::inplace_merge(scratch_dd_.begin(), mid, scratch_dd_.end());
+        scratch_dw_.insert(scratch_dw_.end(), c.dw.begin(), c.dw.end());
+        stats_.queries += c.queries;
+        if (threads > 1) stats_.shared_queries += c.queries;
+    }
 }
 
 bool BroadPhase::update(const std::vector<Vec2>& pos, const std::vector<double>& radius,
@@ -219,33 +252,21 @@ bool BroadPhase::update(const std::vector<Vec2>& pos, const std::vector<double>&
     scratch_dd_.clear();
     for (uint64_t key : dd_)
         if (!escaped_[key_first(key)] && !escaped_[key_second(key)]) scratch_dd_.push_back(key);
-    const size_t kept_dd = scratch_dd_.size();
     scratch_dw_.clear();
     for (uint64_t key : dw_)
         if (!escaped_[key_first(key)] && !changed[key_second(key)]) scratch_dw_.push_back(key);
 
-    // query the escaped discs; a pair of two escaped discs is taken from the lower index
-    for (int32_t i : escaped_list_) {
-        query(fat_lo_[i], fat_hi_[i], hits_);
-        for (int32_t code : hits_) {
-            const int32_t idx = code >> 1;
-            if (code & 1) {
-                scratch_dw_.push_back(pair_key(i, pieces_[idx].wall));
-            } else if (idx != i && !(escaped_[idx] && idx < i) && may_touch(i, idx)) {
-                scratch_dd_.push_back(idx < i ? pair_key(idx, i) : pair_key(i, idx));
-            }
-        }
-    }
+    // query the escaped discs
+    query_all_escaped();
     // query the moved walls' pieces for the discs around them
     for (const Piece& pc : pieces_) {
         if (pc.proxy < 0 || !changed[pc.wall]) continue;
         query(pc.fat_lo, pc.fat_hi, hits_);
+        ++stats_.queries;
         for (int32_t code : hits_)
             if (!(code & 1)) scratch_dw_.push_back(pair_key(code >> 1, pc.wall));
     }
 
-    std::sort(scratch_dd_.begin() + long(kept_dd), scratch_dd_.end());
-    std::inplace_merge(scratch_dd_.begin(), scratch_dd_.begin() + long(kept_dd), scratch_dd_.end());
     std::sort(scratch_dw_.begin(), scratch_dw_.end());
     scratch_dw_.erase(std::unique(scratch_dw_.begin(), scratch_dw_.end()), scratch_dw_.end());
     dd_.swap(scratch_dd_);

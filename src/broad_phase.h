@@ -23,6 +23,8 @@
 
 namespace demlab {
 
+class ThreadPool;
+
 inline uint64_t pair_key(int32_t a, int32_t b) { return (uint64_t(uint32_t(a)) << 32) | uint32_t(b); }
 inline int32_t key_first(uint64_t k) { return int32_t(k >> 32); }
 inline int32_t key_second(uint64_t k) { return int32_t(k & 0xffffffffu); }
@@ -31,6 +33,7 @@ struct BroadPhaseStats {
     long updates = 0;          // calls to update() that changed the candidate lists
     long disc_reinserts = 0;   // discs re-inserted after leaving their fat box
     long queries = 0;
+    long shared_queries = 0;   // of these, queries shared out among the pool's threads
 };
 
 class BroadPhase {
@@ -63,6 +66,13 @@ public:
     double margin() const { return margin_; }
     const BroadPhaseStats& stats() const { return stats_; }
 
+    // Shares the escaped discs' queries among the pool's threads (nullptr: the caller alone).
+    // The lists are the same: each thread's pairs are sorted and merged in key order.
+    void set_pool(ThreadPool* pool) { pool_ = pool; }
+    // Fewer escaped discs than this are queried by the caller alone: a query costs about a
+    // microsecond, the hand-over tens of them when the other thread has gone to sleep.
+    static constexpr size_t kMinSharedQueries = 256;
+
 private:
     struct Piece {
         int32_t wall;
@@ -72,8 +82,16 @@ private:
     };
     b2AABB to_tree(const Vec2& lo, const Vec2& hi) const;
     void read_fat(int32_t proxy, Vec2& lo, Vec2& hi) const;
-    void query(const Vec2& lo, const Vec2& hi, std::vector<int32_t>& hits);
+    void query(const Vec2& lo, const Vec2& hi, std::vector<int32_t>& hits) const;
     bool may_touch(int32_t i, int32_t j) const;
+    // the candidates of escaped discs escaped_list_[begin, end) into `out` (pairs sorted)
+    struct QueryChunk {
+        std::vector<int32_t> hits;
+        std::vector<uint64_t> dd, dw;
+        long queries = 0;
+    };
+    void query_escaped(size_t begin, size_t end, QueryChunk& out) const;
+    void query_all_escaped();
 
     b2DynamicTree tree_;
     double scale_ = 1.0;
@@ -86,6 +104,8 @@ private:
     std::vector<uint8_t> escaped_;
     std::vector<int32_t> escaped_list_, hits_;
     std::vector<uint8_t> wall_changed_;  // per wall, in update()
+    std::vector<QueryChunk> chunks_;     // per thread, kept between updates (no allocation)
+    ThreadPool* pool_ = nullptr;
     BroadPhaseStats stats_;
 };
 

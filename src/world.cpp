@@ -33,7 +33,7 @@ void validate(const WorldDef& d, const std::string& where) {
     require_range(where + ".max_overlap_ratio", d.max_overlap_ratio, 1e-6, 2.0, false, "(ratio)");
 }
 
-World::World(const WorldDef& def) : def_(def), pool_(std::make_unique<ThreadPool>(def.threads)) {}
+World::World(const WorldDef& def) : def_(def), pool_(std::make_unique<ThreadPool>(def.threads)) { broad_.set_pool(pool_.get()); }
 
 World::~World() = default;
 World::World(World&&) noexcept = default;

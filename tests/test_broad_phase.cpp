@@ -96,6 +96,54 @@ TEST(BroadPhase, ContactSetEqualsBruteForceOnRandomConfigurations) {
     }
 }
 
+// The escaped discs' queries are shared among the threads (BroadPhase::query_all_escaped);
+// the candidate lists must be the same, pair for pair and in the same order.
+TEST(BroadPhase, SharedQueriesGiveTheSameCandidateLists) {
+    auto build = [](int threads) {
+        WorldDef def;
+        def.rotation.model = 2;
+        def.rotation.u_rr = 0.0;
+        def.threads = threads;
+        auto w = std::make_unique<World>(def);
+        const int m = w->add_material(material(0.3));
+        std::mt19937_64 rng(7);
+        std::vector<Vec2> placed;
+        std::vector<double> radii;
+        while (placed.size() < 700) {
+            const double r = uniform(rng, 0.001, 0.002);
+            const Vec2 p(uniform(rng, 0.02, 0.13), uniform(rng, 0.03, 0.15));
+            bool free = true;
+            for (size_t k = 0; k < placed.size() && free; ++k) free = (placed[k] - p).norm() >= r + radii[k];
+            if (!free) continue;
+            placed.push_back(p);
+            radii.push_back(r);
+            w->add_disc({p, r, Vec2(uniform(rng, -3, 3), uniform(rng, -3, 3)), 0, 0, m});
+        }
+        w->add_wall(segment(Vec2(-0.05, 0.02), Vec2(0.3, 0.0), 0.3, SegmentSolid::Right));
+        w->add_wall(arc(Vec2(0.075, 0.35), 0.34, 200, 340, ArcSolid::Outside, 0.3));
+        w->add_wall(segment(Vec2(0.0, 0.3), Vec2(0.0, -0.1), 0.3, SegmentSolid::Right));
+        w->finalize();
+        return w;
+    };
+    auto keys = [](const World& w) {
+        std::vector<std::pair<int, int>> k;
+        for (const DiscContact& c : w.disc_contacts()) k.push_back({c.i, c.j});
+        for (const WallContact& c : w.wall_contacts()) k.push_back({-1 - c.disc, c.wall});
+        return k;
+    };
+    auto one = build(1), two = build(2);
+    for (int round = 0; round < 8; ++round) {
+        ASSERT_EQ(keys(*one), keys(*two)) << "round " << round;
+        one->run(50);
+        two->run(50);
+    }
+    EXPECT_EQ(one->broad_phase_stats().queries, two->broad_phase_stats().queries);
+    EXPECT_EQ(one->broad_phase_stats().shared_queries, 0);
+    // beyond the first build's 700 queries, updates were shared too
+    EXPECT_GT(two->broad_phase_stats().shared_queries, 700 + 256);
+    EXPECT_EQ(one->positions(), two->positions());
+}
+
 TEST(BroadPhase, MarginIsAPowerOfTwoFractionOfTheTreePad) {
     WorldDef def;
     def.broadphase_margin = 0.0005;
