@@ -1,6 +1,7 @@
 // The broad phase finds every touching pair: its contact set equals a brute-force search.
 #include <gtest/gtest.h>
 
+#include <memory>
 #include <random>
 #include <set>
 
@@ -46,6 +47,35 @@ PairSet brute_force_walls(const World& w) {
     return s;
 }
 
+// A box of dense, random, not overlapping discs (rejection sampling) flying in all
+// directions at up to v_max, with a floor, a curved wall and a side wall; finalized.
+std::unique_ptr<World> random_flying_world(unsigned seed, size_t count, double r_max, double v_max, int threads = 1) {
+    WorldDef def;
+    def.rotation.model = 2;
+    def.rotation.u_rr = 0.0;
+    def.threads = threads;
+    auto w = std::make_unique<World>(def);
+    const int m = w->add_material(material(0.3));
+    std::mt19937_64 rng(seed);
+    std::vector<Vec2> placed;
+    std::vector<double> radii;
+    while (placed.size() < count) {
+        const double r = uniform(rng, 0.001, r_max);
+        const Vec2 p(uniform(rng, 0.02, 0.13), uniform(rng, 0.03, 0.15));
+        bool free = true;
+        for (size_t k = 0; k < placed.size() && free; ++k) free = (placed[k] - p).norm() >= r + radii[k];
+        if (!free) continue;
+        placed.push_back(p);
+        radii.push_back(r);
+        w->add_disc({p, r, Vec2(uniform(rng, -v_max, v_max), uniform(rng, -v_max, v_max)), 0, 0, m});
+    }
+    w->add_wall(segment(Vec2(-0.05, 0.02), Vec2(0.3, 0.0), 0.3, SegmentSolid::Right));
+    w->add_wall(arc(Vec2(0.075, 0.35), 0.34, 200, 340, ArcSolid::Outside, 0.3));
+    w->add_wall(segment(Vec2(0.0, 0.3), Vec2(0.0, -0.1), 0.3, SegmentSolid::Right));
+    w->finalize();
+    return w;
+}
+
 PairSet engine_walls(const World& w) {
     PairSet s;
     for (const WallContact& c : w.wall_contacts()) {
@@ -60,29 +90,8 @@ PairSet engine_walls(const World& w) {
 
 TEST(BroadPhase, ContactSetEqualsBruteForceOnRandomConfigurations) {
     for (unsigned seed : {1u, 2u, 3u}) {
-        WorldDef def;
-        def.rotation.model = 2;
-        def.rotation.u_rr = 0.0;
-        World w(def);
-        const int m = w.add_material(material(0.3));
-        std::mt19937_64 rng(seed);
-        // dense, random, not overlapping (rejection sampling), flying in all directions
-        std::vector<Vec2> placed;
-        std::vector<double> radii;
-        while (placed.size() < 600) {
-            const double r = uniform(rng, 0.001, 0.003);
-            const Vec2 p(uniform(rng, 0.02, 0.13), uniform(rng, 0.03, 0.15));
-            bool free = true;
-            for (size_t k = 0; k < placed.size() && free; ++k) free = (placed[k] - p).norm() >= r + radii[k];
-            if (!free) continue;
-            placed.push_back(p);
-            radii.push_back(r);
-            w.add_disc({p, r, Vec2(uniform(rng, -2, 2), uniform(rng, -2, 2)), 0, 0, m});
-        }
-        w.add_wall(segment(Vec2(-0.05, 0.02), Vec2(0.3, 0.0), 0.3, SegmentSolid::Right));
-        w.add_wall(arc(Vec2(0.075, 0.35), 0.34, 200, 340, ArcSolid::Outside, 0.3));
-        w.add_wall(segment(Vec2(0.0, 0.3), Vec2(0.0, -0.1), 0.3, SegmentSolid::Right));
-        w.finalize();
+        const auto world = random_flying_world(seed, 600, 0.003, 2.0);
+        World& w = *world;
         long touching_seen = 0;
         for (int round = 0; round < 10; ++round) {
             w.run(round == 0 ? 1 : 300);
@@ -99,32 +108,7 @@ TEST(BroadPhase, ContactSetEqualsBruteForceOnRandomConfigurations) {
 // The escaped discs' queries are shared among the threads (BroadPhase::query_all_escaped);
 // the candidate lists must be the same, pair for pair and in the same order.
 TEST(BroadPhase, SharedQueriesGiveTheSameCandidateLists) {
-    auto build = [](int threads) {
-        WorldDef def;
-        def.rotation.model = 2;
-        def.rotation.u_rr = 0.0;
-        def.threads = threads;
-        auto w = std::make_unique<World>(def);
-        const int m = w->add_material(material(0.3));
-        std::mt19937_64 rng(7);
-        std::vector<Vec2> placed;
-        std::vector<double> radii;
-        while (placed.size() < 700) {
-            const double r = uniform(rng, 0.001, 0.002);
-            const Vec2 p(uniform(rng, 0.02, 0.13), uniform(rng, 0.03, 0.15));
-            bool free = true;
-            for (size_t k = 0; k < placed.size() && free; ++k) free = (placed[k] - p).norm() >= r + radii[k];
-            if (!free) continue;
-            placed.push_back(p);
-            radii.push_back(r);
-            w->add_disc({p, r, Vec2(uniform(rng, -3, 3), uniform(rng, -3, 3)), 0, 0, m});
-        }
-        w->add_wall(segment(Vec2(-0.05, 0.02), Vec2(0.3, 0.0), 0.3, SegmentSolid::Right));
-        w->add_wall(arc(Vec2(0.075, 0.35), 0.34, 200, 340, ArcSolid::Outside, 0.3));
-        w->add_wall(segment(Vec2(0.0, 0.3), Vec2(0.0, -0.1), 0.3, SegmentSolid::Right));
-        w->finalize();
-        return w;
-    };
+    auto build = [](int threads) { return random_flying_world(7, 700, 0.002, 3.0, threads); };
     auto keys = [](const World& w) {
         std::vector<std::pair<int, int>> k;
         for (const DiscContact& c : w.disc_contacts()) k.push_back({c.i, c.j});
