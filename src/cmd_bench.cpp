@@ -20,6 +20,7 @@ struct BenchOptions {
     std::string file;
     bool peer = false;
     int threads = 1;
+    bool scalar = false;
 };
 
 // Runs the LAMMPS script and returns its particle-steps/s (0 if it could not run).
@@ -46,6 +47,7 @@ int bench(const BenchOptions& o) {
     const auto discs = read_xyr(path);
     WorldDef def = db9k_world_def();
     def.threads = o.threads;
+    def.simd = !o.scalar;
     World world(def);
     build_db9k(world, discs);
     world.finalize();
@@ -60,7 +62,8 @@ int bench(const BenchOptions& o) {
     progress.finish();
     const double rate = double(world.disc_count()) * double(o.steps) / secs;
     const auto& bs = world.broad_phase_stats();
-    std::printf("DB-9k: N=%zu steps=%ld dt=%g s threads=%d\n", world.disc_count(), o.steps, world.dt(), o.threads);
+    std::printf("DB-9k: N=%zu steps=%ld dt=%g s threads=%d, %s pair kernel\n", world.disc_count(), o.steps, world.dt(),
+                o.threads, world.simd_kernel() ? "AVX2" : "scalar");
     std::printf("  wall time %.3f s, %.3e particle-steps/s, %.1f ns per particle-step\n", secs, rate,
                 1e9 * secs / (double(world.disc_count()) * double(o.steps)));
     std::printf("  broad phase: margin %.3g m, %ld updates, %ld re-insertions; contacts now %ld disc-disc, %ld disc-wall\n",
@@ -96,6 +99,7 @@ Command add_bench_command(CLI::App& app) {
     sub->add_option("--file", opts->file, "Initial state 'id x y r' (default: the repository's bench/db9k/db9k_initial.xyr)");
     sub->add_option("--threads", opts->threads, "Worker threads (the final state is the same bits for any count)")
         ->capture_default_str()->check(CLI::Range(1, 64));
+    sub->add_flag("--scalar", opts->scalar, "Use the scalar pair kernel even if the CPU has AVX2 (the same bits; for comparison)");
     sub->add_flag("--peer", opts->peer, "Also run LAMMPS (bench/db9k/lammps/run.sh) on the same work and print the ratio");
     return [opts] { return bench(*opts); };
 }

@@ -29,6 +29,7 @@ struct RunCliOptions {
     bool force = false;
     bool frames = false;
     int threads = 1;
+    bool scalar = false;
     bool no_plots = false;
     double checkpoint_every = 0.0;
 };
@@ -67,6 +68,7 @@ int run_command(const RunCliOptions& o) {
     for (const std::string& a : o.set) apply_override(s, a);
     finish_scenario(s);
     s.world.threads = o.threads;
+    s.world.simd = !o.scalar;
     RunOptions ro;
     ro.out_dir = o.out.empty() ? "runs/" + s.name : o.out;
     ro.force = o.force;
@@ -96,6 +98,7 @@ Command add_run_command(CLI::App& app) {
     sub->add_flag("--force", o->force, "Replace the files of an existing output folder");
     sub->add_option("--threads", o->threads, "Worker threads (results are the same bits for any count)")
         ->capture_default_str()->check(CLI::Range(1, 64));
+    sub->add_flag("--scalar", o->scalar, "Use the scalar pair kernel even if the CPU has AVX2 (the same bits; for comparison)");
     sub->add_flag("--frames", o->frames, "Render a PNG frame at every snapshot while running (RUN_DIR/frames)");
     sub->add_flag("--no-plots", o->no_plots, "Do not make the plots (RUN_DIR/plots) at the end");
     sub->add_option("--checkpoint-every", o->checkpoint_every,

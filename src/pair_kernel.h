@@ -5,6 +5,7 @@
 #pragma once
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <cstdint>
 
 #include "contact_law.h"
@@ -120,5 +121,29 @@ inline LinearContactForce step_contact(const LinearContactParams& p, double over
     out.touching = true;
     return true;
 }
+
+// A batch of pairs' results by field (structure of arrays): what disc_pairs_avx2 leaves for
+// the force pass to add into the discs in list order. An open pair's force, torques and
+// stiffnesses are +0, so the force pass adds every pair without a branch: x + (+0) is x for
+// every x but -0, and a sum that starts at +0 never becomes -0 (round to nearest), so the
+// sums are the bits the scalar pass gets by skipping the open pairs.
+struct PairBatch {
+    static constexpr size_t kSize = 64;  // pairs; the batch stays in L1 between kernel and gather
+    alignas(32) double fx[kSize], fy[kSize];     // force on j (B), N/m; i gets the opposite
+    alignas(32) double torque_i[kSize], torque_j[kSize];  // N m / m
+    alignas(32) double dissipated[kSize];        // J/m, half to each disc
+    alignas(32) double k_tran[kSize], k_rot[kSize];  // N/m, the pair's stiffnesses for the step bound
+    alignas(32) int32_t touching[kSize];         // 1 or 0
+};
+
+// Does this CPU run disc_pairs_avx2? (checked once per World)
+bool cpu_has_avx2();
+
+// disc_pair_force for contacts c[0, n) (n <= PairBatch::kSize), four at a time with AVX2, the
+// same bits; results into out at the contacts' offsets. Returns how many contacts it did: a
+// multiple of 4, less than n when the rest do not fill a group of four or when a group holds
+// a blown-up pair (that group is left untouched for the scalar kernel to report). Only call
+// it when cpu_has_avx2().
+size_t disc_pairs_avx2(const DiscArrays& d, const PairPassParams& p, DiscContact* c, size_t n, PairBatch& out);
 
 }  // namespace demlab

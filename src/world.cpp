@@ -33,7 +33,11 @@ void validate(const WorldDef& d, const std::string& where) {
     require_range(where + ".max_overlap_ratio", d.max_overlap_ratio, 1e-6, 2.0, false, "(ratio)");
 }
 
-World::World(const WorldDef& def) : def_(def), pool_(std::make_unique<ThreadPool>(def.threads)) { broad_.set_pool(pool_.get()); }
+World::World(const WorldDef& def)
+    : def_(def), pool_(std::make_unique<ThreadPool>(def.threads)), avx2_(def.simd && cpu_has_avx2()) {
+    broad_.set_pool(pool_.get());
+    if (avx2_) pair_batch_.resize(size_t(pool_->size()));
+}
 
 World::~World() = default;
 World::World(World&&) noexcept = default;
@@ -485,6 +489,7 @@ void World::compute_forces(bool then_integrate) {
         // this range's own cross contacts, in list order
         size_t next = cross_start_[size_t(t)];
         size_t next_k = next < cross_.size() ? size_t(cross_[next]) : SIZE_MAX;
+        PairBatch* const batch = avx2_ ? &pair_batch_[size_t(t)] : nullptr;
         for (size_t k = k0; k < k1; ++k) {
             DiscContact& c = dd_[k];
             if (k == next_k) {  // computed in 1.
@@ -492,6 +497,39 @@ void World::compute_forces(bool then_integrate) {
                 ++next;
                 next_k = next < cross_.size() ? size_t(cross_[next]) : SIZE_MAX;
                 continue;
+            }
+            if (batch) {
+                // up to a batch of pairs before the next cross contact, four at a time, then
+                // added in list order (what the scalar kernel below does pair by pair)
+                const size_t n = std::min({k1, next_k, k + PairBatch::kSize}) - k;
+                const size_t done = disc_pairs_avx2(discs, pp, &c, n, *batch);
+                // locals, not the closure's references: the stores into the loads may alias
+                // anything the closure holds, and GCC then reloaded the pointers every pair
+                DiscLoad* const ld = load;
+                const DiscContact* const cd = &c;
+                for (size_t b = 0; b < done; ++b) {
+                    const DiscContact& cb = cd[b];
+                    const double half_dissipated = 0.5 * batch->dissipated[b];
+                    const Vec2 f(batch->fx[b], batch->fy[b]);
+                    DiscLoad& li = ld[size_t(cb.i)];
+                    li.dissipated += half_dissipated;
+                    li.force -= f;
+                    li.torque += batch->torque_i[b];
+                    li.k_tran += batch->k_tran[b];
+                    li.k_rot += batch->k_rot[b];
+                    li.n_disc += batch->touching[b];
+                    DiscLoad& lj = ld[size_t(cb.j)];
+                    lj.dissipated += half_dissipated;
+                    lj.force += f;
+                    lj.torque += batch->torque_j[b];
+                    lj.k_tran += batch->k_tran[b];
+                    lj.k_rot += batch->k_rot[b];
+                    lj.n_disc += batch->touching[b];
+                }
+                if (done > 0) {
+                    k += done - 1;
+                    continue;
+                }
             }
             PairOut o;
             double overlap = 0.0;

@@ -49,6 +49,8 @@ struct WorldDef {
     Vec2 domain_lo{-1e30, -1e30};          // m, a disc centre leaving [lo, hi] stops the run
     Vec2 domain_hi{1e30, 1e30};
     int threads = 1;                       // worker threads; results are the same bits for any count
+    bool simd = true;                      // the disc-disc kernel 4 pairs at a time when the CPU has AVX2
+                                           // (pair_kernel_avx2.cpp); the same bits as the scalar kernel
 };
 
 void validate(const WorldDef& d, const std::string& where);
@@ -140,6 +142,7 @@ public:
     // The force pass's split (world.cpp): disc ranges (one per thread when shared out) and how
     // many candidate pairs cross from one range to another (computed into slots first).
     int force_pass_ranges() const { return force_ranges_; }
+    bool simd_kernel() const { return avx2_; }  // the AVX2 pair kernel is in use
     size_t cross_contacts() const { return cross_.size(); }
     // per range: its share of the work model (discs + owned contacts) after the measured
     // balancing, and how often the ranges were re-cut to balance their times
@@ -262,6 +265,8 @@ private:
     std::vector<PairOut> cross_out_;        // their results, same order
     std::vector<int32_t> cross_in_start_, cross_in_;  // per range: the cross contacts whose j it owns (CSR)
     int force_ranges_ = 1;
+    bool avx2_ = false;                     // def_.simd and the CPU has AVX2
+    std::vector<PairBatch> pair_batch_;     // per range: the AVX2 kernel's results before they are added
     void split_force_pass();
     // measured balance of the ranges (balance_force_pass)
     static constexpr int kBalanceWindow = 64;          // steps between checks

@@ -1,0 +1,173 @@
+// The AVX2 pair kernel (pair_kernel_avx2.cpp) against the scalar one (pair_kernel.h): the same
+// bits for every field, every dashpot mode, open and touching pairs, sliding and sticking,
+// tension cut or not; and a blown-up pair left to the scalar kernel.
+#include <gtest/gtest.h>
+
+#include <bit>
+#include <cstring>
+#include <random>
+#include <vector>
+
+#include "db9k.h"
+#include "pair_kernel.h"
+#include "world.h"
+
+using namespace demlab;
+
+namespace {
+
+uint64_t bits(double x) { return std::bit_cast<uint64_t>(x); }
+uint32_t bits(float x) { return std::bit_cast<uint32_t>(x); }
+
+// Discs on a jittered grid, so that a neighbour pair is open, touching or deep in contact, with
+// random velocities and spins; the pairs' histories random (some zero, some beyond the
+// Coulomb cap, so that both slide and stick), two materials.
+struct KernelCase {
+    std::vector<Vec2> pos, vel;
+    std::vector<double> radius, omega;
+    std::vector<int32_t> material;
+    std::vector<PairMaterial> materials;
+    std::vector<DiscContact> contacts;
+
+    explicit KernelCase(unsigned seed, size_t n_discs = 900) {
+        std::mt19937_64 rng(seed);
+        std::uniform_real_distribution<double> u(0.0, 1.0);
+        const size_t side = 30;
+        for (size_t d = 0; d < n_discs; ++d) {
+            const double r = 0.001 + 0.0005 * u(rng);
+            pos.emplace_back(0.0024 * double(d % side) + 0.0006 * u(rng), 0.0024 * double(d / side) + 0.0006 * u(rng));
+            radius.push_back(r);
+            vel.emplace_back(6.0 * u(rng) - 3.0, 6.0 * u(rng) - 3.0);
+            omega.push_back(400.0 * u(rng) - 200.0);
+            material.push_back(int32_t(d % 3 == 0));
+        }
+        auto pm = [](double kn, double ks, double mu) { return PairMaterial{kn, ks, mu, std::max(kn, ks), 1.0 / ks}; };
+        materials = {pm(1e8, 1e8, 0.3), pm(2e8, 0.7e8, 0.5), pm(2e8, 0.7e8, 0.5), pm(3e8, 2e8, 0.0)};
+        for (size_t a = 0; a < n_discs; ++a)
+            for (size_t b = a + 1; b < n_discs; ++b) {
+                const double dist = (pos[b] - pos[a]).norm(), rsum = radius[a] + radius[b];
+                // neighbours only, none blown up (the next test covers that)
+                if (dist > 1.4 * rsum || rsum - dist > 0.45 * std::min(radius[a], radius[b])) continue;
+                DiscContact c{int32_t(a), int32_t(b), 0.0, 0.0, 0.0, 0.0f, 0.0f};
+                if (u(rng) < 0.7) {
+                    c.fs = (u(rng) - 0.5) * 2.0e4;
+                    c.damp_n = float((u(rng) - 0.5) * 2000.0);
+                    c.damp_s = u(rng) < 0.5 ? 0.0f : float((u(rng) - 0.5) * 2000.0);
+                }
+                // dashpots of the size DB-9k's have (beta 2 sqrt(m k) ~ 1000 N s/m)
+                c.cn = 2000.0 * u(rng);
+                c.cs = u(rng) < 0.3 ? 0.0 : 1000.0 * u(rng);
+                contacts.push_back(c);
+            }
+    }
+    DiscArrays arrays() const { return {pos.data(), vel.data(), radius.data(), omega.data(), material.data()}; }
+    PairPassParams params(DashpotMode mode) const { return {materials.data(), 2, mode, 3.1e-6, 2.9e-6, 0.5}; }
+};
+
+}  // namespace
+
+TEST(PairKernel, Avx2GivesTheScalarKernelsBits) {
+    if (!cpu_has_avx2()) GTEST_SKIP() << "this CPU has no AVX2";
+    for (DashpotMode mode : {DashpotMode::Full, DashpotMode::NoTension, DashpotMode::NoShearWhileSliding,
+                             DashpotMode::NoTensionNoShearWhileSliding}) {
+        const KernelCase k(11 + unsigned(mode));
+        const DiscArrays d = k.arrays();
+        const PairPassParams p = k.params(mode);
+        std::vector<DiscContact> scalar = k.contacts, simd = k.contacts;
+        size_t touching = 0, open_with_dashpots = 0, sliding = 0, tension_cut = 0, checked = 0;
+        PairBatch batch;
+        for (size_t k0 = 0; k0 < simd.size(); k0 += PairBatch::kSize) {
+            const size_t n = std::min(PairBatch::kSize, simd.size() - k0);
+            const size_t done = disc_pairs_avx2(d, p, &simd[k0], n, batch);
+            ASSERT_EQ(done, n - n % 4);  // no blown-up pair in this case
+            for (size_t b = 0; b < done; ++b) {
+                DiscContact& c = scalar[k0 + b];
+                const DiscContact before = c;
+                PairOut o{};
+                double overlap = 0.0;
+                ASSERT_TRUE(disc_pair_force(d, p, c, o, overlap));
+                const DiscContact& s = simd[k0 + b];
+                ASSERT_EQ(bits(s.fs), bits(c.fs)) << "pair " << k0 + b;
+                ASSERT_EQ(bits(s.damp_n), bits(c.damp_n)) << "pair " << k0 + b;
+                ASSERT_EQ(bits(s.damp_s), bits(c.damp_s)) << "pair " << k0 + b;
+                ASSERT_EQ(bits(batch.dissipated[b]), bits(o.dissipated)) << "pair " << k0 + b;
+                ASSERT_EQ(batch.touching[b], int32_t(o.touching)) << "pair " << k0 + b;
+                if (o.touching) {
+                    ++touching;
+                    ASSERT_EQ(bits(batch.fx[b]), bits(o.f.x())) << "pair " << k0 + b;
+                    ASSERT_EQ(bits(batch.fy[b]), bits(o.f.y())) << "pair " << k0 + b;
+                    ASSERT_EQ(bits(batch.torque_i[b]), bits(o.torque_i));
+                    ASSERT_EQ(bits(batch.torque_j[b]), bits(o.torque_j));
+                    ASSERT_EQ(bits(batch.k_tran[b]), bits(o.k_tran));
+                    ASSERT_EQ(bits(batch.k_rot[b]), bits(o.k_rot));
+                    const PairMaterial& pm = k.materials[size_t(k.material[size_t(c.i)]) * 2 + size_t(k.material[size_t(c.j)])];
+                    if (std::abs(c.fs) == pm.mu * (pm.kn * overlap)) ++sliding;
+                    if (c.damp_n != 0.0f && float(-pm.kn * overlap) == c.damp_n) ++tension_cut;
+                } else {
+                    // what the force pass adds for an open pair: +0 (PairBatch)
+                    for (double x : {batch.fx[b], batch.fy[b], batch.torque_i[b], batch.torque_j[b], batch.k_tran[b],
+                                     batch.k_rot[b]})
+                        ASSERT_EQ(bits(x), bits(0.0));
+                    if (before.damp_n != 0.0f || before.damp_s != 0.0f) ++open_with_dashpots;
+                }
+                ++checked;
+            }
+        }
+        // the case covers what it is meant to
+        EXPECT_GT(checked, 2000u);
+        EXPECT_GT(touching, checked / 5);
+        EXPECT_GT(checked - touching, checked / 5);
+        EXPECT_GT(open_with_dashpots, 100u);
+        EXPECT_GT(sliding, 50u);
+        if (mode == DashpotMode::NoTension || mode == DashpotMode::NoTensionNoShearWhileSliding) {
+            EXPECT_GT(tension_cut, 3u);
+        }
+    }
+}
+
+TEST(PairKernel, Avx2LeavesABlownUpGroupToTheScalarKernel) {
+    if (!cpu_has_avx2()) GTEST_SKIP() << "this CPU has no AVX2";
+    KernelCase k(5);
+    // pair 6 (group 4-7) overlaps by more than half the smaller radius
+    DiscContact& bad = k.contacts[6];
+    k.pos[size_t(bad.j)] = k.pos[size_t(bad.i)] + Vec2(0.1 * k.radius[size_t(bad.i)], 0.0);
+    std::vector<DiscContact> simd = k.contacts;
+    PairBatch batch;
+    const size_t done = disc_pairs_avx2(k.arrays(), k.params(DashpotMode::Full), simd.data(), 16, batch);
+    EXPECT_EQ(done, 4u);
+    for (size_t m = 4; m < 8; ++m) EXPECT_EQ(std::memcmp(&simd[m], &k.contacts[m], sizeof(DiscContact)), 0) << m;
+    PairOut o{};
+    double overlap = 0.0;
+    EXPECT_FALSE(disc_pair_force(k.arrays(), k.params(DashpotMode::Full), simd[6], o, overlap));
+}
+
+TEST(PairKernel, Avx2AndScalarWorldsGiveTheSameBits) {
+    if (!cpu_has_avx2()) GTEST_SKIP() << "this CPU has no AVX2";
+    // the whole pass (batches cut at cross contacts and range ends, the gather in list order):
+    // part of DB-9k on 2 threads, with a shear dashpot, in the default mode and in the one that cuts tension and the sliding
+    // shear dashpot
+    auto discs = read_xyr(default_db9k_path());
+    discs.resize(2000);
+    for (DashpotMode mode : {DashpotMode::Full, DashpotMode::NoTensionNoShearWhileSliding}) {
+        uint64_t h[2];
+        EnergyReport e[2];
+        for (int k = 0; k < 2; ++k) {
+            WorldDef def = db9k_world_def();
+            def.threads = 2;
+            def.simd = k == 0;
+            def.damping.dp_mode = mode;
+            def.damping.beta_s = 0.05;
+            World w(def);
+            EXPECT_EQ(w.simd_kernel(), k == 0);
+            build_db9k(w, discs);
+            w.finalize();
+            w.run(1500);
+            h[k] = state_hash(w);
+            e[k] = w.energy();
+        }
+        EXPECT_EQ(h[0], h[1]);
+        EXPECT_GT(e[0].dissipated_contacts, 0.0);
+        EXPECT_EQ(bits(e[0].dissipated_contacts), bits(e[1].dissipated_contacts));
+        EXPECT_EQ(bits(e[0].elastic), bits(e[1].elastic));
+    }
+}
