@@ -111,6 +111,7 @@ namespace {
 struct ResumeCliOptions {
     std::string dir;
     int threads = 1;
+    bool scalar = false;
     double checkpoint_every = -1.0;
 };
 
@@ -126,6 +127,7 @@ int resume_command(const ResumeCliOptions& o) {
     Scenario s = load_scenario(scenario_file);
     finish_scenario(s);
     s.world.threads = o.threads;
+    s.world.simd = !o.scalar;
     RunOptions ro;
     ro.out_dir = dir;
     ro.handle_signals = true;
@@ -158,6 +160,7 @@ Command add_resume_command(CLI::App& app) {
     sub->add_option("run_dir", o->dir, "The run folder (its scenario.toml and checkpoint.bin)")->required();
     sub->add_option("--threads", o->threads, "Worker threads (results are the same bits for any count)")
         ->capture_default_str()->check(CLI::Range(1, 64));
+    sub->add_flag("--scalar", o->scalar, "Use the scalar pair kernel even if the CPU has AVX2 (the same bits; for comparison)");
     sub->add_option("--checkpoint-every", o->checkpoint_every,
                     "Seconds of wall-clock time between checkpoints (default: as the run was started)")
         ->check(CLI::Range(0.0, 1.0e7));
