@@ -4,8 +4,11 @@
 #include <gtest/gtest.h>
 
 #include <bit>
+#include <cstdio>
 #include <cstring>
+#include <memory>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "db9k.h"
@@ -170,4 +173,34 @@ TEST(PairKernel, Avx2AndScalarWorldsGiveTheSameBits) {
         EXPECT_EQ(bits(e[0].dissipated_contacts), bits(e[1].dissipated_contacts));
         EXPECT_EQ(bits(e[0].elastic), bits(e[1].elastic));
     }
+}
+
+namespace {
+// The output of `demlab ARGS` (stdout), as `bench` prints it.
+std::string demlab_output(const std::string& args) {
+    std::unique_ptr<FILE, int (*)(FILE*)> pipe(popen((std::string(DEMLAB_EXE) + " " + args + " 2>/dev/null").c_str(), "r"),
+                                              pclose);
+    std::string out;
+    if (!pipe) return out;
+    char buf[512];
+    while (fgets(buf, sizeof buf, pipe.get())) out += buf;
+    return out;
+}
+
+std::string line_with(const std::string& text, const std::string& key) {
+    const size_t at = text.find(key);
+    if (at == std::string::npos) return "";
+    const size_t begin = text.rfind('\n', at) + 1;  // npos + 1 = 0 on the first line
+    return text.substr(begin, text.find('\n', at) - begin);
+}
+}  // namespace
+
+TEST(PairKernel, BenchScalarFlagChoosesTheKernelAndKeepsTheChecksum) {
+    const std::string simd = demlab_output("bench db9k --steps 200");
+    const std::string scalar = demlab_output("bench db9k --steps 200 --scalar");
+    EXPECT_NE(line_with(simd, cpu_has_avx2() ? "AVX2 pair kernel" : "scalar pair kernel"), "") << simd;
+    EXPECT_NE(line_with(scalar, "scalar pair kernel"), "") << scalar;
+    const std::string checksum = line_with(simd, "final-state checksum");
+    ASSERT_NE(checksum, "") << simd;
+    EXPECT_EQ(checksum, line_with(scalar, "final-state checksum"));
 }
