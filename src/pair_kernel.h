@@ -123,12 +123,18 @@ inline LinearContactForce step_contact(const LinearContactParams& p, double over
 }
 
 // A batch of pairs' results by field (structure of arrays): what disc_pairs_avx2 leaves for
-// the force pass to add into the discs in list order. An open pair's force, torques and
-// stiffnesses are +0, so the force pass adds every pair without a branch: x + (+0) is x for
-// every x but -0, and a sum that starts at +0 never becomes -0 (round to nearest), so the
-// sums are the bits the scalar pass gets by skipping the open pairs.
+// the force pass to add into the discs in list order. Only the pairs with something to do
+// are there: those touching, and those open with a history to end (a pair open before and
+// after the step, with an all-zero history, adds +0 to every sum and writes back the zeros
+// it read, so it is left out; in DB-9k half the candidates are such). index[b] is result b's
+// contact, counted from the batch's first; the results are in list order. An open pair's
+// force, torques and stiffnesses are +0, so the force pass adds every result without a
+// branch: x + (+0) is x for every x but -0, and a sum that starts at +0 never becomes -0
+// (round to nearest), so the sums are the bits the scalar pass gets by skipping open pairs.
 struct PairBatch {
     static constexpr size_t kSize = 64;  // pairs; the batch stays in L1 between kernel and gather
+    size_t count = 0;                            // results in the batch
+    alignas(32) uint32_t index[kSize + 4];       // result b is contact index[b] of the batch
     alignas(32) double fx[kSize], fy[kSize];     // force on j (B), N/m; i gets the opposite
     alignas(32) double torque_i[kSize], torque_j[kSize];  // N m / m
     alignas(32) double dissipated[kSize];        // J/m, half to each disc
@@ -140,10 +146,11 @@ struct PairBatch {
 bool cpu_has_avx2();
 
 // disc_pair_force for contacts c[0, n) (n <= PairBatch::kSize), four at a time with AVX2, the
-// same bits; results into out at the contacts' offsets. Returns how many contacts it did: a
-// multiple of 4, less than n when the rest do not fill a group of four or when a group holds
-// a blown-up pair (that group is left untouched for the scalar kernel to report). Only call
-// it when cpu_has_avx2().
+// same bits; the results of the pairs with something to do into out (see PairBatch). Returns
+// how many contacts it covered, from the first: n less n % 4 (the rest do not fill a group of
+// four), or fewer when a group of four of the pairs with something to do holds a blown-up pair:
+// then it stops before that group's first pair, and writes nothing from there on, for the
+// scalar kernel to report. Only call it when cpu_has_avx2().
 size_t disc_pairs_avx2(const DiscArrays& d, const PairPassParams& p, DiscContact* c, size_t n, PairBatch& out);
 
 }  // namespace demlab

@@ -15,6 +15,9 @@
 // Only this file's functions use AVX2; the caller asks cpu_has_avx2() first.
 #include <immintrin.h>
 
+#include <cstddef>
+#include <cstring>
+
 #include "pair_kernel.h"
 
 namespace demlab {
@@ -49,6 +52,13 @@ DEMLAB_AVX2 __m256d blend(__m256d c, __m256d a, __m256d b) { return _mm256_blend
 
 DEMLAB_AVX2 __m256d neg(__m256d a) { return _mm256_xor_pd(a, _mm256_set1_pd(-0.0)); }
 
+// For each 4-bit mask, its set lanes' numbers packed to the front (the rest: don't care).
+alignas(16) const __m128i kPackedLanes[16] = {
+    _mm_setr_epi32(0, 0, 0, 0), _mm_setr_epi32(0, 0, 0, 0), _mm_setr_epi32(1, 0, 0, 0), _mm_setr_epi32(0, 1, 0, 0),
+    _mm_setr_epi32(2, 0, 0, 0), _mm_setr_epi32(0, 2, 0, 0), _mm_setr_epi32(1, 2, 0, 0), _mm_setr_epi32(0, 1, 2, 0),
+    _mm_setr_epi32(3, 0, 0, 0), _mm_setr_epi32(0, 3, 0, 0), _mm_setr_epi32(1, 3, 0, 0), _mm_setr_epi32(0, 1, 3, 0),
+    _mm_setr_epi32(2, 3, 0, 0), _mm_setr_epi32(0, 2, 3, 0), _mm_setr_epi32(1, 2, 3, 0), _mm_setr_epi32(0, 1, 2, 3)};
+
 }  // namespace
 
 [[gnu::target("avx2")]] size_t disc_pairs_avx2(const DiscArrays& d, const PairPassParams& p, DiscContact* c, size_t n,
@@ -66,11 +76,45 @@ DEMLAB_AVX2 __m256d neg(__m256d a) { return _mm256_xor_pd(a, _mm256_set1_pd(-0.0
     const __m256d dt = _mm256_set1_pd(p.dt), last_dt = _mm256_set1_pd(p.last_dt);
     const __m256d minus_half_last_dt = _mm256_set1_pd(-0.5 * p.last_dt);
     const __m256d ratio = _mm256_set1_pd(p.max_overlap_ratio);
-    size_t g = 0;
-    for (; g + 4 <= n; g += 4) {
-        DiscContact* q = c + g;
-        const size_t i0 = size_t(q[0].i), i1 = size_t(q[1].i), i2 = size_t(q[2].i), i3 = size_t(q[3].i);
-        const size_t j0 = size_t(q[0].j), j1 = size_t(q[1].j), j2 = size_t(q[2].j), j3 = size_t(q[3].j);
+    // 1. Which pairs have something to do: touching now, or a history to end (any bit set:
+    // a -0 shear force must still become +0, as the scalar kernel writes it). The others are
+    // open before and after the step; the scalar kernel would add +0 and write back zeros.
+    static_assert(offsetof(DiscContact, damp_s) == offsetof(DiscContact, damp_n) + sizeof(float));
+    const size_t covered = n - n % 4;
+    size_t m = 0;
+    for (size_t g = 0; g < covered; g += 4) {
+        const DiscContact* q = c + g;
+        __m256d xi, yi, xj, yj;
+        load_xy(pos, size_t(q[0].i), size_t(q[1].i), size_t(q[2].i), size_t(q[3].i), xi, yi);
+        load_xy(pos, size_t(q[0].j), size_t(q[1].j), size_t(q[2].j), size_t(q[3].j), xj, yj);
+        const __m256d ri = load4(d.radius, size_t(q[0].i), size_t(q[1].i), size_t(q[2].i), size_t(q[3].i));
+        const __m256d rj = load4(d.radius, size_t(q[0].j), size_t(q[1].j), size_t(q[2].j), size_t(q[3].j));
+        const __m256d dxx = _mm256_sub_pd(xj, xi), dxy = _mm256_sub_pd(yj, yi);
+        const __m256d rsum = _mm256_add_pd(ri, rj);
+        const __m256d dist2 = _mm256_add_pd(_mm256_mul_pd(dxx, dxx), _mm256_mul_pd(dxy, dxy));
+        // the same test as below (NaN counts as touching)
+        unsigned todo = unsigned(_mm256_movemask_pd(_mm256_cmp_pd(dist2, _mm256_mul_pd(rsum, rsum), _CMP_NGE_UQ)));
+        for (unsigned l = 0; l < 4; ++l) {
+            uint64_t fs_bits, damp_bits;  // damp_n and damp_s side by side
+            std::memcpy(&fs_bits, &q[l].fs, sizeof fs_bits);
+            std::memcpy(&damp_bits, reinterpret_cast<const char*>(&q[l]) + offsetof(DiscContact, damp_n), sizeof damp_bits);
+            todo |= unsigned((fs_bits | damp_bits) != 0) << l;
+        }
+        // append the pairs to do, without a branch: their lanes packed to the front, one store
+        _mm_storeu_si128(reinterpret_cast<__m128i*>(out.index + m),
+                         _mm_add_epi32(_mm_set1_epi32(int(g)), _mm_load_si128(&kPackedLanes[todo])));
+        m += size_t(__builtin_popcount(todo));
+    }
+    // pad the last group of four with its last pair: that lane computes what the last lane
+    // did and writes the same history back; its results are not counted
+    for (size_t l = m; l % 4 != 0; ++l) out.index[l] = out.index[m - 1];
+    out.count = m;
+
+    // 2. The law, four of those pairs at a time.
+    for (size_t g = 0; g < m; g += 4) {
+        DiscContact* const q[4] = {c + out.index[g], c + out.index[g + 1], c + out.index[g + 2], c + out.index[g + 3]};
+        const size_t i0 = size_t(q[0]->i), i1 = size_t(q[1]->i), i2 = size_t(q[2]->i), i3 = size_t(q[3]->i);
+        const size_t j0 = size_t(q[0]->j), j1 = size_t(q[1]->j), j2 = size_t(q[2]->j), j3 = size_t(q[3]->j);
         __m256d xi, yi, xj, yj;
         load_xy(pos, i0, i1, i2, i3, xi, yi);
         load_xy(pos, j0, j1, j2, j3, xj, yj);
@@ -85,8 +129,13 @@ DEMLAB_AVX2 __m256d neg(__m256d a) { return _mm256_xor_pd(a, _mm256_set1_pd(-0.0
         const __m256d fault =
             _mm256_and_pd(touching, _mm256_or_pd(_mm256_cmp_pd(overlap, _mm256_mul_pd(ratio, _mm256_min_pd(rj, ri)), _CMP_NLE_UQ),
                                                  _mm256_cmp_pd(dist, zero, _CMP_EQ_OQ)));
-        // a blown-up pair: leave this group untouched; the caller's scalar kernel reports it
-        if (_mm256_movemask_pd(fault) != 0) break;
+        // A blown-up pair: leave this group untouched and stop before its first pair; the
+        // pairs left out before that one had nothing to do. The caller's scalar kernel
+        // reports it.
+        if (_mm256_movemask_pd(fault) != 0) {
+            out.count = g;
+            return out.index[g];
+        }
 
         const __m256d nx = _mm256_div_pd(dxx, dist), ny = _mm256_div_pd(dxy, dist);
         const __m256d tx = neg(ny);  // t = perp(n) = (-ny, nx)
@@ -110,11 +159,11 @@ DEMLAB_AVX2 __m256d neg(__m256d a) { return _mm256_xor_pd(a, _mm256_set1_pd(-0.0
         const __m256d ks = _mm256_set_pd(pm3->ks, pm2->ks, pm1->ks, pm0->ks);
         const __m256d mu = _mm256_set_pd(pm3->mu, pm2->mu, pm1->mu, pm0->mu);
         const __m256d inv_ks = _mm256_set_pd(pm3->inv_ks, pm2->inv_ks, pm1->inv_ks, pm0->inv_ks);
-        const __m256d cn = _mm256_set_pd(q[3].cn, q[2].cn, q[1].cn, q[0].cn);
-        const __m256d cs = _mm256_set_pd(q[3].cs, q[2].cs, q[1].cs, q[0].cs);
-        const __m256d fs_old = _mm256_set_pd(q[3].fs, q[2].fs, q[1].fs, q[0].fs);
-        const __m256d damp_n_old = _mm256_cvtps_pd(_mm_set_ps(q[3].damp_n, q[2].damp_n, q[1].damp_n, q[0].damp_n));
-        const __m256d damp_s_old = _mm256_cvtps_pd(_mm_set_ps(q[3].damp_s, q[2].damp_s, q[1].damp_s, q[0].damp_s));
+        const __m256d cn = _mm256_set_pd(q[3]->cn, q[2]->cn, q[1]->cn, q[0]->cn);
+        const __m256d cs = _mm256_set_pd(q[3]->cs, q[2]->cs, q[1]->cs, q[0]->cs);
+        const __m256d fs_old = _mm256_set_pd(q[3]->fs, q[2]->fs, q[1]->fs, q[0]->fs);
+        const __m256d damp_n_old = _mm256_cvtps_pd(_mm_set_ps(q[3]->damp_n, q[2]->damp_n, q[1]->damp_n, q[0]->damp_n));
+        const __m256d damp_s_old = _mm256_cvtps_pd(_mm_set_ps(q[3]->damp_s, q[2]->damp_s, q[1]->damp_s, q[0]->damp_s));
 
         // linear_contact (contact_law.h), operation for operation
         const __m256d fn_spring = _mm256_mul_pd(kn, overlap);
@@ -165,12 +214,12 @@ DEMLAB_AVX2 __m256d neg(__m256d a) { return _mm256_xor_pd(a, _mm256_set1_pd(-0.0
         _mm_store_ps(dn_new, _mm256_cvtpd_ps(_mm256_and_pd(touching, fn_damp)));
         _mm_store_ps(ds_new, _mm256_cvtpd_ps(_mm256_and_pd(touching, fs_damp)));
         for (int l = 0; l < 4; ++l) {
-            q[l].fs = fs_new[l];
-            q[l].damp_n = dn_new[l];
-            q[l].damp_s = ds_new[l];
+            q[l]->fs = fs_new[l];
+            q[l]->damp_n = dn_new[l];
+            q[l]->damp_s = ds_new[l];
         }
     }
-    return g;
+    return covered;
 }
 #else
 size_t disc_pairs_avx2(const DiscArrays&, const PairPassParams&, DiscContact*, size_t, PairBatch&) { return 0; }

@@ -507,8 +507,9 @@ void World::compute_forces(bool then_integrate) {
                 // anything the closure holds, and GCC then reloaded the pointers every pair
                 DiscLoad* const ld = load;
                 const DiscContact* const cd = &c;
-                for (size_t b = 0; b < done; ++b) {
-                    const DiscContact& cb = cd[b];
+                const uint32_t* const index = batch->index;
+                for (size_t b = 0, nb = batch->count; b < nb; ++b) {
+                    const DiscContact& cb = cd[index[b]];
                     const double half_dissipated = 0.5 * batch->dissipated[b];
                     const Vec2 f(batch->fx[b], batch->fy[b]);
                     DiscLoad& li = ld[size_t(cb.i)];
