@@ -122,24 +122,48 @@ inline LinearContactForce step_contact(const LinearContactParams& p, double over
     return true;
 }
 
-// A batch of pairs' results by field (structure of arrays): what disc_pairs_avx2 leaves for
-// the force pass to add into the discs in list order. Only the pairs with something to do
-// are there: those touching, and those open with a history to end (a pair open before and
-// after the step, with an all-zero history, adds +0 to every sum and writes back the zeros
-// it read, so it is left out; in DB-9k half the candidates are such). index[b] is result b's
-// contact, counted from the batch's first; the results are in list order. An open pair's
-// force, torques and stiffnesses are +0, so the force pass adds every result without a
-// branch: x + (+0) is x for every x but -0, and a sum that starts at +0 never becomes -0
-// (round to nearest), so the sums are the bits the scalar pass gets by skipping open pairs.
+// What a disc's contacts add up to in a step, in one cache line: the force pass adds a
+// contact's terms to two discs, and one line per disc instead of eight arrays cut its L1
+// misses (docs/performance.md). The first four fields are one AVX2 register and the next two
+// an SSE one, in the order PairBatch keeps a pair's results, so the AVX2 pass adds a pair to a
+// disc with two additions (add_pair_batch_avx2).
+struct alignas(64) DiscLoad {
+    Vec2 force{0.0, 0.0};      // N/m, contact forces
+    double torque = 0.0;       // N m/m
+    double k_tran = 0.0;       // N/m, sum of max(kn, ks) over touching contacts (automatic step)
+    double k_rot = 0.0;        // N/m, sum of ks
+    double dissipated = 0.0;   // J/m, half the dissipation of each of its disc-disc contacts
+    double wall_normal = 0.0;  // N/m, elastic normal force from walls (rolling resistance)
+    int32_t n_disc = 0, n_wall = 0;  // touching contacts
+};
+
+// A batch of pairs' results, a record per pair and disc in DiscLoad's order: what
+// disc_pairs_avx2 leaves for add_pair_batch_avx2 to add into the discs in list order. Only
+// the pairs with something to do are there: those touching, and those open with a history
+// to end (a pair open before and after the step, with an all-zero history, adds +0 to every
+// sum and writes back the zeros it read, so it is left out; in DB-9k half the candidates are
+// such). index[b] is result b's contact, counted from the batch's first; the results are in
+// list order. An open pair's terms are +0 (-0 for the force on i), so every result is added
+// without a branch: x + (+0) is x for every x but -0, and a sum that starts at +0 never
+// becomes -0 (round to nearest); x + (-0) is x for every x. So the sums are the bits the
+// scalar pass gets by skipping the open pairs. (i's force is added as -f: x + (-f) is x - f.)
 struct PairBatch {
-    static constexpr size_t kSize = 64;  // pairs; the batch stays in L1 between kernel and gather
-    size_t count = 0;                            // results in the batch
-    alignas(32) uint32_t index[kSize + 4];       // result b is contact index[b] of the batch
-    alignas(32) double fx[kSize], fy[kSize];     // force on j (B), N/m; i gets the opposite
-    alignas(32) double torque_i[kSize], torque_j[kSize];  // N m / m
-    alignas(32) double dissipated[kSize];        // J/m, half to each disc
-    alignas(32) double k_tran[kSize], k_rot[kSize];  // N/m, the pair's stiffnesses for the step bound
-    alignas(32) int32_t touching[kSize];         // 1 or 0
+    static constexpr size_t kSize = 64;  // pairs; the batch stays in L1 between kernel and sums
+    size_t count = 0;                          // results in the batch
+    alignas(32) uint32_t index[kSize + 4];     // result b is contact index[b] of the batch
+    alignas(32) double to_i[kSize][4];         // into disc i: -fx, -fy (N/m), torque_i (N m/m), k_tran (N/m)
+    alignas(32) double to_j[kSize][4];         // into disc j: fx, fy, torque_j, k_tran
+    alignas(32) double to_both[kSize][2];      // into both: k_rot (N/m), half the dissipation (J/m)
+    alignas(32) int32_t touching[kSize];       // 1 or 0
+
+    // force on j (B), N/m; i gets the opposite
+    double fx(size_t b) const { return to_j[b][0]; }
+    double fy(size_t b) const { return to_j[b][1]; }
+    double torque_i(size_t b) const { return to_i[b][2]; }
+    double torque_j(size_t b) const { return to_j[b][2]; }
+    double k_tran(size_t b) const { return to_j[b][3]; }
+    double k_rot(size_t b) const { return to_both[b][0]; }
+    double half_dissipated(size_t b) const { return to_both[b][1]; }
 };
 
 // Does this CPU run disc_pairs_avx2? (checked once per World)
@@ -152,5 +176,9 @@ bool cpu_has_avx2();
 // then it stops before that group's first pair, and writes nothing from there on, for the
 // scalar kernel to report. Only call it when cpu_has_avx2().
 size_t disc_pairs_avx2(const DiscArrays& d, const PairPassParams& p, DiscContact* c, size_t n, PairBatch& out);
+
+// Adds the batch's results into the discs' loads, in the batch's order; c is the batch's first
+// contact. Only call it when cpu_has_avx2().
+void add_pair_batch_avx2(const PairBatch& batch, const DiscContact* c, DiscLoad* load);
 
 }  // namespace demlab

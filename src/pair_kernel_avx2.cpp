@@ -59,10 +59,41 @@ alignas(16) const __m128i kPackedLanes[16] = {
     _mm_setr_epi32(3, 0, 0, 0), _mm_setr_epi32(0, 3, 0, 0), _mm_setr_epi32(1, 3, 0, 0), _mm_setr_epi32(0, 1, 3, 0),
     _mm_setr_epi32(2, 3, 0, 0), _mm_setr_epi32(0, 2, 3, 0), _mm_setr_epi32(1, 2, 3, 0), _mm_setr_epi32(0, 1, 2, 3)};
 
-}  // namespace
+// Four registers whose lanes are pairs, as four records (rows[l] = lane l of a, b, c, d).
+DEMLAB_AVX2 void store_rows(double (*rows)[4], __m256d a, __m256d b, __m256d c, __m256d d) {
+    const __m256d ab02 = _mm256_unpacklo_pd(a, b), ab13 = _mm256_unpackhi_pd(a, b);
+    const __m256d cd02 = _mm256_unpacklo_pd(c, d), cd13 = _mm256_unpackhi_pd(c, d);
+    _mm256_store_pd(rows[0], _mm256_permute2f128_pd(ab02, cd02, 0x20));
+    _mm256_store_pd(rows[1], _mm256_permute2f128_pd(ab13, cd13, 0x20));
+    _mm256_store_pd(rows[2], _mm256_permute2f128_pd(ab02, cd02, 0x31));
+    _mm256_store_pd(rows[3], _mm256_permute2f128_pd(ab13, cd13, 0x31));
+}
 
-[[gnu::target("avx2")]] size_t disc_pairs_avx2(const DiscArrays& d, const PairPassParams& p, DiscContact* c, size_t n,
-                                               PairBatch& out) {
+// Four pairs' materials (PairMaterial) as lanes.
+struct PairLanes {
+    __m256d kn, ks, mu, inv_ks, k_tran;
+};
+
+DEMLAB_AVX2 PairLanes broadcast_lanes(const PairMaterial& m) {
+    return {_mm256_set1_pd(m.kn), _mm256_set1_pd(m.ks), _mm256_set1_pd(m.mu), _mm256_set1_pd(m.inv_ks),
+            _mm256_set1_pd(m.k_tran)};
+}
+
+DEMLAB_AVX2 PairLanes pair_lanes(const PairPassParams& p, const DiscArrays& d, size_t i0, size_t i1, size_t i2, size_t i3,
+                                 size_t j0, size_t j1, size_t j2, size_t j3) {
+    const PairMaterial* pm0 = &p.materials[size_t(d.material[i0]) * p.n_materials + size_t(d.material[j0])];
+    const PairMaterial* pm1 = &p.materials[size_t(d.material[i1]) * p.n_materials + size_t(d.material[j1])];
+    const PairMaterial* pm2 = &p.materials[size_t(d.material[i2]) * p.n_materials + size_t(d.material[j2])];
+    const PairMaterial* pm3 = &p.materials[size_t(d.material[i3]) * p.n_materials + size_t(d.material[j3])];
+    return {_mm256_set_pd(pm3->kn, pm2->kn, pm1->kn, pm0->kn), _mm256_set_pd(pm3->ks, pm2->ks, pm1->ks, pm0->ks),
+            _mm256_set_pd(pm3->mu, pm2->mu, pm1->mu, pm0->mu),
+            _mm256_set_pd(pm3->inv_ks, pm2->inv_ks, pm1->inv_ks, pm0->inv_ks),
+            _mm256_set_pd(pm3->k_tran, pm2->k_tran, pm1->k_tran, pm0->k_tran)};
+}
+
+template <bool kOneMaterial>
+DEMLAB_AVX2 size_t disc_pairs(const DiscArrays& d, const PairPassParams& p, DiscContact* c, size_t n, PairBatch& out) {
+    const PairLanes one = kOneMaterial ? broadcast_lanes(p.materials[0]) : PairLanes{};
     const double* pos = d.pos->data();
     const double* vel = d.vel->data();
     const bool no_tension = p.mode == DashpotMode::NoTension || p.mode == DashpotMode::NoTensionNoShearWhileSliding;
@@ -151,14 +182,9 @@ alignas(16) const __m128i kPackedLanes[16] = {
         const __m256d vs = _mm256_sub_pd(vt, _mm256_add_pd(_mm256_mul_pd(wi, ra), _mm256_mul_pd(wj, rb)));
 
         // the contacts' histories and the pairs' materials
-        const PairMaterial* pm0 = &p.materials[size_t(d.material[i0]) * p.n_materials + size_t(d.material[j0])];
-        const PairMaterial* pm1 = &p.materials[size_t(d.material[i1]) * p.n_materials + size_t(d.material[j1])];
-        const PairMaterial* pm2 = &p.materials[size_t(d.material[i2]) * p.n_materials + size_t(d.material[j2])];
-        const PairMaterial* pm3 = &p.materials[size_t(d.material[i3]) * p.n_materials + size_t(d.material[j3])];
-        const __m256d kn = _mm256_set_pd(pm3->kn, pm2->kn, pm1->kn, pm0->kn);
-        const __m256d ks = _mm256_set_pd(pm3->ks, pm2->ks, pm1->ks, pm0->ks);
-        const __m256d mu = _mm256_set_pd(pm3->mu, pm2->mu, pm1->mu, pm0->mu);
-        const __m256d inv_ks = _mm256_set_pd(pm3->inv_ks, pm2->inv_ks, pm1->inv_ks, pm0->inv_ks);
+        // (one material, as in the flume and DB-9k: the same lanes for every group)
+        const PairLanes pl = kOneMaterial ? one : pair_lanes(p, d, i0, i1, i2, i3, j0, j1, j2, j3);
+        const __m256d kn = pl.kn, ks = pl.ks, mu = pl.mu, inv_ks = pl.inv_ks;
         const __m256d cn = _mm256_set_pd(q[3]->cn, q[2]->cn, q[1]->cn, q[0]->cn);
         const __m256d cs = _mm256_set_pd(q[3]->cs, q[2]->cs, q[1]->cs, q[0]->cs);
         const __m256d fs_old = _mm256_set_pd(q[3]->fs, q[2]->fs, q[1]->fs, q[0]->fs);
@@ -193,20 +219,27 @@ alignas(16) const __m128i kPackedLanes[16] = {
             had_dashpots, _mm256_mul_pd(minus_half_last_dt,
                                         _mm256_add_pd(_mm256_mul_pd(damp_n_old, vn), _mm256_mul_pd(damp_s_old, vs_open))));
 
-        // results: force on j = fn n + ft t; torques -r ft; +0 for an open pair (PairBatch)
-        const __m256d k_tran = _mm256_set_pd(pm3->k_tran, pm2->k_tran, pm1->k_tran, pm0->k_tran);
-        _mm256_store_pd(out.fx + g, _mm256_and_pd(touching, _mm256_add_pd(_mm256_mul_pd(fn, nx), _mm256_mul_pd(ft, tx))));
-        _mm256_store_pd(out.fy + g, _mm256_and_pd(touching, _mm256_add_pd(_mm256_mul_pd(fn, ny), _mm256_mul_pd(ft, nx))));
-        _mm256_store_pd(out.torque_i + g, _mm256_and_pd(touching, _mm256_mul_pd(neg(ra), ft)));
-        _mm256_store_pd(out.torque_j + g, _mm256_and_pd(touching, _mm256_mul_pd(neg(rb), ft)));
-        _mm256_store_pd(out.dissipated + g, blend(touching, diss_touching, diss_open));
-        _mm256_store_pd(out.k_tran + g, _mm256_and_pd(touching, k_tran));
-        _mm256_store_pd(out.k_rot + g, _mm256_and_pd(touching, ks));
+        // results: force on j = fn n + ft t; torques -r ft; +0 for an open pair (PairBatch),
+        // as a record per pair and disc (the lanes transposed)
+        const __m256d fx = _mm256_and_pd(touching, _mm256_add_pd(_mm256_mul_pd(fn, nx), _mm256_mul_pd(ft, tx)));
+        const __m256d fy = _mm256_and_pd(touching, _mm256_add_pd(_mm256_mul_pd(fn, ny), _mm256_mul_pd(ft, nx)));
+        const __m256d torque_i = _mm256_and_pd(touching, _mm256_mul_pd(neg(ra), ft));
+        const __m256d torque_j = _mm256_and_pd(touching, _mm256_mul_pd(neg(rb), ft));
+        const __m256d k_tran_t = _mm256_and_pd(touching, pl.k_tran);
+        store_rows(out.to_i + g, neg(fx), neg(fy), torque_i, k_tran_t);
+        store_rows(out.to_j + g, fx, fy, torque_j, k_tran_t);
+        const __m256d k_rot = _mm256_and_pd(touching, ks);
+        const __m256d half_dissipated = _mm256_mul_pd(half, blend(touching, diss_touching, diss_open));
+        const __m256d lo = _mm256_unpacklo_pd(k_rot, half_dissipated);  // pairs 0 and 2
+        const __m256d hi = _mm256_unpackhi_pd(k_rot, half_dissipated);  // pairs 1 and 3
+        _mm_store_pd(out.to_both[g], _mm256_castpd256_pd128(lo));
+        _mm_store_pd(out.to_both[g + 1], _mm256_castpd256_pd128(hi));
+        _mm_store_pd(out.to_both[g + 2], _mm256_extractf128_pd(lo, 1));
+        _mm_store_pd(out.to_both[g + 3], _mm256_extractf128_pd(hi, 1));
         // the mask's lanes (all ones) as 32-bit integers, negated: 1 or 0
         _mm_store_si128(reinterpret_cast<__m128i*>(out.touching + g),
                         _mm_sub_epi32(_mm_setzero_si128(), _mm256_castsi256_si128(_mm256_permutevar8x32_epi32(
                                                                _mm256_castpd_si256(touching), _mm256_setr_epi32(0, 2, 4, 6, 0, 0, 0, 0)))));
-
         // the histories: an open pair starts again from zero (PFC deletes it)
         alignas(32) double fs_new[4];
         alignas(16) float dn_new[4], ds_new[4];
@@ -221,8 +254,35 @@ alignas(16) const __m128i kPackedLanes[16] = {
     }
     return covered;
 }
+
+}  // namespace
+
+// The sums of the scalar pass (add_to_i, add_to_j in world.cpp) for a record at a time: the
+// same additions, lane by lane, in the same order of pairs.
+[[gnu::target("avx2")]] void add_pair_batch_avx2(const PairBatch& batch, const DiscContact* c, DiscLoad* load) {
+    static_assert(offsetof(DiscLoad, force) == 0 && offsetof(DiscLoad, torque) == 16 && offsetof(DiscLoad, k_tran) == 24 &&
+                  offsetof(DiscLoad, k_rot) == 32 && offsetof(DiscLoad, dissipated) == 40);
+    for (size_t b = 0, n = batch.count; b < n; ++b) {
+        const DiscContact& cb = c[batch.index[b]];
+        const __m128d both = _mm_load_pd(batch.to_both[b]);
+        double* const li = reinterpret_cast<double*>(load + size_t(cb.i));
+        _mm256_store_pd(li, _mm256_add_pd(_mm256_load_pd(li), _mm256_load_pd(batch.to_i[b])));
+        _mm_store_pd(li + 4, _mm_add_pd(_mm_load_pd(li + 4), both));
+        load[size_t(cb.i)].n_disc += batch.touching[b];
+        double* const lj = reinterpret_cast<double*>(load + size_t(cb.j));
+        _mm256_store_pd(lj, _mm256_add_pd(_mm256_load_pd(lj), _mm256_load_pd(batch.to_j[b])));
+        _mm_store_pd(lj + 4, _mm_add_pd(_mm_load_pd(lj + 4), both));
+        load[size_t(cb.j)].n_disc += batch.touching[b];
+    }
+}
+
+[[gnu::target("avx2")]] size_t disc_pairs_avx2(const DiscArrays& d, const PairPassParams& p, DiscContact* c, size_t n,
+                                               PairBatch& out) {
+    return p.n_materials == 1 ? disc_pairs<true>(d, p, c, n, out) : disc_pairs<false>(d, p, c, n, out);
+}
 #else
 size_t disc_pairs_avx2(const DiscArrays&, const PairPassParams&, DiscContact*, size_t, PairBatch&) { return 0; }
+void add_pair_batch_avx2(const PairBatch&, const DiscContact*, DiscLoad*) {}
 #endif
 
 }  // namespace demlab

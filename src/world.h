@@ -225,18 +225,7 @@ private:
     std::vector<double> radius_, mass_, inv_mass_, inertia_, inv_inertia_, angle_, omega_;
     std::vector<int32_t> material_;
     std::vector<double> rr_factor_;     // Preh-Poisel factor per disc, 1/m (0 without rolling resistance)
-    // What a disc's contacts add up to in a step, in one cache line: the force pass adds a
-    // contact's terms to two discs, and one line per disc instead of eight arrays cut its
-    // L1 misses (docs/performance.md).
-    struct alignas(64) DiscLoad {
-        Vec2 force{0.0, 0.0};    // N/m, contact forces
-        double torque = 0.0;     // N m/m
-        double k_tran = 0.0;     // N/m, sum of max(kn, ks) over touching contacts (automatic step)
-        double k_rot = 0.0;      // N/m, sum of ks
-        double wall_normal = 0.0;  // N/m, elastic normal force from walls (rolling resistance)
-        double dissipated = 0.0;   // J/m, half the dissipation of each of its disc-disc contacts
-        int32_t n_disc = 0, n_wall = 0;  // touching contacts
-    };
+    // what each disc's contacts add up to in a step (DiscLoad, pair_kernel.h)
     std::vector<DiscLoad> load_;
 
     // walls

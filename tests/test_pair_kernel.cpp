@@ -122,23 +122,30 @@ TEST(PairKernel, Avx2GivesTheScalarKernelsBits) {
                     continue;
                 }
                 const size_t b = size_t(slot[a]);
-                ASSERT_EQ(bits(batch.dissipated[b]), bits(o.dissipated)) << "pair " << k0 + a;
+                ASSERT_EQ(bits(batch.half_dissipated(b)), bits(0.5 * o.dissipated)) << "pair " << k0 + a;
                 ASSERT_EQ(batch.touching[b], int32_t(o.touching)) << "pair " << k0 + a;
                 if (o.touching) {
                     ++touching;
-                    ASSERT_EQ(bits(batch.fx[b]), bits(o.f.x())) << "pair " << k0 + a;
-                    ASSERT_EQ(bits(batch.fy[b]), bits(o.f.y())) << "pair " << k0 + a;
-                    ASSERT_EQ(bits(batch.torque_i[b]), bits(o.torque_i));
-                    ASSERT_EQ(bits(batch.torque_j[b]), bits(o.torque_j));
-                    ASSERT_EQ(bits(batch.k_tran[b]), bits(o.k_tran));
-                    ASSERT_EQ(bits(batch.k_rot[b]), bits(o.k_rot));
+                    ASSERT_EQ(bits(batch.fx(b)), bits(o.f.x())) << "pair " << k0 + a;
+                    ASSERT_EQ(bits(batch.fy(b)), bits(o.f.y())) << "pair " << k0 + a;
+                    ASSERT_EQ(bits(batch.torque_i(b)), bits(o.torque_i));
+                    ASSERT_EQ(bits(batch.torque_j(b)), bits(o.torque_j));
+                    ASSERT_EQ(bits(batch.k_tran(b)), bits(o.k_tran));
+                    ASSERT_EQ(bits(batch.k_rot(b)), bits(o.k_rot));
+                }
+                // disc i's record: the opposite force (added, it is the scalar pass' subtraction)
+                // and the same stiffness
+                ASSERT_EQ(bits(batch.to_i[b][0]), bits(-batch.fx(b))) << "pair " << k0 + a;
+                ASSERT_EQ(bits(batch.to_i[b][1]), bits(-batch.fy(b))) << "pair " << k0 + a;
+                ASSERT_EQ(bits(batch.to_i[b][3]), bits(batch.k_tran(b))) << "pair " << k0 + a;
+                if (o.touching) {
                     const PairMaterial& pm = k.materials[size_t(k.material[size_t(c.i)]) * 2 + size_t(k.material[size_t(c.j)])];
                     if (std::abs(c.fs) == pm.mu * (pm.kn * overlap)) ++sliding;
                     if (c.damp_n != 0.0f && float(-pm.kn * overlap) == c.damp_n) ++tension_cut;
                 } else {
                     // what the force pass adds for an open pair: +0 (PairBatch)
-                    for (double x : {batch.fx[b], batch.fy[b], batch.torque_i[b], batch.torque_j[b], batch.k_tran[b],
-                                     batch.k_rot[b]})
+                    for (double x : {batch.fx(b), batch.fy(b), batch.torque_i(b), batch.torque_j(b), batch.k_tran(b),
+                                     batch.k_rot(b)})
                         ASSERT_EQ(bits(x), bits(0.0));
                     if (before.damp_n != 0.0f || before.damp_s != 0.0f) ++open_with_dashpots;
                 }
