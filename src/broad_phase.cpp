@@ -99,6 +99,11 @@ bool BroadPhase::may_touch(int32_t i, int32_t j) const {
     return gx * gx + gy * gy < reach * reach;
 }
 
+double BroadPhase::pad_for(const Vec2& v, double dt) const {
+    const double wanted = std::sqrt(v.norm() * dt * reach_length_);
+    return wanted > margin_ ? std::min(wanted, kMaxMarginFactor * margin_) : margin_;  // NaN: the margin
+}
+
 void BroadPhase::init(double margin_target, double wall_piece_length, const std::vector<Vec2>& pos,
                       const std::vector<double>& radius, const std::vector<WallGeom>& walls,
                       const std::vector<uint8_t>& wall_active) {
@@ -116,6 +121,8 @@ void BroadPhase::init(double margin_target, double wall_piece_length, const std:
     fat_lo_.resize(n);
     fat_hi_.resize(n);
     box_radius_.assign(radius.begin(), radius.end());
+    half_pad_.assign(n, 0.5 * margin_);
+    reach_length_ = n > 0 ? kReachRadii * *std::min_element(radius.begin(), radius.end()) : 0.0;
     escaped_.assign(n, 1);  // every disc is new: query them all
     escaped_list_.clear();
     for (size_t i = 0; i < n; ++i) {
@@ -180,7 +187,8 @@ void BroadPhase::query_all_escaped() {
 
 bool BroadPhase::update(const std::vector<Vec2>& pos, const std::vector<double>& radius,
                         const std::vector<WallGeom>& walls, const std::vector<uint8_t>& wall_active,
-                        const std::vector<uint8_t>& wall_moving, bool discs_may_have_escaped) {
+                        const std::vector<uint8_t>& wall_moving, bool discs_may_have_escaped,
+                        const std::vector<Vec2>* vel, double dt) {
     // walls: removed ones leave the tree; moving ones are re-inserted whole when any of
     // their pieces leaves its fat box
     std::vector<uint8_t>& changed = wall_changed_;  // kept between steps: no allocation in the step
@@ -212,27 +220,36 @@ bool BroadPhase::update(const std::vector<Vec2>& pos, const std::vector<double>&
     if (escaped_list_.empty() && !any_wall) return false;
     // An update costs a pass over the candidate list whatever the number of escapes, so batch
     // them: with the escaped discs also re-insert every disc that has used up more than half
-    // its margin. The next update then waits until a disc moves another half margin, instead
-    // of coming on the next step for the next-fastest disc.
+    // its pad. The next update then waits until a disc moves another half pad, instead of
+    // coming on the next step for the next-fastest disc.
     if (!escaped_list_.empty()) {
-        const double half = 0.5 * margin_;
-        const Vec2 pad(half, half);
+        // So is a disc whose pad is more than twice what its speed now asks for (it has slowed
+        // down; its box would keep candidates that cost a pass each step).
         for (size_t i = 0; i < n; ++i) {
             const Vec2 rr(radius[i], radius[i]);
-            if (!contains(fat_lo_[i] + pad, fat_hi_[i] - pad, pos[i] - rr, pos[i] + rr)) escaped_list_.push_back(int32_t(i));
+            const Vec2 pad(half_pad_[i], half_pad_[i]);
+            if (!contains(fat_lo_[i] + pad, fat_hi_[i] - pad, pos[i] - rr, pos[i] + rr) ||
+                half_pad_[i] > pad_for(vel ? (*vel)[i] : Vec2::Zero(), dt))
+                escaped_list_.push_back(int32_t(i));
         }
         std::sort(escaped_list_.begin(), escaped_list_.end());
         escaped_list_.erase(std::unique(escaped_list_.begin(), escaped_list_.end()), escaped_list_.end());
     }
 
+    if (half_pad_.size() != n) half_pad_.assign(n, 0.5 * margin_);  // discs added since init
     for (int32_t i : escaped_list_) {
         const Vec2 rr(radius[i], radius[i]);
+        // the pad from the disc's speed: the box grows by `extra`, the tree adds the margin
+        const double pad = pad_for(vel ? (*vel)[size_t(i)] : Vec2::Zero(), dt);
+        const double extra = pad - margin_;
+        half_pad_[size_t(i)] = 0.5 * pad;
+        const Vec2 lo = pos[i] - rr - Vec2(extra, extra), hi = pos[i] + rr + Vec2(extra, extra);
         // MoveProxy keeps the old fat box of a disc that has not left it yet: re-create those
         if (contains(fat_lo_[i], fat_hi_[i], pos[i] - rr, pos[i] + rr)) {
             tree_.DestroyProxy(disc_proxy_[i]);
-            disc_proxy_[i] = tree_.CreateProxy(to_tree(pos[i] - rr, pos[i] + rr), encode(i, 0));
+            disc_proxy_[i] = tree_.CreateProxy(to_tree(lo, hi), encode(i, 0));
         } else {
-            tree_.MoveProxy(disc_proxy_[i], to_tree(pos[i] - rr, pos[i] + rr), b2Vec2(0.0f, 0.0f));
+            tree_.MoveProxy(disc_proxy_[i], to_tree(lo, hi), b2Vec2(0.0f, 0.0f));
         }
         read_fat(disc_proxy_[i], fat_lo_[i], fat_hi_[i]);
         box_radius_[size_t(i)] = radius[size_t(i)];

@@ -7,6 +7,17 @@
 // 0.1 / scale metres (the margin) and converting the tree's float boxes back to metres is
 // exact. A disc is re-inserted only when its tight box leaves its fat box.
 //
+// Margins from the discs' speeds: a disc is inserted with its box grown by an extra pad
+// before the tree adds the margin, so that its whole pad is
+//     m_i = clamp(sqrt(|v_i| dt L), margin, kMaxMarginFactor margin),  L = kReachRadii r_min.
+// Why the square root: a disc re-inserted costs c_r (remove, insert, query: about 1.5 us),
+// and it escapes after m / (|v| dt) steps, so c_r |v| dt / m per step; its pad adds
+// candidates in proportion to m, each costing c_p per step (the kernel's first pass: a few
+// ns). The sum is least for m^2 = (c_r / c_p) (|v| dt) (r / beta), beta the candidates per
+// disc a pad of one radius adds; L = kReachRadii r_min stands for (c_r / c_p) (r / beta),
+// measured on DB-9k (docs/performance.md, session 8). A still disc keeps the margin; a fast
+// one waits longer before it escapes. The candidates do not change any result (may_touch).
+//
 // Candidate pairs: every pair of discs (and disc-wall) whose fat boxes overlap, less the disc
 // pairs that cannot touch while both discs stay in their fat boxes (may_touch). The set is
 // kept between updates: pairs of two discs that did not escape stay as they are (their fat
@@ -48,9 +59,16 @@ public:
     // the candidate lists. Returns true if the lists changed.
     // discs_may_have_escaped = false skips the scan of the discs (the caller has checked
     // inside_fat_box() for every disc that moved).
+    // vel, dt: the discs' velocities (m/s) and the step (s), for the re-inserted discs' pads
+    // (nullptr: every pad is the margin).
     bool update(const std::vector<Vec2>& pos, const std::vector<double>& radius,
                 const std::vector<WallGeom>& walls, const std::vector<uint8_t>& wall_active,
-                const std::vector<uint8_t>& wall_moving, bool discs_may_have_escaped = true);
+                const std::vector<uint8_t>& wall_moving, bool discs_may_have_escaped = true,
+                const std::vector<Vec2>* vel = nullptr, double dt = 0.0);
+
+    // The speed rule's constants (see the top of this file).
+    static constexpr double kReachRadii = 400.0;     // L / r_min
+    static constexpr double kMaxMarginFactor = 5.0;  // the largest pad, in margins
 
     // Is disc i (centre p, radius r) still inside its fat box? Thread-safe (read-only).
     bool inside_fat_box(size_t i, const Vec2& p, double r) const {
@@ -64,6 +82,9 @@ public:
     const std::vector<uint64_t>& wall_pairs() const { return dw_; }
 
     double margin() const { return margin_; }
+    // Disc i's fat box, m.
+    Vec2 fat_lo(size_t i) const { return fat_lo_[i]; }
+    Vec2 fat_hi(size_t i) const { return fat_hi_[i]; }
     const BroadPhaseStats& stats() const { return stats_; }
 
     // Shares the escaped discs' queries among the pool's threads (nullptr: the caller alone).
@@ -84,6 +105,7 @@ private:
     void read_fat(int32_t proxy, Vec2& lo, Vec2& hi) const;
     void query(const Vec2& lo, const Vec2& hi, std::vector<int32_t>& hits) const;
     bool may_touch(int32_t i, int32_t j) const;
+    double pad_for(const Vec2& v, double dt) const;  // m, the speed rule's pad
     // the candidates of escaped discs escaped_list_[begin, end) into `out` (pairs sorted)
     struct QueryChunk {
         std::vector<int32_t> hits;
@@ -99,6 +121,8 @@ private:
     std::vector<int32_t> disc_proxy_;
     std::vector<Vec2> fat_lo_, fat_hi_;
     std::vector<double> box_radius_;  // the radius each disc's fat box was made for, m
+    std::vector<double> half_pad_;    // half the pad each disc's fat box was made with, m
+    double reach_length_ = 0.0;       // L of the speed rule, m
     std::vector<Piece> pieces_;
     std::vector<uint64_t> dd_, dw_, scratch_dd_, scratch_dw_;
     std::vector<uint8_t> escaped_;

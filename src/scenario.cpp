@@ -214,7 +214,7 @@ const std::vector<Key>& registry() {
         k.push_back(boolean("timestep.damping_correction", "shrink the rotational bound for the shear dashpot (stability, docs/engine.md)", [](Scenario& s) -> bool& { return s.world.timestep.damping_correction; }));
         // world
         k.push_back(vec2("world.gravity", "m/s2", "gravity vector", [](Scenario& s) -> Vec2& { return s.world.gravity; }));
-        k.push_back(real("world.broadphase_margin", "m", "pad of the broad phase's fat boxes; 0 = half the smallest radius", [](Scenario& s) -> double& { return s.world.broadphase_margin; }, 0, 1));
+        k.push_back(real("world.broadphase_margin", "m", "smallest pad of the broad phase's fat boxes (moving discs get wider ones); 0 = half the smallest radius", [](Scenario& s) -> double& { return s.world.broadphase_margin; }, 0, 1));
         k.push_back(real("world.joint_tolerance", "m", "wall ends closer than this are joined", [](Scenario& s) -> double& { return s.world.joint_tolerance; }, 0, 0.1));
         k.push_back(real("world.max_overlap_ratio", "-", "an overlap beyond this fraction of the smaller radius stops the run (blow-up)", [](Scenario& s) -> double& { return s.world.max_overlap_ratio; }, 0, 2, true));
         // flume

@@ -824,7 +824,8 @@ void World::step() {
             }
         }
     }
-    if (broad_.update(pos_, radius_, geom_, wall_active_, wall_moving_, discs_may_have_escaped_)) refresh_contacts();
+    if (broad_.update(pos_, radius_, geom_, wall_active_, wall_moving_, discs_may_have_escaped_, &vel_, dt_))
+        refresh_contacts();
     compute_forces(true);
     integrate_finish();
     balance_force_pass();

@@ -184,3 +184,41 @@ TEST(BroadPhase, AShrunkDiscGetsItsCandidatesAgain) {
     ASSERT_EQ(w.disc_contacts().size(), 1u);
     EXPECT_EQ(w.touching_disc_pairs(), 1);
 }
+
+// The pads from the discs' speeds (broad_phase.h): r = 1 mm, margin 0.39 mm, L = 400 r_min =
+// 0.4 m, dt = 1 us. A still disc keeps the margin; one at 1 m/s gets sqrt(1e-6 * 0.4) =
+// 0.632 mm; one at 100 m/s would get 6.3 mm and is held to 5 margins. When they stop, the
+// next update gives a pad more than twice the margin the margin again.
+TEST(BroadPhase, PadsFollowTheDiscsSpeeds) {
+    const double r = 0.001, dt = 1e-6;
+    std::vector<Vec2> pos = {Vec2(0.0, 0.0), Vec2(0.1, 0.0), Vec2(0.2, 0.0)};
+    std::vector<Vec2> vel = {Vec2(0.0, 0.0), Vec2(0.6, -0.8), Vec2(0.0, 100.0)};
+    const std::vector<double> radius(3, r);
+    BroadPhase bp;
+    bp.init(0.0005, 1.0, pos, radius, {}, {});
+    const double margin = bp.margin();
+    ASSERT_NEAR(margin, 0.1 / 256.0, 1e-9);
+    auto pad = [&](size_t i) {  // the pad on each side, from the fat box (both axes)
+        const double px = 0.5 * (bp.fat_hi(i).x() - bp.fat_lo(i).x()) - r;
+        const double py = 0.5 * (bp.fat_hi(i).y() - bp.fat_lo(i).y()) - r;
+        EXPECT_NEAR(px, py, 1e-7);
+        return px;
+    };
+    for (size_t i = 0; i < 3; ++i) EXPECT_NEAR(pad(i), margin, 1e-7) << i;  // no speeds at init
+    // every disc out of its box: all re-inserted, with the pads their speeds ask for
+    for (Vec2& p : pos) p += Vec2(0.002, 0.0);
+    ASSERT_TRUE(bp.update(pos, radius, {}, {}, {}, true, &vel, dt));
+    EXPECT_NEAR(pad(0), margin, 1e-7);
+    EXPECT_NEAR(pad(1), std::sqrt(1.0 * dt * 0.4), 1e-7);
+    EXPECT_NEAR(pad(2), BroadPhase::kMaxMarginFactor * margin, 1e-7);
+    for (size_t i = 0; i < 3; ++i) EXPECT_TRUE(bp.inside_fat_box(i, pos[i], r)) << i;
+    // all stop; disc 0 leaves its box: the update re-inserts it, and disc 2, whose pad is more
+    // than twice what it now needs, with the margin; disc 1's pad is within twice the margin
+    for (Vec2& v : vel) v = Vec2::Zero();
+    pos[0] += Vec2(0.002, 0.0);
+    ASSERT_TRUE(bp.update(pos, radius, {}, {}, {}, true, &vel, dt));
+    EXPECT_NEAR(pad(0), margin, 1e-7);
+    EXPECT_NEAR(pad(1), std::sqrt(1.0 * dt * 0.4), 1e-7);
+    EXPECT_NEAR(pad(2), margin, 1e-7);
+    EXPECT_EQ(bp.stats().disc_reinserts, 3 + 2);
+}
