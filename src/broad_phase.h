@@ -85,6 +85,9 @@ public:
     // Disc i's fat box, m.
     Vec2 fat_lo(size_t i) const { return fat_lo_[i]; }
     Vec2 fat_hi(size_t i) const { return fat_hi_[i]; }
+    // The same as arrays (valid until the next init or update), for the integration's loop.
+    const Vec2* fat_lo_data() const { return fat_lo_.data(); }
+    const Vec2* fat_hi_data() const { return fat_hi_.data(); }
     const BroadPhaseStats& stats() const { return stats_; }
 
     // Shares the escaped discs' queries among the pool's threads (nullptr: the caller alone).

@@ -640,13 +640,19 @@ World::DtFactors World::dt_factors() const {
     return {def_.rotation.model != 1, phi * phi, phi_t * phi_t};
 }
 
-// Inlined by force: out of line it was a call per disc and step, 7 % of geometry A's time
-// (perf); inlined, its two divisions overlap the integration's other work.
-[[gnu::always_inline]] inline double World::critical_step_squared_of(size_t i, const DtFactors& f) const {
-    const MaterialDef& m = materials_[size_t(material_[i])];
-    const double kt = load_[i].k_tran > 0.0 ? load_[i].k_tran : std::max(m.kn, m.ks);
-    const double kr = load_[i].k_rot > 0.0 ? load_[i].k_rot : m.ks;
-    return critical_step_squared(mass_[i], inertia_[i], radius_[i], kt, kr, f.rotation_free, f.phi_sq, f.phi_t_sq);
+// One disc's squared critical step from its loads (the PFC rule, timestep.h): a disc
+// without contacts uses its own stiffnesses. Inlined by force: out of line it was a call per
+// disc and step, 7 % of geometry A's time (perf); inlined, its two divisions overlap the
+// integration's other work.
+[[gnu::always_inline]] inline double World::critical_step_squared_at(const DiscLoad& l, const MaterialDef& m, double mass,
+                                                                     double inertia, double radius, const DtFactors& f) {
+    const double kt = l.k_tran > 0.0 ? l.k_tran : std::max(m.kn, m.ks);
+    const double kr = l.k_rot > 0.0 ? l.k_rot : m.ks;
+    return critical_step_squared(mass, inertia, radius, kt, kr, f.rotation_free, f.phi_sq, f.phi_t_sq);
+}
+
+double World::critical_step_squared_of(size_t i, const DtFactors& f) const {
+    return critical_step_squared_at(load_[i], materials_[size_t(material_[i])], mass_[i], inertia_[i], radius_[i], f);
 }
 
 double World::step_from_critical_squared(double best_sq) const {
@@ -676,7 +682,16 @@ void World::integrate_discs(size_t begin, size_t end, int chunk, const Integrate
     const double dt = k.dt;
     const Vec2 g = k.g;
     const double alpha = k.alpha;
-    const RotationDef& rot = def_.rotation;
+    // copies, like the arrays below: the stores into the discs' arrays may alias anything
+    // reached through `this`, and GCC reloaded these every disc
+    const RotationDef rot = def_.rotation;
+    const DtFactors dtf = k.dtf;
+    const bool auto_dt = k.auto_dt;
+    const MaterialDef* const materials = materials_.data();
+    const int32_t* const material = material_.data();
+    LedgerBlock* const ledger_blocks = ledger_blocks_.data();
+    const Vec2* const fat_lo = broad_.fat_lo_data();
+    const Vec2* const fat_hi = broad_.fat_hi_data();
     // The arrays through local pointers, and each new value kept in a register: Eigen stores
     // a Vec2 as an SSE packet, whose type may alias anything, so after `vel_[i] += ...` GCC
     // reloaded the vectors' data pointers and vel_[i] itself before the position update;
@@ -702,7 +717,9 @@ void World::integrate_discs(size_t begin, size_t end, int chunk, const Integrate
     // the ledger's shares per block of discs (see compute_forces' ledger)
     double block_local = 0.0, block_rot = 0.0;
     for (size_t i = begin; i < end; ++i) {
-        if (k.auto_dt) best_sq = std::min(best_sq, critical_step_squared_of(i, k.dtf));
+        if (auto_dt)
+            best_sq = std::min(best_sq, critical_step_squared_at(load[i], materials[size_t(material[i])], mass[i],
+                                                                 inertia[i], radius[i], dtf));
         double diss_local = 0.0, diss_rot = 0.0;
         const DiscLoad& l = load[i];
         const Vec2 v_old = vel[i];
@@ -750,7 +767,7 @@ void World::integrate_discs(size_t begin, size_t end, int chunk, const Integrate
         block_local += diss_local;
         block_rot += diss_rot;
         if ((i + 1) % kLedgerBlock == 0 || i + 1 == end) {
-            LedgerBlock& b = ledger_blocks_[i / kLedgerBlock];
+            LedgerBlock& b = ledger_blocks[i / kLedgerBlock];
             b.local = block_local;
             b.rotation = block_rot;
             block_local = block_rot = 0.0;
@@ -761,7 +778,10 @@ void World::integrate_discs(size_t begin, size_t end, int chunk, const Integrate
         const bool inside = (p.x() >= lo.x()) & (p.x() <= hi.x()) & (p.y() >= lo.y()) & (p.y() <= hi.y());
         const bool bad = !inside;
         if (bad && fault == SIZE_MAX) fault = i;
-        any_escaped = any_escaped || !broad_.inside_fat_box(i, p, radius[i]);
+        // BroadPhase::inside_fat_box, through the local pointers
+        const double r = radius[i];
+        any_escaped = any_escaped || !(fat_lo[i].x() <= p.x() - r && fat_lo[i].y() <= p.y() - r &&
+                                       p.x() + r <= fat_hi[i].x() && p.y() + r <= fat_hi[i].y());
     }
     integrate_fault_[size_t(chunk)] = fault;
     dt_sq_chunk_[size_t(chunk)] = best_sq;
