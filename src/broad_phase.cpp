@@ -188,7 +188,7 @@ void BroadPhase::query_all_escaped() {
 bool BroadPhase::update(const std::vector<Vec2>& pos, const std::vector<double>& radius,
                         const std::vector<WallGeom>& walls, const std::vector<uint8_t>& wall_active,
                         const std::vector<uint8_t>& wall_moving, bool discs_may_have_escaped,
-                        const std::vector<Vec2>* vel, double dt) {
+                        const std::vector<Vec2>* vel, double dt, bool check_pads) {
     // walls: removed ones leave the tree; moving ones are re-inserted whole when any of
     // their pieces leaves its fat box
     std::vector<uint8_t>& changed = wall_changed_;  // kept between steps: no allocation in the step
@@ -213,10 +213,13 @@ bool BroadPhase::update(const std::vector<Vec2>& pos, const std::vector<double>&
 
     escaped_list_.clear();
     const size_t n = pos.size();
-    if (discs_may_have_escaped)
+    if (half_pad_.size() != n) half_pad_.assign(n, 0.5 * margin_);  // discs added since init
+    if (discs_may_have_escaped || check_pads)
         for (size_t i = 0; i < n; ++i)
             // a changed radius (World::set_radius) needs a new box and new candidates too
-            if (!inside_fat_box(i, pos[i], radius[i]) || radius[i] != box_radius_[i]) escaped_list_.push_back(int32_t(i));
+            if (!inside_fat_box(i, pos[i], radius[i]) || radius[i] != box_radius_[i] ||
+                (check_pads && half_pad_[i] > pad_for(vel ? (*vel)[i] : Vec2::Zero(), dt)))
+                escaped_list_.push_back(int32_t(i));
     if (escaped_list_.empty() && !any_wall) return false;
     // An update costs a pass over the candidate list whatever the number of escapes, so batch
     // them: with the escaped discs also re-insert every disc that has used up more than half
@@ -236,7 +239,6 @@ bool BroadPhase::update(const std::vector<Vec2>& pos, const std::vector<double>&
         escaped_list_.erase(std::unique(escaped_list_.begin(), escaped_list_.end()), escaped_list_.end());
     }
 
-    if (half_pad_.size() != n) half_pad_.assign(n, 0.5 * margin_);  // discs added since init
     for (int32_t i : escaped_list_) {
         const Vec2 rr(radius[i], radius[i]);
         // the pad from the disc's speed: the box grows by `extra`, the tree adds the margin

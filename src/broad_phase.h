@@ -60,11 +60,13 @@ public:
     // discs_may_have_escaped = false skips the scan of the discs (the caller has checked
     // inside_fat_box() for every disc that moved).
     // vel, dt: the discs' velocities (m/s) and the step (s), for the re-inserted discs' pads
-    // (nullptr: every pad is the margin).
+    // (nullptr: every pad is the margin). check_pads: also re-insert the discs whose pads are
+    // over twice what their speeds ask for, even if none escaped (a pile come to rest would
+    // otherwise keep the wide boxes, and their candidates, of its flow).
     bool update(const std::vector<Vec2>& pos, const std::vector<double>& radius,
                 const std::vector<WallGeom>& walls, const std::vector<uint8_t>& wall_active,
                 const std::vector<uint8_t>& wall_moving, bool discs_may_have_escaped = true,
-                const std::vector<Vec2>* vel = nullptr, double dt = 0.0);
+                const std::vector<Vec2>* vel = nullptr, double dt = 0.0, bool check_pads = false);
 
     // The speed rule's constants (see the top of this file).
     static constexpr double kReachRadii = 400.0;     // L / r_min

@@ -844,7 +844,10 @@ void World::step() {
             }
         }
     }
-    if (broad_.update(pos_, radius_, geom_, wall_active_, wall_moving_, discs_may_have_escaped_, &vel_, dt_))
+    // every kPadCheckSteps steps the broad phase also looks for pads wider than the discs'
+    // speeds ask for (a scan of the discs: a tenth of a step's time, once in 128 steps)
+    const bool check_pads = steps_ % kPadCheckSteps == 0;
+    if (broad_.update(pos_, radius_, geom_, wall_active_, wall_moving_, discs_may_have_escaped_, &vel_, dt_, check_pads))
         refresh_contacts();
     compute_forces(true);
     integrate_finish();

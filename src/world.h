@@ -209,6 +209,7 @@ private:
     // the automatic step (timestep.h): its constant factors, one disc's bound, the step
     DtFactors dt_factors() const;
     double critical_step_squared_of(size_t i, const DtFactors& f) const;
+    static constexpr long kPadCheckSteps = 128;  // see step()
     static double critical_step_squared_at(const DiscLoad& l, const MaterialDef& m, double mass, double inertia,
                                            double radius, const DtFactors& f);
     double step_from_critical_squared(double best_sq) const;

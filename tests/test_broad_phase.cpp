@@ -188,7 +188,8 @@ TEST(BroadPhase, AShrunkDiscGetsItsCandidatesAgain) {
 // The pads from the discs' speeds (broad_phase.h): r = 1 mm, margin 0.39 mm, L = 400 r_min =
 // 0.4 m, dt = 1 us. A still disc keeps the margin; one at 1 m/s gets sqrt(1e-6 * 0.4) =
 // 0.632 mm; one at 100 m/s would get 6.3 mm and is held to 5 margins. When they stop, the
-// next update gives a pad more than twice the margin the margin again.
+// pad check (World: every kPadCheckSteps steps) gives a pad more than twice the margin the
+// margin again.
 TEST(BroadPhase, PadsFollowTheDiscsSpeeds) {
     const double r = 0.001, dt = 1e-6;
     std::vector<Vec2> pos = {Vec2(0.0, 0.0), Vec2(0.1, 0.0), Vec2(0.2, 0.0)};
@@ -212,13 +213,16 @@ TEST(BroadPhase, PadsFollowTheDiscsSpeeds) {
     EXPECT_NEAR(pad(1), std::sqrt(1.0 * dt * 0.4), 1e-7);
     EXPECT_NEAR(pad(2), BroadPhase::kMaxMarginFactor * margin, 1e-7);
     for (size_t i = 0; i < 3; ++i) EXPECT_TRUE(bp.inside_fat_box(i, pos[i], r)) << i;
-    // all stop; disc 0 leaves its box: the update re-inserts it, and disc 2, whose pad is more
-    // than twice what it now needs, with the margin; disc 1's pad is within twice the margin
+    // all stop where they are: nothing escaped, so an update without the pad check does nothing;
+    // with it, disc 2, whose pad is more than twice what it now needs, gets the margin (disc 1's
+    // pad is within twice the margin)
     for (Vec2& v : vel) v = Vec2::Zero();
-    pos[0] += Vec2(0.002, 0.0);
-    ASSERT_TRUE(bp.update(pos, radius, {}, {}, {}, true, &vel, dt));
+    EXPECT_FALSE(bp.update(pos, radius, {}, {}, {}, true, &vel, dt, false));
+    EXPECT_NEAR(pad(2), BroadPhase::kMaxMarginFactor * margin, 1e-7);
+    ASSERT_TRUE(bp.update(pos, radius, {}, {}, {}, false, &vel, dt, true));
     EXPECT_NEAR(pad(0), margin, 1e-7);
     EXPECT_NEAR(pad(1), std::sqrt(1.0 * dt * 0.4), 1e-7);
     EXPECT_NEAR(pad(2), margin, 1e-7);
-    EXPECT_EQ(bp.stats().disc_reinserts, 3 + 2);
+    EXPECT_EQ(bp.stats().disc_reinserts, 3 + 1);
+    EXPECT_FALSE(bp.update(pos, radius, {}, {}, {}, false, &vel, dt, true));  // nothing more to do
 }
