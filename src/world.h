@@ -259,6 +259,8 @@ private:
     int force_ranges_ = 1;
     bool avx2_ = false;                     // def_.simd and the CPU has AVX2
     std::vector<PairBatch> pair_batch_;     // per range: the AVX2 kernel's results before they are added
+    std::vector<std::vector<double>> integrate_terms_;  // per range: the AVX2 integration's ledger terms
+    std::vector<double> default_k_tran_, default_k_rot_;  // per material, N/m (integrate_prepare)
     void split_force_pass();
     // measured balance of the ranges (balance_force_pass)
     static constexpr int kBalanceWindow = 64;          // steps between checks

@@ -1,0 +1,61 @@
+// The integration of a range of discs (PFC's central differences, World::integrate_discs), four
+// discs at a time with AVX2, for the runs that use no local damping (alpha = 0: every flow run;
+// the release's settling uses it) and the per-disc rotational damping: the same operations in
+// the same order, lane by lane, so the same bits as the scalar loop (world.cpp).
+#pragma once
+#include <cstddef>
+#include <cstdint>
+
+#include "pair_kernel.h"
+#include "vec2.h"
+
+namespace demlab {
+
+// The discs' arrays the integration reads and writes.
+struct IntegrateArrays {
+    Vec2* pos;
+    Vec2* vel;
+    double* omega;
+    double* angle;
+    const double* mass;
+    const double* inv_mass;
+    const double* inertia;
+    const double* inv_inertia;
+    const double* radius;
+    const double* rr_factor;      // Preh-Poisel factor, 1/m
+    const int32_t* material;
+    const DiscLoad* load;
+    const Vec2* fat_lo;           // the broad phase's fat boxes
+    const Vec2* fat_hi;
+    const double* default_k_tran; // per material: max(kn, ks), N/m (a disc without contacts)
+    const double* default_k_rot;  // per material: ks, N/m
+};
+
+// The step's constants.
+struct IntegrateParams {
+    double dt;                  // s
+    Vec2 g;                     // m/s^2
+    double g_abs;               // |g|, m/s^2
+    int rotation_model;         // 1, 2 or 3
+    bool rolling_literal;       // RollingForm::Literal: g_eff = |g|; else the wall's normal force / m
+    double mu_br;               // Model 3's factor per step for a disc touching another
+    bool auto_dt;               // compute the discs' critical steps
+    bool rotation_free;         // and with the rotational bound (DtFactors)
+    double phi_sq, phi_t_sq;
+    Vec2 domain_lo, domain_hi;  // m
+};
+
+// What the range's integration found.
+struct IntegrateOut {
+    double best_sq;     // the smallest squared critical step (INFINITY if !auto_dt)
+    size_t fault;       // the first disc outside the domain or not finite (SIZE_MAX: none)
+    bool any_escaped;   // a disc left its fat box
+};
+
+// Integrates discs [begin, end), writing each disc's rotational ledger term (the energy the
+// rolling resistance and the rotational damping took out, J/m) into diss_rotation[i - begin]
+// for the caller to add in disc order. Only call it when cpu_has_avx2().
+IntegrateOut integrate_avx2(const IntegrateArrays& a, const IntegrateParams& p, size_t begin, size_t end,
+                            double* diss_rotation);
+
+}  // namespace demlab
