@@ -99,7 +99,7 @@ Command add_bench_command(CLI::App& app) {
     sub->add_option("--file", opts->file, "Initial state 'id x y r' (default: the repository's bench/db9k/db9k_initial.xyr)");
     sub->add_option("--threads", opts->threads, "Worker threads (the final state is the same bits for any count)")
         ->capture_default_str()->check(CLI::Range(1, 64));
-    sub->add_flag("--scalar", opts->scalar, "Use the scalar pair kernel even if the CPU has AVX2 (the same bits; for comparison)");
+    sub->add_flag("--scalar", opts->scalar, "Use the scalar loops (pair forces, integration) even if the CPU has AVX2 (the same bits; for comparison)");
     sub->add_flag("--peer", opts->peer, "Also run LAMMPS (bench/db9k/lammps/run.sh) on the same work and print the ratio");
     return [opts] { return bench(*opts); };
 }

@@ -98,7 +98,7 @@ Command add_run_command(CLI::App& app) {
     sub->add_flag("--force", o->force, "Replace the files of an existing output folder");
     sub->add_option("--threads", o->threads, "Worker threads (results are the same bits for any count)")
         ->capture_default_str()->check(CLI::Range(1, 64));
-    sub->add_flag("--scalar", o->scalar, "Use the scalar pair kernel even if the CPU has AVX2 (the same bits; for comparison)");
+    sub->add_flag("--scalar", o->scalar, "Use the scalar loops (pair forces, integration) even if the CPU has AVX2 (the same bits; for comparison)");
     sub->add_flag("--frames", o->frames, "Render a PNG frame at every snapshot while running (RUN_DIR/frames)");
     sub->add_flag("--no-plots", o->no_plots, "Do not make the plots (RUN_DIR/plots) at the end");
     sub->add_option("--checkpoint-every", o->checkpoint_every,
@@ -160,7 +160,7 @@ Command add_resume_command(CLI::App& app) {
     sub->add_option("run_dir", o->dir, "The run folder (its scenario.toml and checkpoint.bin)")->required();
     sub->add_option("--threads", o->threads, "Worker threads (results are the same bits for any count)")
         ->capture_default_str()->check(CLI::Range(1, 64));
-    sub->add_flag("--scalar", o->scalar, "Use the scalar pair kernel even if the CPU has AVX2 (the same bits; for comparison)");
+    sub->add_flag("--scalar", o->scalar, "Use the scalar loops (pair forces, integration) even if the CPU has AVX2 (the same bits; for comparison)");
     sub->add_option("--checkpoint-every", o->checkpoint_every,
                     "Seconds of wall-clock time between checkpoints (default: as the run was started)")
         ->check(CLI::Range(0.0, 1.0e7));

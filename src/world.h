@@ -142,7 +142,7 @@ public:
     // The force pass's split (world.cpp): disc ranges (one per thread when shared out) and how
     // many candidate pairs cross from one range to another (computed into slots first).
     int force_pass_ranges() const { return force_ranges_; }
-    bool simd_kernel() const { return avx2_; }  // the AVX2 pair kernel is in use
+    bool simd_kernel() const { return avx2_; }  // the AVX2 kernels are in use (pair forces, integration)
     size_t cross_contacts() const { return cross_.size(); }
     // per range: its share of the work model (discs + owned contacts) after the measured
     // balancing, and how often the ranges were re-cut to balance their times
