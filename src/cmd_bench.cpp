@@ -69,8 +69,10 @@ int bench(const BenchOptions& o) {
     std::printf("  broad phase: margin %.3g m, %ld updates, %ld re-insertions; contacts now %ld disc-disc, %ld disc-wall\n",
                 world.broad_phase_margin(), bs.updates, bs.disc_reinserts, world.touching_disc_pairs(),
                 world.touching_wall_pairs());
-    std::printf("  force pass: %d disc range(s), %zu of %zu candidate pairs cross ranges\n", world.force_pass_ranges(),
-                world.cross_contacts(), world.disc_contacts().size());
+    std::printf("  force pass: %d disc range(s), %zu of %zu candidate pairs cross ranges; %.1f %% of the candidates "
+                "skipped as clear\n",
+                world.force_pass_ranges(), world.cross_contacts(), world.disc_contacts().size(),
+                world.candidate_passes() > 0 ? 100.0 * double(world.pairs_skipped()) / double(world.candidate_passes()) : 0.0);
     if (world.force_pass_ranges() > 1) {
         std::printf("  force-pass shares after %ld re-cut(s) to balance the ranges' times:", world.force_pass_rebalances());
         for (double s : world.force_pass_shares()) std::printf(" %.3f", s);

@@ -94,7 +94,9 @@ DEMLAB_AVX2 __m256d neg(__m256d a) { return _mm256_xor_pd(a, _mm256_set1_pd(-0.0
     const __m256d phi_sq = _mm256_set1_pd(p.phi_sq), phi_t_sq = _mm256_set1_pd(p.phi_t_sq);
     const __m256d g_abs = _mm256_set1_pd(p.g_abs), mu_br = _mm256_set1_pd(p.mu_br);
     __m256d best_sq = _mm256_set1_pd(INFINITY);
-    IntegrateOut out{INFINITY, SIZE_MAX, false};
+    const __m256d sign = _mm256_set1_pd(-0.0);
+    __m256d speed_l1 = zero, extent_l1 = zero;  // (a NaN is caught by the domain test)
+    IntegrateOut out{INFINITY, SIZE_MAX, false, 0.0, 0.0};
     for (size_t i0 = begin; i0 < end; i0 += 4) {
         const size_t n = std::min<size_t>(4, end - i0);
         const DiscLoad* const ld = a.load;
@@ -136,6 +138,8 @@ DEMLAB_AVX2 __m256d neg(__m256d a) { return _mm256_xor_pd(a, _mm256_set1_pd(-0.0
         py = _mm256_add_pd(py, _mm256_mul_pd(vy, dt));
         store_xy(a.vel, i0, n, vx, vy);
         store_xy(a.pos, i0, n, px, py);
+        speed_l1 = _mm256_max_pd(speed_l1, _mm256_add_pd(_mm256_andnot_pd(sign, vx), _mm256_andnot_pd(sign, vy)));
+        extent_l1 = _mm256_max_pd(extent_l1, _mm256_add_pd(_mm256_andnot_pd(sign, px), _mm256_andnot_pd(sign, py)));
 
         // rotation
         __m256d diss_rot = zero;
@@ -189,6 +193,15 @@ DEMLAB_AVX2 __m256d neg(__m256d a) { return _mm256_xor_pd(a, _mm256_set1_pd(-0.0
                 _mm256_and_pd(_mm256_cmp_pd(_mm256_add_pd(px, radius), fhi_x, _CMP_LE_OQ),
                               _mm256_cmp_pd(_mm256_add_pd(py, radius), fhi_y, _CMP_LE_OQ)));
             out.any_escaped = (~_mm256_movemask_pd(in_box) & valid) != 0;
+        }
+    }
+    {
+        alignas(32) double sp[4], ex[4];
+        _mm256_store_pd(sp, speed_l1);
+        _mm256_store_pd(ex, extent_l1);
+        for (int l = 0; l < 4; ++l) {
+            out.speed_l1 = std::max(out.speed_l1, sp[l]);
+            out.extent_l1 = std::max(out.extent_l1, ex[l]);
         }
     }
     if (p.auto_dt) {

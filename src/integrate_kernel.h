@@ -50,6 +50,8 @@ struct IntegrateOut {
     double best_sq;     // the smallest squared critical step (INFINITY if !auto_dt)
     size_t fault;       // the first disc outside the domain or not finite (SIZE_MAX: none)
     bool any_escaped;   // a disc left its fat box
+    double speed_l1;    // the largest |vx| + |vy| of the new velocities, m/s (the clearance test)
+    double extent_l1;   // the largest |x| + |y| of the new positions, m (their rounding)
 };
 
 // Integrates discs [begin, end), writing each disc's rotational ledger term (the energy the

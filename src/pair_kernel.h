@@ -151,6 +151,8 @@ struct PairBatch {
     static constexpr size_t kSize = 64;  // pairs; the batch stays in L1 between kernel and sums
     size_t count = 0;                          // results in the batch
     alignas(32) uint32_t index[kSize + 4];     // result b is contact index[b] of the batch
+    alignas(32) uint32_t check[kSize + 4];     // the contacts the clearance test did not skip
+    size_t skipped = 0;                        // pairs skipped by the clearance test, summed over calls
     alignas(32) double to_i[kSize][4];         // into disc i: -fx, -fy (N/m), torque_i (N m/m), k_tran (N/m)
     alignas(32) double to_j[kSize][4];         // into disc j: fx, fy, torque_j, k_tran
     alignas(32) double to_both[kSize][2];      // into both: k_rot (N/m), half the dissipation (J/m)
@@ -166,16 +168,38 @@ struct PairBatch {
     double half_dissipated(size_t b) const { return to_both[b][1]; }
 };
 
+// The clearance test, which lets the AVX2 pass skip the candidates that cannot touch yet
+// without reading them. approach is a bound, accumulated since the clearances were reset, on
+// how much closer any two discs can have come: each integration adds twice the largest
+// distance a disc moved (World::integrate_finish). When the pass finds pair k open with a zero
+// history, it records clearance[k] = approach + (a lower bound of its gap): the pair cannot
+// touch, and its history stays zero, until approach has grown past that; until then it adds
+// +0 to every sum and writes back the zeros it holds, so the pass skips it and no bit
+// changes. A pair the law found touching gets clearance -1: it is to do in the next step
+// without a look (were it open by then, the law adds +0 for it, see PairBatch); one it found
+// open (its history just zeroed) gets 0: looked at next step. The floats are
+// rounded towards safety: approach_lo <= approach <= approach_hi, and the gap's lower bound
+// is shrunk by 2^-20 of the lengths it is made of (far more than the rounding of the float
+// arithmetic, 2^-24 per operation).
+struct PairSkip {
+    float* clearance;   // per contact, m (parallel to the contact list)
+    float approach_lo;  // the approach rounded down, m
+    float approach_hi;  // the approach rounded up, m
+};
+
 // Does this CPU run disc_pairs_avx2? (checked once per World)
 bool cpu_has_avx2();
 
 // disc_pair_force for contacts c[0, n) (n <= PairBatch::kSize), four at a time with AVX2, the
-// same bits; the results of the pairs with something to do into out (see PairBatch). Returns
+// same bits; the results of the pairs with something to do into out (see PairBatch). With
+// skip, it first leaves out the pairs whose clearances (skip->clearance[0, n), parallel to c)
+// exceed the approach, and updates the clearances of the others (PairSkip). Returns
 // how many contacts it covered, from the first: n less n % 4 (the rest do not fill a group of
 // four), or fewer when a group of four of the pairs with something to do holds a blown-up pair:
 // then it stops before that group's first pair, and writes nothing from there on, for the
 // scalar kernel to report. Only call it when cpu_has_avx2().
-size_t disc_pairs_avx2(const DiscArrays& d, const PairPassParams& p, DiscContact* c, size_t n, PairBatch& out);
+size_t disc_pairs_avx2(const DiscArrays& d, const PairPassParams& p, DiscContact* c, size_t n, PairBatch& out,
+                       const PairSkip* skip = nullptr);
 
 // Adds the batch's results into the discs' loads, in the batch's order; c is the batch's first
 // contact. Only call it when cpu_has_avx2().

@@ -144,6 +144,11 @@ public:
     int force_pass_ranges() const { return force_ranges_; }
     bool simd_kernel() const { return avx2_; }  // the AVX2 kernels are in use (pair forces, integration)
     size_t cross_contacts() const { return cross_.size(); }
+    // disc-disc candidates the AVX2 pass skipped by the clearance test (PairSkip), summed over
+    // the steps, and the approach bound now, m
+    long pairs_skipped() const { return pairs_skipped_; }
+    long candidate_passes() const { return candidate_passes_; }  // disc-disc candidates, summed over the force passes
+    double approach() const { return approach_; }
     // per range: its share of the work model (discs + owned contacts) after the measured
     // balancing, and how often the ranges were re-cut to balance their times
     const std::vector<double>& force_pass_shares() const { return range_share_; }
@@ -163,6 +168,7 @@ public:
     void set_position(int i, const Vec2& p) {
         pos_[size_t(i)] = p;
         discs_may_have_escaped_ = true;
+        forget_clearances();
     }
     void set_dt(double dt);  // switches to a fixed step
     // Changes a disc's radius (mass and inertia follow); call refresh_dashpots() after a batch.
@@ -294,6 +300,16 @@ private:
     std::vector<uint8_t> escaped_chunk_;
     bool discs_may_have_escaped_ = true;  // false when integrate_discs() saw every disc inside its fat box
     std::vector<DiscContact> dd_, dd_scratch_;
+    // The AVX2 pass' clearance test (PairSkip, pair_kernel.h): per disc-disc contact, the
+    // approach below which it is known to be open with a zero history (carried with the
+    // contact when the lists are rebuilt); the approach since the last reset, m; per chunk,
+    // the integration's largest |vx| + |vy| (m/s) and |x| + |y| (m) of the step.
+    std::vector<float> clearance_, clearance_scratch_;
+    double approach_ = 0.0;
+    std::vector<double> speed_chunk_, extent_chunk_;
+    long pairs_skipped_ = 0;  // summed over the steps (the ranges' PairBatch::skipped)
+    long candidate_passes_ = 0;
+    void forget_clearances();
     std::vector<WallContact> dw_, dw_scratch_;
     long touching_dd_ = 0, touching_dw_ = 0;
 

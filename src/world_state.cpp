@@ -220,6 +220,7 @@ void World::load_state(BinaryReader& in) {
     discs_may_have_escaped_ = true;
     merge_histories(dd, dd_, [](const DiscContact& c) { return pair_key(c.i, c.j); }, "disc-disc");
     merge_histories(dw, dw_, [](const WallContact& c) { return pair_key(c.disc, c.wall); }, "disc-wall");
+    forget_clearances();  // the restored histories are not what the clearances were found on
 }
 
 }  // namespace demlab

@@ -165,6 +165,88 @@ TEST(PairKernel, Avx2GivesTheScalarKernelsBits) {
     }
 }
 
+// The clearance test (PairSkip): what it records is a bound of each open pair's gap above
+// the approach, the pairs it then skips are those, and the others get the scalar kernel's bits.
+TEST(PairKernel, ClearanceTestSkipsOnlyPairsThatCannotTouch) {
+    if (!cpu_has_avx2()) GTEST_SKIP() << "this CPU has no AVX2";
+    const KernelCase k(23);
+    const DiscArrays d = k.arrays();
+    const PairPassParams p = k.params(DashpotMode::Full);
+    std::vector<DiscContact> scalar = k.contacts, simd = k.contacts;
+    std::vector<float> clearance(simd.size(), 0.0f);
+    const double approach = 1.0e-4;  // m, as if the discs had moved since the clearances began
+    const PairSkip skip{clearance.data(), float(approach), std::nextafter(float(approach), 1.0f)};
+    // two passes over the same state: the first finds the clear pairs, the second skips them
+    size_t cleared = 0, marked_touching = 0, looked_again = 0, skipped = 0, done_total = 0;
+    for (int pass = 0; pass < 2; ++pass) {
+        PairBatch batch;
+        for (size_t k0 = 0; k0 < simd.size(); k0 += PairBatch::kSize) {
+            const size_t n = std::min(PairBatch::kSize, simd.size() - k0);
+            PairSkip s = skip;
+            s.clearance = clearance.data() + k0;
+            std::vector<float> before(clearance.begin() + long(k0), clearance.begin() + long(k0 + n));
+            const size_t done = disc_pairs_avx2(d, p, &simd[k0], n, batch, &s);
+            ASSERT_EQ(done, n - n % 4);
+            std::vector<int> slot(done, -1);
+            for (size_t b = 0; b < batch.count; ++b) {
+                if (b > 0) {
+                    ASSERT_GT(batch.index[b], batch.index[b - 1]);
+                }
+                slot[batch.index[b]] = int(b);
+            }
+            for (size_t a = 0; a < done; ++a) {
+                DiscContact& c = scalar[k0 + a];
+                PairOut o{};
+                double overlap = 0.0;
+                ASSERT_TRUE(disc_pair_force(d, p, c, o, overlap));
+                const DiscContact& sc = simd[k0 + a];
+                ASSERT_EQ(bits(sc.fs), bits(c.fs)) << "pair " << k0 + a;
+                ASSERT_EQ(bits(sc.damp_n), bits(c.damp_n)) << "pair " << k0 + a;
+                ASSERT_EQ(bits(sc.damp_s), bits(c.damp_s)) << "pair " << k0 + a;
+                const float cl = clearance[k0 + a];
+                const double gap = (k.pos[size_t(c.j)] - k.pos[size_t(c.i)]).norm() - (k.radius[size_t(c.i)] + k.radius[size_t(c.j)]);
+                if (pass == 1 && before[a] > skip.approach_hi) {
+                    ++skipped;  // left alone: not in the batch, its clearance kept
+                    ASSERT_LT(slot[a], 0) << "pair " << k0 + a;
+                    ASSERT_EQ(bits(cl), bits(before[a]));
+                }
+                if (slot[a] >= 0) {
+                    const size_t b = size_t(slot[a]);
+                    ASSERT_EQ(batch.touching[b], int32_t(o.touching)) << "pair " << k0 + a;
+                    ASSERT_EQ(bits(batch.half_dissipated(b)), bits(0.5 * o.dissipated)) << "pair " << k0 + a;
+                    if (o.touching) {
+                        ASSERT_EQ(bits(batch.fx(b)), bits(o.f.x()));
+                        ASSERT_EQ(bits(batch.torque_j(b)), bits(o.torque_j));
+                    }
+                } else {
+                    ASSERT_FALSE(o.touching) << "pair " << k0 + a;
+                    ASSERT_EQ(bits(o.dissipated), bits(0.0)) << "pair " << k0 + a;
+                }
+                if (o.touching) {
+                    ASSERT_EQ(cl, -1.0f) << "pair " << k0 + a;  // to do next time, no look
+                    if (pass == 0) ++marked_touching;
+                } else if (cl > 0.0f) {
+                    // a bound: open now with a zero history, and at least its gap away
+                    ASSERT_LE(double(cl), approach + gap) << "pair " << k0 + a;
+                    ASSERT_GT(double(cl), approach + gap - 2e-8) << "pair " << k0 + a;  // and a tight one (2^-20 of some mm)
+                    ASSERT_EQ(bits(c.fs), bits(0.0));
+                    ASSERT_EQ(bits(c.damp_n), bits(0.0f));
+                    ASSERT_EQ(bits(c.damp_s), bits(0.0f));
+                    if (pass == 0) ++cleared;
+                }
+                // a pair whose history the first pass ended has clearance 0: looked at again
+                if (pass == 1 && bits(before[a]) == bits(0.0f) && !o.touching) ++looked_again;
+            }
+            done_total += done;
+        }
+    }
+    EXPECT_GT(done_total, 4000u);
+    EXPECT_GT(cleared, 200u);
+    EXPECT_GT(marked_touching, 500u);
+    EXPECT_GT(looked_again, 50u);
+    EXPECT_GT(skipped, 200u);
+}
+
 TEST(PairKernel, Avx2LeavesABlownUpGroupToTheScalarKernel) {
     if (!cpu_has_avx2()) GTEST_SKIP() << "this CPU has no AVX2";
     KernelCase k(5);
@@ -208,11 +290,53 @@ TEST(PairKernel, Avx2AndScalarWorldsGiveTheSameBits) {
             w.run(1500);
             h[k] = state_hash(w);
             e[k] = w.energy();
+            // the AVX2 pass skipped clear pairs (the clearance test), the scalar one none
+            if (k == 0) {
+                EXPECT_GT(w.pairs_skipped(), w.candidate_passes() / 10);
+            } else {
+                EXPECT_EQ(w.pairs_skipped(), 0);
+            }
         }
         EXPECT_EQ(h[0], h[1]);
         EXPECT_GT(e[0].dissipated_contacts, 0.0);
         EXPECT_EQ(bits(e[0].dissipated_contacts), bits(e[1].dissipated_contacts));
         EXPECT_EQ(bits(e[0].elastic), bits(e[1].elastic));
+    }
+}
+
+// A disc moved or grown by hand between steps may touch a pair the clearance test had found
+// clear: World forgets the clearances then, so the AVX2 world still gives the scalar bits.
+TEST(PairKernel, ClearancesAreForgottenWhenDiscsAreEditedByHand) {
+    if (!cpu_has_avx2()) GTEST_SKIP() << "this CPU has no AVX2";
+    auto discs = read_xyr(default_db9k_path());
+    discs.resize(1500);
+    for (int edit = 0; edit < 2; ++edit) {
+        uint64_t h[2];
+        for (int k = 0; k < 2; ++k) {
+            WorldDef def = db9k_world_def();
+            def.simd = k == 0;
+            World w(def);
+            build_db9k(w, discs);
+            w.finalize();
+            w.run(400);
+            // the first candidate pair open by 2 to 10 % of a radius: bring its discs into
+            // contact (move j towards i, or grow i), by 1 % of a radius beyond the gap
+            for (const DiscContact& c : w.disc_contacts()) {
+                const Vec2 pi = w.positions()[size_t(c.i)], pj = w.positions()[size_t(c.j)];
+                const double ri = w.radii()[size_t(c.i)], rj = w.radii()[size_t(c.j)];
+                const double gap = (pj - pi).norm() - (ri + rj);
+                if (gap < 0.02 * rj || gap > 0.1 * rj) continue;
+                if (edit == 0)
+                    w.set_position(c.j, pj - (pj - pi).normalized() * (gap + 0.01 * rj));
+                else
+                    w.set_radius(c.i, ri + gap + 0.01 * rj);
+                break;
+            }
+            if (edit == 1) w.refresh_dashpots();
+            w.run(50);
+            h[k] = state_hash(w);
+        }
+        EXPECT_EQ(h[0], h[1]) << (edit == 0 ? "set_position" : "set_radius");
     }
 }
 
