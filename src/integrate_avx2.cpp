@@ -85,7 +85,7 @@ DEMLAB_AVX2 __m256d neg(__m256d a) { return _mm256_xor_pd(a, _mm256_set1_pd(-0.0
 }  // namespace
 
 [[gnu::target("avx2")]] IntegrateOut integrate_avx2(const IntegrateArrays& a, const IntegrateParams& p, size_t begin,
-                                                    size_t end, double* diss_rotation) {
+                                                    size_t end, LedgerBlock* blocks, size_t block_size) {
     const __m256d dt = _mm256_set1_pd(p.dt);
     const __m256d gx = _mm256_set1_pd(p.g.x()), gy = _mm256_set1_pd(p.g.y());
     const __m256d zero = _mm256_setzero_pd(), half = _mm256_set1_pd(0.5);
@@ -96,7 +96,12 @@ DEMLAB_AVX2 __m256d neg(__m256d a) { return _mm256_xor_pd(a, _mm256_set1_pd(-0.0
     __m256d best_sq = _mm256_set1_pd(INFINITY);
     const __m256d sign = _mm256_set1_pd(-0.0);
     __m256d speed_l1 = zero, extent_l1 = zero;  // (a NaN is caught by the domain test)
-    IntegrateOut out{INFINITY, SIZE_MAX, false, 0.0, 0.0};
+    IntegrateOut out{INFINITY, SIZE_MAX, false, 0.0, 0.0, 0};
+    // The ledger's sums, disc by disc in order as the scalar loops add them (two chains of
+    // additions that run beside the vector work; as passes of their own after the loop they
+    // cost 3 % of DB-9k's step, docs/performance.md)
+    double sum_contacts = 0.0, sum_rotation = 0.0;
+    long touching = 0;
     for (size_t i0 = begin; i0 < end; i0 += 4) {
         const size_t n = std::min<size_t>(4, end - i0);
         const DiscLoad* const ld = a.load;
@@ -174,7 +179,21 @@ DEMLAB_AVX2 __m256d neg(__m256d a) { return _mm256_xor_pd(a, _mm256_set1_pd(-0.0
             store_lanes(a.omega, i0, n, w);
             store_lanes(a.angle, i0, n, _mm256_add_pd(load_lanes(a.angle, i0, n), _mm256_mul_pd(w, dt)));
         }
-        store_lanes(diss_rotation, i0 - begin, n, diss_rot);
+        alignas(32) double rot_terms[4];
+        _mm256_store_pd(rot_terms, diss_rot);
+        for (size_t l = 0; l < n; ++l) {
+            const size_t i = i0 + l;
+            sum_contacts += ld[i].dissipated;
+            sum_rotation += rot_terms[l];
+            touching += ld[i].n_disc;
+            if ((i + 1) % block_size == 0 || i + 1 == end) {
+                LedgerBlock& b = blocks[i / block_size];
+                b.contacts = sum_contacts;
+                b.local = 0.0;  // no local damping in this loop
+                b.rotation = sum_rotation;
+                sum_contacts = sum_rotation = 0.0;
+            }
+        }
 
         // outside the domain or not a number; left the fat box
         const int valid = (1 << n) - 1;
@@ -204,6 +223,7 @@ DEMLAB_AVX2 __m256d neg(__m256d a) { return _mm256_xor_pd(a, _mm256_set1_pd(-0.0
             out.extent_l1 = std::max(out.extent_l1, ex[l]);
         }
     }
+    out.touching_dd = touching;
     if (p.auto_dt) {
         alignas(32) double b[4];
         _mm256_store_pd(b, best_sq);
@@ -212,7 +232,7 @@ DEMLAB_AVX2 __m256d neg(__m256d a) { return _mm256_xor_pd(a, _mm256_set1_pd(-0.0
     return out;
 }
 #else
-IntegrateOut integrate_avx2(const IntegrateArrays&, const IntegrateParams&, size_t, size_t, double*) {
+IntegrateOut integrate_avx2(const IntegrateArrays&, const IntegrateParams&, size_t, size_t, LedgerBlock*, size_t) {
     return {INFINITY, SIZE_MAX, false};
 }
 #endif

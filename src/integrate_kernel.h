@@ -45,6 +45,14 @@ struct IntegrateParams {
     Vec2 domain_lo, domain_hi;  // m
 };
 
+// The energy ledger's sums of a step for a block of discs (World's ledger: the blocks are
+// added in order, so the bits do not depend on how the discs are shared among threads).
+struct LedgerBlock {
+    double contacts = 0.0;  // J/m, half of each disc-disc contact's dissipation, per disc (DiscLoad)
+    double local = 0.0;     // J/m, local damping
+    double rotation = 0.0;  // J/m, rolling resistance and rotational damping
+};
+
 // What the range's integration found.
 struct IntegrateOut {
     double best_sq;     // the smallest squared critical step (INFINITY if !auto_dt)
@@ -52,12 +60,15 @@ struct IntegrateOut {
     bool any_escaped;   // a disc left its fat box
     double speed_l1;    // the largest |vx| + |vy| of the new velocities, m/s (the clearance test)
     double extent_l1;   // the largest |x| + |y| of the new positions, m (their rounding)
+    long touching_dd;   // the discs' touching disc-disc contacts (each pair counted twice)
 };
 
-// Integrates discs [begin, end), writing each disc's rotational ledger term (the energy the
-// rolling resistance and the rotational damping took out, J/m) into diss_rotation[i - begin]
-// for the caller to add in disc order. Only call it when cpu_has_avx2().
+// Integrates discs [begin, end), and writes the ledger's sums for their blocks: block k holds
+// discs [k block_size, (k + 1) block_size) (begin and end at block ends, or the range's ends),
+// each sum taken in disc order: the contacts' share from the discs' loads, the energy the
+// rolling resistance and the rotational damping took out, and 0 for local damping. Only call
+// it when cpu_has_avx2().
 IntegrateOut integrate_avx2(const IntegrateArrays& a, const IntegrateParams& p, size_t begin, size_t end,
-                            double* diss_rotation);
+                            LedgerBlock* blocks, size_t block_size);
 
 }  // namespace demlab

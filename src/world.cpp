@@ -595,26 +595,29 @@ void World::compute_forces(bool then_integrate) {
             ++l.n_wall;
         }
 
-        // the ledger's share of this range: the contacts' dissipation per block of discs (in
-        // disc order, as a serial pass would add them) and the touching pairs
-        long touching = 0;
-        for (size_t b0 = d0; b0 < d1; b0 += kLedgerBlock) {
-            const size_t b1 = std::min(b0 + kLedgerBlock, d1);
-            double sum = 0.0;
-            for (size_t d = b0; d < b1; ++d) {
-                sum += load[d].dissipated;
-                touching += load[d].n_disc;
-            }
-            ledger_blocks_[b0 / kLedgerBlock].contacts = sum;
-        }
-        range_clock_[size_t(t)].touching_dd = touching;
-
         // This range's sums are complete (its discs' other terms came from the cross slots),
         // and no other range reads its discs' state from here on: integrate them now, on the
         // thread whose cache holds their loads, without waiting for the other ranges. A range
         // that met a fault leaves its discs alone (the pass then throws).
-        if (then_integrate && dd_fault_[size_t(t)].index == SIZE_MAX && dw_fault_[size_t(t)].index == SIZE_MAX)
-            integrate_discs(d0, d1, t, ic);
+        const bool integrate =
+            then_integrate && dd_fault_[size_t(t)].index == SIZE_MAX && dw_fault_[size_t(t)].index == SIZE_MAX;
+        // the ledger's share of this range: the contacts' dissipation per block of discs (in
+        // disc order, as a serial pass would add them) and the touching pairs; the AVX2
+        // integration adds them up as it goes
+        if (!(integrate && avx2_integration(ic))) {
+            long touching = 0;
+            for (size_t b0 = d0; b0 < d1; b0 += kLedgerBlock) {
+                const size_t b1 = std::min(b0 + kLedgerBlock, d1);
+                double sum = 0.0;
+                for (size_t d = b0; d < b1; ++d) {
+                    sum += load[d].dissipated;
+                    touching += load[d].n_disc;
+                }
+                ledger_blocks_[b0 / kLedgerBlock].contacts = sum;
+            }
+            range_clock_[size_t(t)].touching_dd = touching;
+        }
+        if (integrate) integrate_discs(d0, d1, t, ic);
         range_clock_[size_t(t)].seconds +=
             std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
     };
@@ -713,18 +716,17 @@ World::IntegrateConsts World::integrate_prepare() {
         default_k_tran_[m] = std::max(materials_[m].kn, materials_[m].ks);
         default_k_rot_[m] = materials_[m].ks;
     }
-    if (avx2_) {
-        integrate_terms_.resize(chunks);
-        for (std::vector<double>& t : integrate_terms_)
-            if (t.size() < pos_.size()) t.resize(pos_.size());
-    }
     return {dt_, def_.gravity, def_.damping.local_alpha, def_.gravity.norm(), def_.timestep.automatic, dt_factors()};
+}
+
+bool World::avx2_integration(const IntegrateConsts& k) const {
+    return avx2_ && k.alpha == 0.0 && !(def_.rotation.model == 3 && def_.rotation.damping_per != RotDampingPer::Disc);
 }
 
 void World::integrate_discs(size_t begin, size_t end, int chunk, const IntegrateConsts& k) {
     // four discs at a time where the AVX2 loop has every rule the run uses (no local damping:
     // every flow; per-disc rotational damping), the same bits
-    if (avx2_ && k.alpha == 0.0 && !(def_.rotation.model == 3 && def_.rotation.damping_per != RotDampingPer::Disc)) {
+    if (avx2_integration(k)) {
         const IntegrateArrays arrays{pos_.data(),      vel_.data(),          omega_.data(),       angle_.data(),
                                      mass_.data(),     inv_mass_.data(),     inertia_.data(),     inv_inertia_.data(),
                                      radius_.data(),   rr_factor_.data(),    material_.data(),    load_.data(),
@@ -734,19 +736,8 @@ void World::integrate_discs(size_t begin, size_t end, int chunk, const Integrate
         const IntegrateParams params{k.dt,          k.g,          k.g_abs,         rot.model, rot.rolling_form == RollingForm::Literal,
                                      rot.mu_br,     k.auto_dt,    k.dtf.rotation_free, k.dtf.phi_sq, k.dtf.phi_t_sq,
                                      def_.domain_lo, def_.domain_hi};
-        double* const terms = integrate_terms_[size_t(chunk)].data();
-        const IntegrateOut out = integrate_avx2(arrays, params, begin, end, terms);
-        // the ledger's blocks, in disc order, as the loop below adds them (no local damping: +0)
-        double block_rot = 0.0;
-        for (size_t i = begin; i < end; ++i) {
-            block_rot += terms[i - begin];
-            if ((i + 1) % kLedgerBlock == 0 || i + 1 == end) {
-                LedgerBlock& b = ledger_blocks_[i / kLedgerBlock];
-                b.local = 0.0;
-                b.rotation = block_rot;
-                block_rot = 0.0;
-            }
-        }
+        const IntegrateOut out = integrate_avx2(arrays, params, begin, end, ledger_blocks_.data(), kLedgerBlock);
+        range_clock_[size_t(chunk)].touching_dd = out.touching_dd;
         integrate_fault_[size_t(chunk)] = out.fault;
         dt_sq_chunk_[size_t(chunk)] = k.auto_dt ? out.best_sq : INFINITY;
         escaped_chunk_[size_t(chunk)] = out.any_escaped ? 1 : 0;

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "broad_phase.h"
+#include "integrate_kernel.h"
 #include "contact_law.h"
 #include "material.h"
 #include "pair_kernel.h"
@@ -206,6 +207,8 @@ private:
     };
     IntegrateConsts integrate_prepare();
     void integrate_discs(size_t begin, size_t end, int chunk, const IntegrateConsts& k);
+    // does integrate_discs use the AVX2 loop? (no local damping; per-disc rotational damping)
+    bool avx2_integration(const IntegrateConsts& k) const;
     void integrate_finish();
     void move_walls();
     void refresh_contacts();
@@ -265,7 +268,6 @@ private:
     int force_ranges_ = 1;
     bool avx2_ = false;                     // def_.simd and the CPU has AVX2
     std::vector<PairBatch> pair_batch_;     // per range: the AVX2 kernel's results before they are added
-    std::vector<std::vector<double>> integrate_terms_;  // per range: the AVX2 integration's ledger terms
     std::vector<double> default_k_tran_, default_k_rot_;  // per material, N/m (integrate_prepare)
     void split_force_pass();
     // measured balance of the ranges (balance_force_pass)
@@ -276,11 +278,9 @@ private:
         long touching_dd = 0;  // touching disc-disc contacts counted by its discs (each pair twice)
     };
     // The energy ledger's per-step sums, per block of kLedgerBlock discs: the ranges are cut at
-    // block ends, each range sums its blocks, and the blocks are added in order.
+    // block ends, each range sums its blocks (LedgerBlock, integrate_kernel.h), and the blocks
+    // are added in order.
     static constexpr size_t kLedgerBlock = 64;
-    struct LedgerBlock {
-        double contacts = 0.0, local = 0.0, rotation = 0.0;  // J/m, dissipated in the last step
-    };
     std::vector<LedgerBlock> ledger_blocks_;
     std::vector<RangeClock> range_clock_;
     std::vector<double> range_share_;  // per range: target share of the work model
