@@ -475,6 +475,11 @@ void World::compute_forces(bool then_integrate) {
     // 2. each range sums its discs' terms
     DiscLoad* const load = load_.data();
     // the clearance test's bound as floats, rounded outwards (PairSkip)
+    if (clearances_stale_) {
+        std::fill(clearance_.begin(), clearance_.end(), 0.0f);
+        approach_ = 0.0;
+        clearances_stale_ = false;
+    }
     float* const clearance = clearance_.data();
     const float approach_lo = round_down_float(approach_), approach_hi = round_up_float(approach_);
     auto add_to_i = [load](size_t i, const PairOut& o) {
@@ -897,8 +902,8 @@ void World::integrate_finish() {
 }
 
 void World::forget_clearances() {
-    std::fill(clearance_.begin(), clearance_.end(), 0.0f);
-    approach_ = 0.0;
+    // at the next force pass: an edit by hand may come once per disc (the release's growth)
+    clearances_stale_ = true;
 }
 
 void World::move_walls() {

@@ -309,6 +309,7 @@ private:
     std::vector<double> speed_chunk_, extent_chunk_;
     long pairs_skipped_ = 0;  // summed over the steps (the ranges' PairBatch::skipped)
     long candidate_passes_ = 0;
+    bool clearances_stale_ = false;  // forget_clearances() was called: reset at the next force pass
     void forget_clearances();
     std::vector<WallContact> dw_, dw_scratch_;
     long touching_dd_ = 0, touching_dw_ = 0;
