@@ -14,6 +14,7 @@ namespace demlab {
 
 #if defined(__GNUC__) && (defined(__x86_64__) || defined(__i386__))
 #define DEMLAB_AVX2 [[gnu::target("avx2"), gnu::always_inline]] static inline
+#define DEMLAB_AVX2_LAMBDA __attribute__((target("avx2"), always_inline))
 
 namespace {
 
@@ -62,25 +63,64 @@ DEMLAB_AVX2 void store_xy(Vec2* a, size_t i0, size_t n, __m256d x, __m256d y) {
     for (size_t l = 0; l < n; ++l) a[i0 + l] = Vec2(t[2 * l], t[2 * l + 1]);
 }
 
-// a field of the four discs' loads
-template <typename F>
-DEMLAB_AVX2 __m256d load_field(const DiscLoad* load, size_t i0, size_t n, F field) {
-    return _mm256_set_pd(field(load[lane(i0, n, 3)]), field(load[lane(i0, n, 2)]), field(load[lane(i0, n, 1)]),
-                         field(load[i0]));
-}
-
-// lanes whose count is above zero, as a mask
-template <typename F>
-DEMLAB_AVX2 __m256d positive_count(const DiscLoad* load, size_t i0, size_t n, F count) {
-    const __m128i c = _mm_set_epi32(count(load[lane(i0, n, 3)]), count(load[lane(i0, n, 2)]), count(load[lane(i0, n, 1)]),
-                                    count(load[i0]));
-    return _mm256_castsi256_pd(_mm256_cvtepi32_epi64(_mm_cmpgt_epi32(c, _mm_setzero_si128())));
-}
-
 // c ? a : b, lane by lane
 DEMLAB_AVX2 __m256d blend(__m256d c, __m256d a, __m256d b) { return _mm256_blendv_pd(b, a, c); }
 
 DEMLAB_AVX2 __m256d neg(__m256d a) { return _mm256_xor_pd(a, _mm256_set1_pd(-0.0)); }
+
+// Four discs' loads (DiscLoad, one 64-byte record each) as eight registers of fields, by
+// two 4x4 transposes: fx, fy, torque, k_tran, then k_rot, dissipated, wall_normal and the
+// two counts (n_disc in the low, n_wall in the high 32 bits of a 64-bit lane). Eight
+// loads and sixteen shuffles, where a register per field gathered from four records took
+// four loads and three shuffles each (callgrind: the gathers and the ledger's per-disc loop
+// were a third of this loop's instructions). rows[l] is lane l's disc.
+struct LoadLanes {
+    __m256d fx, fy, torque, k_tran, k_rot, dissipated, wall_normal;
+    __m256i counts;
+};
+
+DEMLAB_AVX2 void transpose4(__m256d r0, __m256d r1, __m256d r2, __m256d r3, __m256d& f0, __m256d& f1, __m256d& f2,
+                            __m256d& f3) {
+    const __m256d t0 = _mm256_unpacklo_pd(r0, r1), t1 = _mm256_unpackhi_pd(r0, r1);  // r0[0] r1[0] r0[2] r1[2], ...
+    const __m256d t2 = _mm256_unpacklo_pd(r2, r3), t3 = _mm256_unpackhi_pd(r2, r3);
+    f0 = _mm256_permute2f128_pd(t0, t2, 0x20);
+    f1 = _mm256_permute2f128_pd(t1, t3, 0x20);
+    f2 = _mm256_permute2f128_pd(t0, t2, 0x31);
+    f3 = _mm256_permute2f128_pd(t1, t3, 0x31);
+}
+
+DEMLAB_AVX2 LoadLanes load_loads(const DiscLoad* const rows[4]) {
+    static_assert(sizeof(DiscLoad) == 64 && alignof(DiscLoad) == 64);
+    static_assert(offsetof(DiscLoad, force) == 0 && offsetof(DiscLoad, torque) == 16 && offsetof(DiscLoad, k_tran) == 24 &&
+                  offsetof(DiscLoad, k_rot) == 32 && offsetof(DiscLoad, dissipated) == 40 &&
+                  offsetof(DiscLoad, wall_normal) == 48 && offsetof(DiscLoad, n_disc) == 56 &&
+                  offsetof(DiscLoad, n_wall) == 60);
+    LoadLanes o;
+    const double* r[4];
+    for (int l = 0; l < 4; ++l) r[l] = reinterpret_cast<const double*>(rows[l]);
+    transpose4(_mm256_load_pd(r[0]), _mm256_load_pd(r[1]), _mm256_load_pd(r[2]), _mm256_load_pd(r[3]), o.fx, o.fy,
+               o.torque, o.k_tran);
+    __m256d counts;
+    transpose4(_mm256_load_pd(r[0] + 4), _mm256_load_pd(r[1] + 4), _mm256_load_pd(r[2] + 4), _mm256_load_pd(r[3] + 4),
+               o.k_rot, o.dissipated, o.wall_normal, counts);
+    o.counts = _mm256_castpd_si256(counts);
+    return o;
+}
+
+// lanes with n_disc > 0, and with n_wall > 0, as masks (the counts are never negative:
+// n_disc << 32 is positive iff n_disc is; n_wall 2^32 + n_disc exceeds 2^32 - 1 iff n_wall >= 1)
+DEMLAB_AVX2 __m256d touches_disc(__m256i counts) {
+    return _mm256_castsi256_pd(_mm256_cmpgt_epi64(_mm256_slli_epi64(counts, 32), _mm256_setzero_si256()));
+}
+DEMLAB_AVX2 __m256d touches_wall(__m256i counts) {
+    return _mm256_castsi256_pd(_mm256_cmpgt_epi64(counts, _mm256_set1_epi64x(0xffffffffLL)));
+}
+
+// lane l of a, l = 0..3
+DEMLAB_AVX2 double lane_of(__m256d a, int l) {
+    const __m128d h = l < 2 ? _mm256_castpd256_pd128(a) : _mm256_extractf128_pd(a, 1);
+    return (l & 1) ? _mm_cvtsd_f64(_mm_unpackhi_pd(h, h)) : _mm_cvtsd_f64(h);
+}
 
 }  // namespace
 
@@ -93,6 +133,9 @@ DEMLAB_AVX2 __m256d neg(__m256d a) { return _mm256_xor_pd(a, _mm256_set1_pd(-0.0
     const __m256d hi_x = _mm256_set1_pd(p.domain_hi.x()), hi_y = _mm256_set1_pd(p.domain_hi.y());
     const __m256d phi_sq = _mm256_set1_pd(p.phi_sq), phi_t_sq = _mm256_set1_pd(p.phi_t_sq);
     const __m256d g_abs = _mm256_set1_pd(p.g_abs), mu_br = _mm256_set1_pd(p.mu_br);
+    // one material: its stiffnesses for a disc without contacts, the same in every lane
+    const bool one_material = a.n_materials == 1;
+    const __m256d def_tran_one = _mm256_set1_pd(a.default_k_tran[0]), def_rot_one = _mm256_set1_pd(a.default_k_rot[0]);
     __m256d best_sq = _mm256_set1_pd(INFINITY);
     const __m256d sign = _mm256_set1_pd(-0.0);
     __m256d speed_l1 = zero, extent_l1 = zero;  // (a NaN is caught by the domain test)
@@ -101,26 +144,49 @@ DEMLAB_AVX2 __m256d neg(__m256d a) { return _mm256_xor_pd(a, _mm256_set1_pd(-0.0
     // additions that run beside the vector work; as passes of their own after the loop they
     // cost 3 % of DB-9k's step, docs/performance.md)
     double sum_contacts = 0.0, sum_rotation = 0.0;
-    long touching = 0;
-    for (size_t i0 = begin; i0 < end; i0 += 4) {
-        const size_t n = std::min<size_t>(4, end - i0);
-        const DiscLoad* const ld = a.load;
-        const __m256d mass = load_lanes(a.mass, i0, n), inv_mass = load_lanes(a.inv_mass, i0, n);
-        const __m256d inertia = load_lanes(a.inertia, i0, n), radius = load_lanes(a.radius, i0, n);
+    // the touching disc-disc contacts, n_disc summed as 64-bit integers (any order gives the
+    // same count)
+    __m256i touching = _mm256_setzero_si256();
+    // the block being summed and the disc after its last (a running count: `% block_size`
+    // with a run-time divisor was four 64-bit divisions per group)
+    size_t block = begin / block_size;
+    size_t block_end = std::min((block + 1) * block_size, end);
+
+    // the parameters and arrays as locals: the stores below may alias anything reached
+    // through a reference, and GCC would reload them every group
+    const bool auto_dt = p.auto_dt, rotation_free = p.rotation_free, rolling_literal = p.rolling_literal;
+    const int rotation_model = p.rotation_model;
+    const DiscLoad* const loads = a.load;
+    const double *const mass_a = a.mass, *const inv_mass_a = a.inv_mass, *const inertia_a = a.inertia;
+    const double *const inv_inertia_a = a.inv_inertia, *const radius_a = a.radius, *const rr_factor_a = a.rr_factor;
+    Vec2 *const vel_a = a.vel, *const pos_a = a.pos;
+    double *const omega_a = a.omega, *const angle_a = a.angle;
+    const Vec2 *const fat_lo_a = a.fat_lo, *const fat_hi_a = a.fat_hi;
+
+    // One group of four discs from i0 (n < 4 only for the range's last group: its missing
+    // lanes repeat its last disc and are not stored). Full groups and the last one are two
+    // instances, so the full ones carry no test of n.
+    auto group = [&](size_t i0, size_t n) DEMLAB_AVX2_LAMBDA {
+        const DiscLoad* const rows[4] = {loads + i0, loads + lane(i0, n, 1), loads + lane(i0, n, 2),
+                                         loads + lane(i0, n, 3)};
+        const LoadLanes ld = load_loads(rows);
+        const __m256d mass = load_lanes(mass_a, i0, n), inv_mass = load_lanes(inv_mass_a, i0, n);
+        const __m256d inertia = load_lanes(inertia_a, i0, n), radius = load_lanes(radius_a, i0, n);
 
         // the critical step (World::critical_step_squared_at; std::min(best, t) is min_pd(t, best))
-        if (p.auto_dt) {
-            const __m256d k_tran = load_field(ld, i0, n, [](const DiscLoad& l) { return l.k_tran; });
-            const __m256d k_rot = load_field(ld, i0, n, [](const DiscLoad& l) { return l.k_rot; });
-            const int32_t* m = a.material;
-            const __m256d def_tran = _mm256_set_pd(a.default_k_tran[m[lane(i0, n, 3)]], a.default_k_tran[m[lane(i0, n, 2)]],
-                                                   a.default_k_tran[m[lane(i0, n, 1)]], a.default_k_tran[m[i0]]);
-            const __m256d def_rot = _mm256_set_pd(a.default_k_rot[m[lane(i0, n, 3)]], a.default_k_rot[m[lane(i0, n, 2)]],
-                                                  a.default_k_rot[m[lane(i0, n, 1)]], a.default_k_rot[m[i0]]);
-            const __m256d kt = blend(_mm256_cmp_pd(k_tran, zero, _CMP_GT_OQ), k_tran, def_tran);
-            const __m256d kr = blend(_mm256_cmp_pd(k_rot, zero, _CMP_GT_OQ), k_rot, def_rot);
+        if (auto_dt) {
+            __m256d def_tran = def_tran_one, def_rot = def_rot_one;
+            if (!one_material) {
+                const int32_t* m = a.material;
+                def_tran = _mm256_set_pd(a.default_k_tran[m[lane(i0, n, 3)]], a.default_k_tran[m[lane(i0, n, 2)]],
+                                         a.default_k_tran[m[lane(i0, n, 1)]], a.default_k_tran[m[i0]]);
+                def_rot = _mm256_set_pd(a.default_k_rot[m[lane(i0, n, 3)]], a.default_k_rot[m[lane(i0, n, 2)]],
+                                        a.default_k_rot[m[lane(i0, n, 1)]], a.default_k_rot[m[i0]]);
+            }
+            const __m256d kt = blend(_mm256_cmp_pd(ld.k_tran, zero, _CMP_GT_OQ), ld.k_tran, def_tran);
+            const __m256d kr = blend(_mm256_cmp_pd(ld.k_rot, zero, _CMP_GT_OQ), ld.k_rot, def_rot);
             __m256d t2 = _mm256_div_pd(_mm256_mul_pd(phi_t_sq, mass), kt);
-            if (p.rotation_free) {
+            if (rotation_free) {
                 const __m256d r2 =
                     _mm256_div_pd(_mm256_mul_pd(phi_sq, inertia), _mm256_mul_pd(_mm256_mul_pd(kr, radius), radius));
                 t2 = blend(_mm256_cmp_pd(r2, t2, _CMP_LT_OQ), r2, t2);
@@ -129,40 +195,34 @@ DEMLAB_AVX2 __m256d neg(__m256d a) { return _mm256_xor_pd(a, _mm256_set1_pd(-0.0
         }
 
         // translation: v += (F + m g) / m dt, x += v dt
-        const __m256d fx = _mm256_add_pd(load_field(ld, i0, n, [](const DiscLoad& l) { return l.force.x(); }),
-                                         _mm256_mul_pd(mass, gx));
-        const __m256d fy = _mm256_add_pd(load_field(ld, i0, n, [](const DiscLoad& l) { return l.force.y(); }),
-                                         _mm256_mul_pd(mass, gy));
+        const __m256d fx = _mm256_add_pd(ld.fx, _mm256_mul_pd(mass, gx));
+        const __m256d fy = _mm256_add_pd(ld.fy, _mm256_mul_pd(mass, gy));
         __m256d vx, vy, px, py;
-        load_xy(a.vel, i0, n, vx, vy);
-        load_xy(a.pos, i0, n, px, py);
+        load_xy(vel_a, i0, n, vx, vy);
+        load_xy(pos_a, i0, n, px, py);
         const __m256d s = _mm256_mul_pd(inv_mass, dt);
         vx = _mm256_add_pd(vx, _mm256_mul_pd(fx, s));
         vy = _mm256_add_pd(vy, _mm256_mul_pd(fy, s));
         px = _mm256_add_pd(px, _mm256_mul_pd(vx, dt));
         py = _mm256_add_pd(py, _mm256_mul_pd(vy, dt));
-        store_xy(a.vel, i0, n, vx, vy);
-        store_xy(a.pos, i0, n, px, py);
+        store_xy(vel_a, i0, n, vx, vy);
+        store_xy(pos_a, i0, n, px, py);
         speed_l1 = _mm256_max_pd(speed_l1, _mm256_add_pd(_mm256_andnot_pd(sign, vx), _mm256_andnot_pd(sign, vy)));
         extent_l1 = _mm256_max_pd(extent_l1, _mm256_add_pd(_mm256_andnot_pd(sign, px), _mm256_andnot_pd(sign, py)));
 
         // rotation
         __m256d diss_rot = zero;
-        if (p.rotation_model != 1) {
-            const __m256d tq = load_field(ld, i0, n, [](const DiscLoad& l) { return l.torque; });
-            const __m256d w_old = load_lanes(a.omega, i0, n);
+        if (rotation_model != 1) {
+            const __m256d tq = ld.torque;
+            const __m256d w_old = load_lanes(omega_a, i0, n);
             const __m256d w_free =
-                _mm256_add_pd(w_old, _mm256_mul_pd(_mm256_mul_pd(tq, load_lanes(a.inv_inertia, i0, n)), dt));
+                _mm256_add_pd(w_old, _mm256_mul_pd(_mm256_mul_pd(tq, load_lanes(inv_inertia_a, i0, n)), dt));
             __m256d w = w_free;
             // Model 2/3: rolling resistance for a disc touching a wall (reduce_towards_zero)
-            const __m256d rr = load_lanes(a.rr_factor, i0, n);
-            const __m256d rolling = _mm256_and_pd(positive_count(ld, i0, n, [](const DiscLoad& l) { return l.n_wall; }),
-                                                  _mm256_cmp_pd(rr, zero, _CMP_GT_OQ));
+            const __m256d rr = load_lanes(rr_factor_a, i0, n);
+            const __m256d rolling = _mm256_and_pd(touches_wall(ld.counts), _mm256_cmp_pd(rr, zero, _CMP_GT_OQ));
             if (_mm256_movemask_pd(rolling) != 0) {
-                const __m256d g_eff =
-                    p.rolling_literal
-                        ? g_abs
-                        : _mm256_mul_pd(load_field(ld, i0, n, [](const DiscLoad& l) { return l.wall_normal; }), inv_mass);
+                const __m256d g_eff = rolling_literal ? g_abs : _mm256_mul_pd(ld.wall_normal, inv_mass);
                 const __m256d delta = _mm256_mul_pd(_mm256_mul_pd(g_eff, rr), dt);
                 const __m256d reduced =
                     blend(_mm256_cmp_pd(w, delta, _CMP_GT_OQ), _mm256_sub_pd(w, delta),
@@ -170,30 +230,46 @@ DEMLAB_AVX2 __m256d neg(__m256d a) { return _mm256_xor_pd(a, _mm256_set1_pd(-0.0
                 w = blend(rolling, reduced, w);
             }
             // Model 3: rotational damping of a disc touching another (per disc)
-            if (p.rotation_model == 3)
-                w = blend(positive_count(ld, i0, n, [](const DiscLoad& l) { return l.n_disc; }), _mm256_mul_pd(w, mu_br), w);
+            if (rotation_model == 3) w = blend(touches_disc(ld.counts), _mm256_mul_pd(w, mu_br), w);
             const __m256d taken = _mm256_mul_pd(_mm256_mul_pd(half, inertia),
                                                 _mm256_sub_pd(_mm256_mul_pd(w_free, w_free), _mm256_mul_pd(w, w)));
             const __m256d torque_work = _mm256_mul_pd(_mm256_mul_pd(_mm256_mul_pd(half, tq), dt), _mm256_sub_pd(w_free, w));
             diss_rot = _mm256_add_pd(zero, _mm256_sub_pd(taken, torque_work));
-            store_lanes(a.omega, i0, n, w);
-            store_lanes(a.angle, i0, n, _mm256_add_pd(load_lanes(a.angle, i0, n), _mm256_mul_pd(w, dt)));
+            store_lanes(omega_a, i0, n, w);
+            store_lanes(angle_a, i0, n, _mm256_add_pd(load_lanes(angle_a, i0, n), _mm256_mul_pd(w, dt)));
         }
-        alignas(32) double rot_terms[4];
-        _mm256_store_pd(rot_terms, diss_rot);
-        for (size_t l = 0; l < n; ++l) {
-            const size_t i = i0 + l;
-            sum_contacts += ld[i].dissipated;
-            sum_rotation += rot_terms[l];
-            touching += ld[i].n_disc;
-            if ((i + 1) % block_size == 0 || i + 1 == end) {
-                LedgerBlock& b = blocks[i / block_size];
-                b.contacts = sum_contacts;
-                b.local = 0.0;  // no local damping in this loop
-                b.rotation = sum_rotation;
-                sum_contacts = sum_rotation = 0.0;
+        // the ledger: the contacts' dissipation and the rotation rules' terms, added disc by
+        // disc; a block's sums are written when its last disc is added
+        if (n == 4 && i0 + 4 < block_end) {
+            sum_contacts += lane_of(ld.dissipated, 0);
+            sum_rotation += lane_of(diss_rot, 0);
+            sum_contacts += lane_of(ld.dissipated, 1);
+            sum_rotation += lane_of(diss_rot, 1);
+            sum_contacts += lane_of(ld.dissipated, 2);
+            sum_rotation += lane_of(diss_rot, 2);
+            sum_contacts += lane_of(ld.dissipated, 3);
+            sum_rotation += lane_of(diss_rot, 3);
+        } else {
+            alignas(32) double diss_terms[4], rot_terms[4];
+            _mm256_store_pd(diss_terms, ld.dissipated);
+            _mm256_store_pd(rot_terms, diss_rot);
+            for (size_t l = 0; l < n; ++l) {
+                sum_contacts += diss_terms[l];
+                sum_rotation += rot_terms[l];
+                if (i0 + l + 1 == block_end) {
+                    LedgerBlock& b = blocks[block];
+                    b.contacts = sum_contacts;
+                    b.local = 0.0;  // no local damping in this loop
+                    b.rotation = sum_rotation;
+                    sum_contacts = sum_rotation = 0.0;
+                    ++block;
+                    block_end = std::min(block_end + block_size, end);
+                }
             }
         }
+        // the lanes beyond n repeat the last disc: not counted
+        const __m256i valid_lanes = _mm256_cmpgt_epi64(_mm256_set1_epi64x(int64_t(n)), _mm256_setr_epi64x(0, 1, 2, 3));
+        touching = _mm256_add_epi64(touching, _mm256_and_si256(valid_lanes, _mm256_and_si256(ld.counts, _mm256_set1_epi64x(0xffffffffLL))));
 
         // outside the domain or not a number; left the fat box
         const int valid = (1 << n) - 1;
@@ -204,8 +280,8 @@ DEMLAB_AVX2 __m256d neg(__m256d a) { return _mm256_xor_pd(a, _mm256_set1_pd(-0.0
         if (bad != 0 && out.fault == SIZE_MAX) out.fault = i0 + size_t(__builtin_ctz(unsigned(bad)));
         if (!out.any_escaped) {
             __m256d flo_x, flo_y, fhi_x, fhi_y;
-            load_xy(a.fat_lo, i0, n, flo_x, flo_y);
-            load_xy(a.fat_hi, i0, n, fhi_x, fhi_y);
+            load_xy(fat_lo_a, i0, n, flo_x, flo_y);
+            load_xy(fat_hi_a, i0, n, fhi_x, fhi_y);
             const __m256d in_box = _mm256_and_pd(
                 _mm256_and_pd(_mm256_cmp_pd(flo_x, _mm256_sub_pd(px, radius), _CMP_LE_OQ),
                               _mm256_cmp_pd(flo_y, _mm256_sub_pd(py, radius), _CMP_LE_OQ)),
@@ -213,7 +289,10 @@ DEMLAB_AVX2 __m256d neg(__m256d a) { return _mm256_xor_pd(a, _mm256_set1_pd(-0.0
                               _mm256_cmp_pd(_mm256_add_pd(py, radius), fhi_y, _CMP_LE_OQ)));
             out.any_escaped = (~_mm256_movemask_pd(in_box) & valid) != 0;
         }
-    }
+    };
+    size_t i0 = begin;
+    for (; i0 + 4 <= end; i0 += 4) group(i0, 4);
+    if (i0 < end) group(i0, end - i0);
     {
         alignas(32) double sp[4], ex[4];
         _mm256_store_pd(sp, speed_l1);
@@ -222,8 +301,10 @@ DEMLAB_AVX2 __m256d neg(__m256d a) { return _mm256_xor_pd(a, _mm256_set1_pd(-0.0
             out.speed_l1 = std::max(out.speed_l1, sp[l]);
             out.extent_l1 = std::max(out.extent_l1, ex[l]);
         }
+        alignas(32) int64_t t[4];
+        _mm256_store_si256(reinterpret_cast<__m256i*>(t), touching);
+        out.touching_dd = long(t[0] + t[1] + t[2] + t[3]);
     }
-    out.touching_dd = touching;
     if (p.auto_dt) {
         alignas(32) double b[4];
         _mm256_store_pd(b, best_sq);

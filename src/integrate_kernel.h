@@ -29,6 +29,7 @@ struct IntegrateArrays {
     const Vec2* fat_hi;
     const double* default_k_tran; // per material: max(kn, ks), N/m (a disc without contacts)
     const double* default_k_rot;  // per material: ks, N/m
+    size_t n_materials;           // entries of the two tables (1: every disc reads entry 0)
 };
 
 // The step's constants.
