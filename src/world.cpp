@@ -368,6 +368,29 @@ void World::split_force_pass() {
             cross_in_[size_t(fill[range_of(dd_[size_t(cross_[m])].j)]++)] = int32_t(m);
     }
     cross_out_.resize(cross_.size());
+
+    // the range pass' blocks (FuseBlock) and how far ahead each one's pairs reach
+    fuse_blocks_.clear();
+    fuse_start_.assign(r + 1, 0);
+    cross_in_reach_.assign(r, 0);
+    for (size_t t = 0; t < r; ++t) {
+        const size_t d0 = disc_split_[t], d1 = disc_split_[t + 1];
+        size_t reach = d0;
+        for (int32_t e = cross_in_start_[t]; e < cross_in_start_[t + 1]; ++e)
+            reach = std::max(reach, size_t(dd_[size_t(cross_[size_t(cross_in_[size_t(e)])])].j) + 1);
+        cross_in_reach_[t] = std::min(reach, d1);
+        fuse_start_[t] = fuse_blocks_.size();
+        size_t k = contact_split_[t], kw = wall_split_[t];
+        for (size_t b0 = d0; b0 < d1;) {
+            const size_t b1 = std::min(b0 + kFuseBlock, d1);
+            size_t far = b1;
+            for (; k < contact_split_[t + 1] && size_t(dd_[k].i) < b1; ++k) far = std::max(far, size_t(dd_[k].j) + 1);
+            while (kw < wall_split_[t + 1] && size_t(dw_[kw].disc) < b1) ++kw;
+            fuse_blocks_.push_back({b1, k, kw, std::min(far, d1)});  // a cross pair's j is another range's
+            b0 = b1;
+        }
+    }
+    fuse_start_[r] = fuse_blocks_.size();
 }
 
 // The ranges' work model (one unit per disc and per owned contact) misses what a unit costs:
@@ -504,125 +527,146 @@ void World::compute_forces(bool then_integrate) {
     };
     auto range_pass = [&](int t) {
         const auto started = std::chrono::steady_clock::now();
-        const size_t d0 = disc_split_[size_t(t)], d1 = disc_split_[size_t(t) + 1];
-        std::fill(load + d0, load + d1, DiscLoad{});
+        const size_t d0 = disc_split_[size_t(t)];
+        // The loads are zeroed just ahead of the first pair that adds to them (the blocks'
+        // reach, split_force_pass), not all at the range's start: by the time the pairs of a
+        // range's last discs came, their zeroed lines had left the cache.
+        size_t zeroed = d0;
+        auto zero_to = [&](size_t e) {
+            if (e <= zeroed) return;
+            std::fill(load + zeroed, load + e, DiscLoad{});
+            zeroed = e;
+        };
         // cross contacts into this range's discs come first in their order
+        zero_to(cross_in_reach_[size_t(t)]);
         for (int32_t e = cross_in_start_[size_t(t)]; e < cross_in_start_[size_t(t) + 1]; ++e) {
             const size_t m = size_t(cross_in_[size_t(e)]);
             add_to_j(size_t(dd_[size_t(cross_[m])].j), cross_out_[m]);
         }
-        const size_t k0 = contact_split_[size_t(t)], k1 = contact_split_[size_t(t) + 1];
         // this range's own cross contacts, in list order
         size_t next = cross_start_[size_t(t)];
         size_t next_k = next < cross_.size() ? size_t(cross_[next]) : SIZE_MAX;
         PairBatch* const batch = avx2_ ? &pair_batch_[size_t(t)] : nullptr;
         PairSkip skip_base{nullptr, approach_lo, approach_hi};
-        for (size_t k = k0; k < k1; ++k) {
-            DiscContact& c = dd_[k];
-            if (k == next_k) {  // computed in 1.
-                add_to_i(size_t(c.i), cross_out_[next]);
-                ++next;
-                next_k = next < cross_.size() ? size_t(cross_[next]) : SIZE_MAX;
-                continue;
-            }
-            if (batch) {
-                // up to a batch of pairs before the next cross contact, four at a time, then
-                // added in list order (what the scalar kernel below does pair by pair)
-                const size_t n = std::min({k1, next_k, k + PairBatch::kSize}) - k;
-                skip_base.clearance = clearance + k;
-                const size_t done = disc_pairs_avx2(discs, pp, &c, n, *batch, &skip_base);
-                add_pair_batch_avx2(*batch, &c, load);
-                if (done > 0) {
-                    k += done - 1;
+        range_clock_[size_t(t)].touching_dd = 0;
+        size_t k = contact_split_[size_t(t)], kw = wall_split_[size_t(t)], b0 = d0;
+        // Block by block (FuseBlock): the pairs whose first disc is in the block, then the
+        // block's wall contacts; then the block's sums are complete (a disc's pairs with
+        // earlier discs came in earlier blocks, its cross terms first) and no later pair reads
+        // its discs (a pair's second disc comes after its first), so the block is integrated
+        // while its loads and state are still in the cache. Every disc adds its terms in the
+        // order it did when the range was one block: the same bits.
+        for (size_t fbi = fuse_start_[size_t(t)]; fbi < fuse_start_[size_t(t) + 1]; ++fbi) {
+            const FuseBlock& fb = fuse_blocks_[fbi];
+            zero_to(fb.reach);
+            for (; k < fb.contact_end; ++k) {
+                DiscContact& c = dd_[k];
+                if (k == next_k) {  // computed in 1.
+                    add_to_i(size_t(c.i), cross_out_[next]);
+                    ++next;
+                    next_k = next < cross_.size() ? size_t(cross_[next]) : SIZE_MAX;
                     continue;
                 }
-            }
-            PairOut o;
-            double overlap = 0.0;
-            if (!disc_pair_force(discs, pp, c, o, overlap)) {
-                disc_fault(k, overlap, t);
-                continue;
-            }
-            add_to_i(size_t(c.i), o);
-            add_to_j(size_t(c.j), o);
-        }
-
-        // disc-wall: n from the wall (A) to the disc (B)
-        for (size_t k = wall_split_[size_t(t)]; k < wall_split_[size_t(t) + 1]; ++k) {
-            WallContact& c = dw_[k];
-            WallOut& out = dw_out_[k];
-            const size_t i = size_t(c.disc), w = size_t(c.wall);
-            out.touching = false;
-            out.dissipated = 0.0;
-            WallHit hit;
-            if (!wall_active_[w] || !disc_wall_contact(geom_[w], pos_[i], radius_[i], hit)) {
-                if (c.damp_n != 0.0f || c.damp_s != 0.0f) {
-                    // the last dashpot force's second half, along the normal it had
-                    const Vec2 vrel = vel_[i] - (wall_moving_[w] ? walls_[w].velocity : Vec2::Zero());
-                    const Vec2 q = closest_point(geom_[w], pos_[i]);
-                    const Vec2 nrm = (pos_[i] - q).normalized();
-                    const double vs = vrel.dot(perp(nrm)) - omega_[i] * radius_[i];
-                    out.dissipated = -0.5 * last_dt * (c.damp_n * vrel.dot(nrm) + c.damp_s * vs);
+                if (batch) {
+                    // up to a batch of pairs before the next cross contact, four at a time, then
+                    // added in list order (what the scalar kernel below does pair by pair)
+                    const size_t n = std::min({fb.contact_end, next_k, k + PairBatch::kSize}) - k;
+                    skip_base.clearance = clearance + k;
+                    const size_t done = disc_pairs_avx2(discs, pp, &c, n, *batch, &skip_base);
+                    add_pair_batch_avx2(*batch, &c, load);
+                    if (done > 0) {
+                        k += done - 1;
+                        continue;
+                    }
                 }
-                c.fs = 0.0;
-                c.damp_n = c.damp_s = 0.0f;
-                continue;
-            }
-            if (!(hit.overlap <= max_ratio * radius_[i])) {
-                if (k < dw_fault_[size_t(t)].index)
-                    dw_fault_[size_t(t)] = Fault{k, "blow-up: overlap " + format_number(hit.overlap) + " m of disc " +
-                                                        std::to_string(i) + " with wall '" + walls_[w].name + "' exceeds " +
-                                                        format_number(max_ratio) + " of its radius at " +
-                                                        where_disc(steps_, time_, int(i), pos_[i]) +
-                                                        ". Likely cause: a time step too large for the stiffness, or a "
-                                                        "disc crossing the wall"};
-                continue;
-            }
-            const Vec2 nrm = hit.normal;
-            const Vec2 tan = perp(nrm);
-            const double rb = radius_[i] - 0.5 * hit.overlap;
-            const Vec2 vwall = wall_moving_[w] ? walls_[w].velocity : Vec2::Zero();
-            const Vec2 vrel = vel_[i] - vwall;
-            const double vn = vrel.dot(nrm);
-            const double vs = vrel.dot(tan) - omega_[i] * rb;
-            const PairMaterial& pm = mat_dw_[size_t(material_[i]) * nw + w];
-            const LinearContactForce f =
-                step_contact({pm.kn, pm.ks, pm.mu, c.cn, c.cs, mode, pm.inv_ks}, hit.overlap, vn, vs, dt, last_dt, c, out.dissipated);
-            out.f = f.fn * nrm + f.ft * tan;
-            out.point = pos_[i] - rb * nrm;
-            out.touching = true;
-            DiscLoad& l = load[i];
-            l.force += out.f;
-            l.torque += -rb * f.ft;
-            l.k_tran += pm.k_tran;
-            l.k_rot += pm.ks;
-            l.wall_normal += f.fn_spring;
-            ++l.n_wall;
-        }
-
-        // This range's sums are complete (its discs' other terms came from the cross slots),
-        // and no other range reads its discs' state from here on: integrate them now, on the
-        // thread whose cache holds their loads, without waiting for the other ranges. A range
-        // that met a fault leaves its discs alone (the pass then throws).
-        const bool integrate =
-            then_integrate && dd_fault_[size_t(t)].index == SIZE_MAX && dw_fault_[size_t(t)].index == SIZE_MAX;
-        // the ledger's share of this range: the contacts' dissipation per block of discs (in
-        // disc order, as a serial pass would add them) and the touching pairs; the AVX2
-        // integration adds them up as it goes
-        if (!(integrate && avx2_integration(ic))) {
-            long touching = 0;
-            for (size_t b0 = d0; b0 < d1; b0 += kLedgerBlock) {
-                const size_t b1 = std::min(b0 + kLedgerBlock, d1);
-                double sum = 0.0;
-                for (size_t d = b0; d < b1; ++d) {
-                    sum += load[d].dissipated;
-                    touching += load[d].n_disc;
+                PairOut o;
+                double overlap = 0.0;
+                if (!disc_pair_force(discs, pp, c, o, overlap)) {
+                    disc_fault(k, overlap, t);
+                    continue;
                 }
-                ledger_blocks_[b0 / kLedgerBlock].contacts = sum;
+                add_to_i(size_t(c.i), o);
+                add_to_j(size_t(c.j), o);
             }
-            range_clock_[size_t(t)].touching_dd = touching;
+
+            // disc-wall: n from the wall (A) to the disc (B)
+            for (; kw < fb.wall_end; ++kw) {
+                WallContact& c = dw_[kw];
+                WallOut& out = dw_out_[kw];
+                const size_t i = size_t(c.disc), w = size_t(c.wall);
+                out.touching = false;
+                out.dissipated = 0.0;
+                WallHit hit;
+                if (!wall_active_[w] || !disc_wall_contact(geom_[w], pos_[i], radius_[i], hit)) {
+                    if (c.damp_n != 0.0f || c.damp_s != 0.0f) {
+                        // the last dashpot force's second half, along the normal it had
+                        const Vec2 vrel = vel_[i] - (wall_moving_[w] ? walls_[w].velocity : Vec2::Zero());
+                        const Vec2 q = closest_point(geom_[w], pos_[i]);
+                        const Vec2 nrm = (pos_[i] - q).normalized();
+                        const double vs = vrel.dot(perp(nrm)) - omega_[i] * radius_[i];
+                        out.dissipated = -0.5 * last_dt * (c.damp_n * vrel.dot(nrm) + c.damp_s * vs);
+                    }
+                    c.fs = 0.0;
+                    c.damp_n = c.damp_s = 0.0f;
+                    continue;
+                }
+                if (!(hit.overlap <= max_ratio * radius_[i])) {
+                    if (kw < dw_fault_[size_t(t)].index)
+                        dw_fault_[size_t(t)] = Fault{kw, "blow-up: overlap " + format_number(hit.overlap) + " m of disc " +
+                                                            std::to_string(i) + " with wall '" + walls_[w].name + "' exceeds " +
+                                                            format_number(max_ratio) + " of its radius at " +
+                                                            where_disc(steps_, time_, int(i), pos_[i]) +
+                                                            ". Likely cause: a time step too large for the stiffness, or a "
+                                                            "disc crossing the wall"};
+                    continue;
+                }
+                const Vec2 nrm = hit.normal;
+                const Vec2 tan = perp(nrm);
+                const double rb = radius_[i] - 0.5 * hit.overlap;
+                const Vec2 vwall = wall_moving_[w] ? walls_[w].velocity : Vec2::Zero();
+                const Vec2 vrel = vel_[i] - vwall;
+                const double vn = vrel.dot(nrm);
+                const double vs = vrel.dot(tan) - omega_[i] * rb;
+                const PairMaterial& pm = mat_dw_[size_t(material_[i]) * nw + w];
+                const LinearContactForce f =
+                    step_contact({pm.kn, pm.ks, pm.mu, c.cn, c.cs, mode, pm.inv_ks}, hit.overlap, vn, vs, dt, last_dt, c, out.dissipated);
+                out.f = f.fn * nrm + f.ft * tan;
+                out.point = pos_[i] - rb * nrm;
+                out.touching = true;
+                DiscLoad& l = load[i];
+                l.force += out.f;
+                l.torque += -rb * f.ft;
+                l.k_tran += pm.k_tran;
+                l.k_rot += pm.ks;
+                l.wall_normal += f.fn_spring;
+                ++l.n_wall;
+            }
+
+            // The block's sums are complete. A range that met a fault integrates no more
+            // blocks, but goes on with its pairs (the pass then throws the first fault in list
+            // order, whatever the blocks and ranges).
+            const size_t b1 = fb.disc_end;
+            const bool integrate =
+                then_integrate && dd_fault_[size_t(t)].index == SIZE_MAX && dw_fault_[size_t(t)].index == SIZE_MAX;
+            // the ledger's share of the block: the contacts' dissipation per ledger block of
+            // discs (in disc order, as a serial pass would add them) and the touching pairs;
+            // the AVX2 integration adds them up as it goes
+            if (!(integrate && avx2_integration(ic))) {
+                long touching = 0;
+                for (size_t l0 = b0; l0 < b1; l0 += kLedgerBlock) {
+                    const size_t l1 = std::min(l0 + kLedgerBlock, b1);
+                    double sum = 0.0;
+                    for (size_t d = l0; d < l1; ++d) {
+                        sum += load[d].dissipated;
+                        touching += load[d].n_disc;
+                    }
+                    ledger_blocks_[l0 / kLedgerBlock].contacts = sum;
+                }
+                range_clock_[size_t(t)].touching_dd += touching;
+            }
+            if (integrate) integrate_discs(b0, b1, t, ic);
+            b0 = b1;
         }
-        if (integrate) integrate_discs(d0, d1, t, ic);
         range_clock_[size_t(t)].seconds +=
             std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
     };
@@ -742,12 +786,8 @@ void World::integrate_discs(size_t begin, size_t end, int chunk, const Integrate
                                      rot.mu_br,     k.auto_dt,    k.dtf.rotation_free, k.dtf.phi_sq, k.dtf.phi_t_sq,
                                      def_.domain_lo, def_.domain_hi};
         const IntegrateOut out = integrate_avx2(arrays, params, begin, end, ledger_blocks_.data(), kLedgerBlock);
-        range_clock_[size_t(chunk)].touching_dd = out.touching_dd;
-        integrate_fault_[size_t(chunk)] = out.fault;
-        dt_sq_chunk_[size_t(chunk)] = k.auto_dt ? out.best_sq : INFINITY;
-        escaped_chunk_[size_t(chunk)] = out.any_escaped ? 1 : 0;
-        speed_chunk_[size_t(chunk)] = out.speed_l1;
-        extent_chunk_[size_t(chunk)] = out.extent_l1;
+        range_clock_[size_t(chunk)].touching_dd += out.touching_dd;
+        integrate_note(chunk, out.fault, k.auto_dt ? out.best_sq : INFINITY, out.any_escaped, out.speed_l1, out.extent_l1);
         return;
     }
     const double dt = k.dt;
@@ -857,11 +897,19 @@ void World::integrate_discs(size_t begin, size_t end, int chunk, const Integrate
         any_escaped = any_escaped || !(fat_lo[i].x() <= p.x() - r && fat_lo[i].y() <= p.y() - r &&
                                        p.x() + r <= fat_hi[i].x() && p.y() + r <= fat_hi[i].y());
     }
-    integrate_fault_[size_t(chunk)] = fault;
-    dt_sq_chunk_[size_t(chunk)] = best_sq;
-    escaped_chunk_[size_t(chunk)] = any_escaped ? 1 : 0;
-    speed_chunk_[size_t(chunk)] = speed_l1;
-    extent_chunk_[size_t(chunk)] = extent_l1;
+    integrate_note(chunk, fault, best_sq, any_escaped, speed_l1, extent_l1);
+}
+
+// A chunk's integration runs block by block (compute_forces): what each block found is added
+// to the chunk's slots (reset by integrate_prepare): the first fault, the smallest step, any
+// escape, the largest speed and extent.
+void World::integrate_note(int chunk, size_t fault, double best_sq, bool any_escaped, double speed_l1, double extent_l1) {
+    const size_t c = size_t(chunk);
+    if (integrate_fault_[c] == SIZE_MAX) integrate_fault_[c] = fault;
+    dt_sq_chunk_[c] = std::min(dt_sq_chunk_[c], best_sq);
+    if (any_escaped) escaped_chunk_[c] = 1;
+    speed_chunk_[c] = std::max(speed_chunk_[c], speed_l1);
+    extent_chunk_[c] = std::max(extent_chunk_[c], extent_l1);
 }
 
 void World::integrate_finish() {

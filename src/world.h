@@ -209,6 +209,7 @@ private:
     void integrate_discs(size_t begin, size_t end, int chunk, const IntegrateConsts& k);
     // does integrate_discs use the AVX2 loop? (no local damping; per-disc rotational damping)
     bool avx2_integration(const IntegrateConsts& k) const;
+    void integrate_note(int chunk, size_t fault, double best_sq, bool any_escaped, double speed_l1, double extent_l1);
     void integrate_finish();
     void move_walls();
     void refresh_contacts();
@@ -270,6 +271,21 @@ private:
     std::vector<PairBatch> pair_batch_;     // per range: the AVX2 kernel's results before they are added
     std::vector<double> default_k_tran_, default_k_rot_;  // per material, N/m (integrate_prepare)
     void split_force_pass();
+    // The range pass goes block by block, a block being kFuseBlock discs (whole ledger
+    // blocks) and the contacts whose first disc is in it; each block is integrated as soon as
+    // its pairs and wall contacts are done (compute_forces). Measured on the flume and DB-9k:
+    // docs/performance.md, session 10.
+    static constexpr size_t kFuseBlock = 256;
+    struct FuseBlock {
+        size_t disc_end;     // its discs end here (they start where the last block ended)
+        size_t contact_end;  // its disc-disc contacts end here (dd_ index)
+        size_t wall_end;     // its wall contacts end here (dw_ index)
+        size_t reach;        // the loads of discs below this are zeroed before its pairs: one
+                             // more than the largest disc of the range its pairs add to
+    };
+    std::vector<FuseBlock> fuse_blocks_;
+    std::vector<size_t> fuse_start_;      // per range: its first block (ranges + 1 entries)
+    std::vector<size_t> cross_in_reach_;  // per range: the cross contacts into it add below this disc
     // measured balance of the ranges (balance_force_pass)
     static constexpr int kBalanceWindow = 64;          // steps between checks
     static constexpr double kBalanceTolerance = 0.03;  // longest range over the mean, - 1

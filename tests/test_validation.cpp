@@ -4,6 +4,7 @@
 #include <functional>
 #include <limits>
 
+#include "db9k.h"
 #include "helpers.h"
 
 using namespace demlab;
@@ -87,6 +88,30 @@ TEST(BlowUp, LostAndNonFiniteDiscsStopTheRun) {
     EXPECT_NE(lost.find("disc 0"), std::string::npos) << lost;
     const std::string overflow = run_one(-1.7e308, 10.0);  // v = -inf after one step
     EXPECT_NE(overflow.find("non-finite"), std::string::npos) << overflow;
+}
+
+// The force pass integrates its discs block by block as their sums complete, and a range
+// stops integrating at its first fault but goes on with its pairs: the diagnosis names the
+// first blow-up in list order, the same for any thread count.
+TEST(BlowUp, SameDiagnosisOnOneAndTwoThreads) {
+    const auto discs = read_xyr(default_db9k_path());
+    std::string msg[2];
+    for (int threads : {1, 2}) {
+        WorldDef def = db9k_world_def();
+        def.threads = threads;
+        def.timestep.fixed = 2e-5;  // 4 times DB-9k's step: an overlap beyond half a radius at step 3,
+                                     // between discs 559 and 560 (the third block of 256)
+        World w(def);
+        build_db9k(w, discs);
+        w.finalize();
+        try {
+            w.run(400);
+        } catch (const RunError& e) {
+            msg[threads - 1] = e.what();
+        }
+    }
+    EXPECT_NE(msg[0].find("blow-up: overlap"), std::string::npos) << msg[0];
+    EXPECT_EQ(msg[0], msg[1]);
 }
 
 TEST(BlowUp, TooLargeATimeStepStopsWithADiagnosis) {
