@@ -143,7 +143,7 @@ DEMLAB_AVX2 double lane_of(__m256d a, int l) {
     // The ledger's sums, disc by disc in order as the scalar loops add them (two chains of
     // additions that run beside the vector work; as passes of their own after the loop they
     // cost 3 % of DB-9k's step, docs/performance.md)
-    double sum_contacts = 0.0, sum_rotation = 0.0;
+    double sum_contacts = 0.0, sum_rotation = 0.0, sum_kinetic = 0.0;
     // the touching disc-disc contacts, n_disc summed as 64-bit integers (any order gives the
     // same count)
     __m256i touching = _mm256_setzero_si256();
@@ -210,6 +210,10 @@ DEMLAB_AVX2 double lane_of(__m256d a, int l) {
         speed_l1 = _mm256_max_pd(speed_l1, _mm256_add_pd(_mm256_andnot_pd(sign, vx), _mm256_andnot_pd(sign, vy)));
         extent_l1 = _mm256_max_pd(extent_l1, _mm256_add_pd(_mm256_andnot_pd(sign, px), _mm256_andnot_pd(sign, py)));
 
+        // the kinetic energy after the step, translation then rotation (World::integrate_discs)
+        __m256d kinetic = _mm256_mul_pd(_mm256_mul_pd(half, mass),
+                                        _mm256_add_pd(_mm256_mul_pd(vx, vx), _mm256_mul_pd(vy, vy)));
+
         // rotation
         __m256d diss_rot = zero;
         if (rotation_model != 1) {
@@ -235,6 +239,7 @@ DEMLAB_AVX2 double lane_of(__m256d a, int l) {
                                                 _mm256_sub_pd(_mm256_mul_pd(w_free, w_free), _mm256_mul_pd(w, w)));
             const __m256d torque_work = _mm256_mul_pd(_mm256_mul_pd(_mm256_mul_pd(half, tq), dt), _mm256_sub_pd(w_free, w));
             diss_rot = _mm256_add_pd(zero, _mm256_sub_pd(taken, torque_work));
+            kinetic = _mm256_add_pd(kinetic, _mm256_mul_pd(_mm256_mul_pd(half, inertia), _mm256_mul_pd(w, w)));
             store_lanes(omega_a, i0, n, w);
             store_lanes(angle_a, i0, n, _mm256_add_pd(load_lanes(angle_a, i0, n), _mm256_mul_pd(w, dt)));
         }
@@ -243,25 +248,32 @@ DEMLAB_AVX2 double lane_of(__m256d a, int l) {
         if (n == 4 && i0 + 4 < block_end) {
             sum_contacts += lane_of(ld.dissipated, 0);
             sum_rotation += lane_of(diss_rot, 0);
+            sum_kinetic += lane_of(kinetic, 0);
             sum_contacts += lane_of(ld.dissipated, 1);
             sum_rotation += lane_of(diss_rot, 1);
+            sum_kinetic += lane_of(kinetic, 1);
             sum_contacts += lane_of(ld.dissipated, 2);
             sum_rotation += lane_of(diss_rot, 2);
+            sum_kinetic += lane_of(kinetic, 2);
             sum_contacts += lane_of(ld.dissipated, 3);
             sum_rotation += lane_of(diss_rot, 3);
+            sum_kinetic += lane_of(kinetic, 3);
         } else {
-            alignas(32) double diss_terms[4], rot_terms[4];
+            alignas(32) double diss_terms[4], rot_terms[4], kinetic_terms[4];
             _mm256_store_pd(diss_terms, ld.dissipated);
             _mm256_store_pd(rot_terms, diss_rot);
+            _mm256_store_pd(kinetic_terms, kinetic);
             for (size_t l = 0; l < n; ++l) {
                 sum_contacts += diss_terms[l];
                 sum_rotation += rot_terms[l];
+                sum_kinetic += kinetic_terms[l];
                 if (i0 + l + 1 == block_end) {
                     LedgerBlock& b = blocks[block];
                     b.contacts = sum_contacts;
                     b.local = 0.0;  // no local damping in this loop
                     b.rotation = sum_rotation;
-                    sum_contacts = sum_rotation = 0.0;
+                    b.kinetic = sum_kinetic;
+                    sum_contacts = sum_rotation = sum_kinetic = 0.0;
                     ++block;
                     block_end = std::min(block_end + block_size, end);
                 }

@@ -52,6 +52,8 @@ struct LedgerBlock {
     double contacts = 0.0;  // J/m, half of each disc-disc contact's dissipation, per disc (DiscLoad)
     double local = 0.0;     // J/m, local damping
     double rotation = 0.0;  // J/m, rolling resistance and rotational damping
+    double kinetic = 0.0;   // J/m, the discs' kinetic energy after the step: per disc
+                            // 0.5 m |v|^2 + 0.5 I omega^2 (the second term unless rotation is locked)
 };
 
 // What the range's integration found.
@@ -67,7 +69,8 @@ struct IntegrateOut {
 // Integrates discs [begin, end), and writes the ledger's sums for their blocks: block k holds
 // discs [k block_size, (k + 1) block_size) (begin and end at block ends, or the range's ends),
 // each sum taken in disc order: the contacts' share from the discs' loads, the energy the
-// rolling resistance and the rotational damping took out, and 0 for local damping. Only call
+// rolling resistance and the rotational damping took out, 0 for local damping, and the
+// discs' kinetic energy after the step. Only call
 // it when cpu_has_avx2().
 IntegrateOut integrate_avx2(const IntegrateArrays& a, const IntegrateParams& p, size_t begin, size_t end,
                             LedgerBlock* blocks, size_t block_size);

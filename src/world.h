@@ -140,6 +140,12 @@ public:
     long touching_wall_pairs() const { return touching_dw_; }
 
     EnergyReport energy() const;
+    // The discs' kinetic energy after the last step, J/m: sum of 0.5 m |v|^2 + 0.5 I omega^2
+    // (no rotation term when rotation is locked), added up by the integration per block of
+    // discs and the blocks in order, so the same bits for any thread count, at no serial
+    // cost (the run's rest and blow-up watch reads it every 10 steps). Not updated by the
+    // direct edits below; 0 before the first step.
+    double kinetic_energy() const { return kinetic_; }
     // The force pass's split (world.cpp): disc ranges (one per thread when shared out) and how
     // many candidate pairs cross from one range to another (computed into slots first).
     int force_pass_ranges() const { return force_ranges_; }
@@ -332,6 +338,13 @@ private:
 
     // energy ledger
     double diss_contacts_ = 0, diss_local_ = 0, diss_rotation_ = 0, work_walls_ = 0, removed_walls_ = 0, last_dt_ = 0;
+    double kinetic_ = 0;
+    // energy()'s partial sums per block (kept between calls: no allocation in the run)
+    static constexpr size_t kEnergyBlock = 2048;
+    struct EnergyBlock {
+        double kinetic_translation = 0, kinetic_rotation = 0, potential = 0, elastic = 0;
+    };
+    mutable std::vector<EnergyBlock> energy_blocks_;
 };
 
 }  // namespace demlab

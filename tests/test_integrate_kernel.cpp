@@ -60,6 +60,7 @@ TEST(IntegrateKernel, Avx2AndScalarGiveTheSameBitsForEveryRotationRule) {
                 const EnergyReport a = simd->energy(), b = scalar->energy();
                 ASSERT_EQ(bits(a.dissipated_rotation), bits(b.dissipated_rotation));
                 ASSERT_EQ(bits(a.dissipated_contacts), bits(b.dissipated_contacts));
+                ASSERT_EQ(bits(simd->kinetic_energy()), bits(scalar->kinetic_energy()));
             }
             // the case covers what it is meant to: contacts with walls and discs, spin taken out
             EXPECT_GT(simd->touching_disc_pairs(), 100);
@@ -67,4 +68,37 @@ TEST(IntegrateKernel, Avx2AndScalarGiveTheSameBitsForEveryRotationRule) {
                 EXPECT_GT(simd->energy().dissipated_rotation, 0.0) << "model " << model;
             }
         }
+}
+
+// World::kinetic_energy, summed by the integration per block of discs: the direct sum to
+// rounding, with and without the rotation term, and the same bits on 1 and 3 threads (the
+// ranges are cut at other discs then).
+TEST(IntegrateKernel, KineticEnergyIsTheDirectSumForAnyThreadCount) {
+    const auto discs = read_xyr(default_db9k_path());
+    for (bool locked : {false, true}) {
+        double ke[2] = {0, 0};
+        for (int k = 0; k < 2; ++k) {
+            WorldDef def = db9k_world_def();
+            def.threads = k == 0 ? 1 : 3;
+            if (locked) def.rotation.model = 1;
+            World w(def);
+            build_db9k(w, discs);
+            w.finalize();
+            EXPECT_EQ(w.kinetic_energy(), 0.0);
+            w.run(1200);
+            ke[k] = w.kinetic_energy();
+            double direct = 0.0, rotation = 0.0;
+            for (size_t i = 0; i < w.disc_count(); ++i) {
+                direct += 0.5 * w.masses()[i] * w.velocities()[i].squaredNorm();
+                rotation += 0.25 * w.masses()[i] * w.radii()[i] * w.radii()[i] * w.omegas()[i] * w.omegas()[i];
+            }
+            if (!locked) {
+                EXPECT_GT(rotation, 1e-6 * direct);  // the discs spin: the term is there
+                direct += rotation;
+            }
+            EXPECT_GT(direct, 0.0);
+            EXPECT_NEAR(ke[k], direct, 1e-12 * direct) << (locked ? "locked" : "free") << ", threads " << def.threads;
+        }
+        EXPECT_EQ(bits(ke[0]), bits(ke[1]));
+    }
 }
