@@ -325,16 +325,22 @@ DEMLAB_AVX2 size_t disc_pairs(const DiscArrays& d, const PairPassParams& p, Disc
     static_assert(offsetof(DiscLoad, force) == 0 && offsetof(DiscLoad, torque) == 16 && offsetof(DiscLoad, k_tran) == 24 &&
                   offsetof(DiscLoad, k_rot) == 32 && offsetof(DiscLoad, dissipated) == 40);
     for (size_t b = 0, n = batch.count; b < n; ++b) {
+        // everything read from the batch and the contact first: the stores into the loads
+        // may alias them as far as the compiler knows, and it reloaded i, j and the touching
+        // flag after each (a third of the loop's instructions)
         const DiscContact& cb = c[batch.index[b]];
+        const size_t i = size_t(cb.i), j = size_t(cb.j);
+        const int32_t touching = batch.touching[b];
         const __m128d both = _mm_load_pd(batch.to_both[b]);
-        double* const li = reinterpret_cast<double*>(load + size_t(cb.i));
-        _mm256_store_pd(li, _mm256_add_pd(_mm256_load_pd(li), _mm256_load_pd(batch.to_i[b])));
+        const __m256d to_i = _mm256_load_pd(batch.to_i[b]), to_j = _mm256_load_pd(batch.to_j[b]);
+        double* const li = reinterpret_cast<double*>(load + i);
+        _mm256_store_pd(li, _mm256_add_pd(_mm256_load_pd(li), to_i));
         _mm_store_pd(li + 4, _mm_add_pd(_mm_load_pd(li + 4), both));
-        load[size_t(cb.i)].n_disc += batch.touching[b];
-        double* const lj = reinterpret_cast<double*>(load + size_t(cb.j));
-        _mm256_store_pd(lj, _mm256_add_pd(_mm256_load_pd(lj), _mm256_load_pd(batch.to_j[b])));
+        load[i].n_disc += touching;
+        double* const lj = reinterpret_cast<double*>(load + j);
+        _mm256_store_pd(lj, _mm256_add_pd(_mm256_load_pd(lj), to_j));
         _mm_store_pd(lj + 4, _mm_add_pd(_mm_load_pd(lj + 4), both));
-        load[size_t(cb.j)].n_disc += batch.touching[b];
+        load[j].n_disc += touching;
     }
 }
 
