@@ -136,7 +136,8 @@ DEMLAB_AVX2 double lane_of(__m256d a, int l) {
     // one material: its stiffnesses for a disc without contacts, the same in every lane
     const bool one_material = a.n_materials == 1;
     const __m256d def_tran_one = _mm256_set1_pd(a.default_k_tran[0]), def_rot_one = _mm256_set1_pd(a.default_k_rot[0]);
-    __m256d best_sq = _mm256_set1_pd(INFINITY);
+    __m256d best_sq = _mm256_set1_pd(p.auto_dt ? p.best_sq_start : INFINITY);
+    const __m256d widen = _mm256_set1_pd(1.0 + 0x1p-51), smallest_normal = _mm256_set1_pd(0x1p-1022);
     const __m256d sign = _mm256_set1_pd(-0.0);
     __m256d speed_l1 = zero, extent_l1 = zero;  // (a NaN is caught by the domain test)
     IntegrateOut out{INFINITY, SIZE_MAX, false, 0.0, 0.0, 0};
@@ -185,13 +186,31 @@ DEMLAB_AVX2 double lane_of(__m256d a, int l) {
             }
             const __m256d kt = blend(_mm256_cmp_pd(ld.k_tran, zero, _CMP_GT_OQ), ld.k_tran, def_tran);
             const __m256d kr = blend(_mm256_cmp_pd(ld.k_rot, zero, _CMP_GT_OQ), ld.k_rot, def_rot);
-            __m256d t2 = _mm256_div_pd(_mm256_mul_pd(phi_t_sq, mass), kt);
+            const __m256d a_t = _mm256_mul_pd(phi_t_sq, mass);
+            const __m256d a_r = _mm256_mul_pd(phi_sq, inertia), b_r = _mm256_mul_pd(_mm256_mul_pd(kr, radius), radius);
+            // Only the smallest quotient counts, and the divisions (two per group, 13 cycles
+            // each) were where this loop's time piled up (perf). A lane's quotient a / b cannot
+            // go below its best so far, T, when a >= T b; and fl(a / b) >= T then, rounding
+            // being monotonic. P = fl(T b) is within 2^-53 of T b when it is a normal number,
+            // so a >= fl(P (1 + 2^-51)) proves a >= T b. A group none of whose lanes can win
+            // skips the divisions; the others divide as always, so the bits are the same.
+            // (A NaN or infinite T or quotient fails the test and is divided.)
+            const __m256d p_t = _mm256_mul_pd(best_sq, kt);
+            __m256d cannot_win = _mm256_and_pd(_mm256_cmp_pd(a_t, _mm256_mul_pd(p_t, widen), _CMP_GE_OQ),
+                                               _mm256_cmp_pd(p_t, smallest_normal, _CMP_GE_OQ));
             if (rotation_free) {
-                const __m256d r2 =
-                    _mm256_div_pd(_mm256_mul_pd(phi_sq, inertia), _mm256_mul_pd(_mm256_mul_pd(kr, radius), radius));
-                t2 = blend(_mm256_cmp_pd(r2, t2, _CMP_LT_OQ), r2, t2);
+                const __m256d p_r = _mm256_mul_pd(best_sq, b_r);
+                cannot_win = _mm256_and_pd(cannot_win, _mm256_and_pd(_mm256_cmp_pd(a_r, _mm256_mul_pd(p_r, widen), _CMP_GE_OQ),
+                                                                     _mm256_cmp_pd(p_r, smallest_normal, _CMP_GE_OQ)));
             }
-            best_sq = _mm256_min_pd(t2, best_sq);
+            if (_mm256_movemask_pd(cannot_win) != 15) {
+                __m256d t2 = _mm256_div_pd(a_t, kt);
+                if (rotation_free) {
+                    const __m256d r2 = _mm256_div_pd(a_r, b_r);
+                    t2 = blend(_mm256_cmp_pd(r2, t2, _CMP_LT_OQ), r2, t2);
+                }
+                best_sq = _mm256_min_pd(t2, best_sq);
+            }
         }
 
         // translation: v += (F + m g) / m dt, x += v dt

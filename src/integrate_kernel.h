@@ -44,6 +44,8 @@ struct IntegrateParams {
     bool rotation_free;         // and with the rotational bound (DtFactors)
     double phi_sq, phi_t_sq;
     Vec2 domain_lo, domain_hi;  // m
+    double best_sq_start;       // s^2, the smallest squared step already found by this range's
+                                // earlier blocks (INFINITY: none); the result is no larger
 };
 
 // The energy ledger's sums of a step for a block of discs (World's ledger: the blocks are

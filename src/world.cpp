@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <sstream>
+#include <thread>
 
 #include "error.h"
 #include "integrate_kernel.h"
@@ -368,6 +369,10 @@ void World::split_force_pass() {
             cross_in_[size_t(fill[range_of(dd_[size_t(cross_[m])].j)]++)] = int32_t(m);
     }
     cross_out_.resize(cross_.size());
+    if (cross_done_size_ < r) {
+        cross_done_ = std::make_unique<CrossDone[]>(r);  // a new array: no pass is marked done
+        cross_done_size_ = r;
+    }
 
     // the range pass' blocks (FuseBlock) and how far ahead each one's pairs reach
     fuse_blocks_.clear();
@@ -486,14 +491,34 @@ void World::compute_forces(bool then_integrate) {
 
     const IntegrateConsts ic = then_integrate ? integrate_prepare() : IntegrateConsts{};
 
-    // 1. the cross contacts, into their slots
-    pool_->parallel_for(cross_.size(), [&](size_t begin, size_t end, int chunk) {
-        for (size_t m = begin; m < end; ++m) {
-            const size_t k = size_t(cross_[m]);
-            double overlap = 0.0;
-            if (!disc_pair_force(discs, pp, dd_[k], cross_out_[m], overlap)) disc_fault(k, overlap, chunk);
+    // The cross contacts (split_force_pass) are computed into their slots by the range that
+    // owns their second disc, first thing, and it then raises its flag for this pass. The
+    // range that owns their first disc waits for the flags of all later ranges before its
+    // first cross contact: it reads the slots there, and from there on it integrates the
+    // discs those pairs read (its cross contacts are its last, in list order, and a pair's
+    // first disc comes no earlier). Before, the calling thread computed them all while the
+    // others waited: 4 % of a 2-thread flume run.
+    const uint64_t pass = ++cross_pass_;
+    const size_t ranges = size_t(force_ranges_);
+    // Returns the seconds it waited: not the range's work, so left out of its measured time
+    // (the balancing would otherwise move work away from the range that waits). It yields
+    // after a short spin, as the pool does: with more threads than free cores the range it
+    // waits for may need this core.
+    auto wait_for_cross = [&](size_t t) {
+        double waited = 0.0;
+        for (size_t u = t + 1; u < ranges; ++u) {
+            if (cross_done_[u].pass.load(std::memory_order_acquire) == pass) continue;
+            const auto w0 = std::chrono::steady_clock::now();
+            for (unsigned polls = 1; cross_done_[u].pass.load(std::memory_order_acquire) != pass; ++polls) {
+                if (polls < 2048)
+                    DEMLAB_CPU_RELAX();
+                else
+                    std::this_thread::yield();
+            }
+            waited += std::chrono::duration<double>(std::chrono::steady_clock::now() - w0).count();
         }
-    });
+        return waited;
+    };
 
     // 2. each range sums its discs' terms
     DiscLoad* const load = load_.data();
@@ -528,6 +553,7 @@ void World::compute_forces(bool then_integrate) {
     auto range_pass = [&](int t) {
         const auto started = std::chrono::steady_clock::now();
         const size_t d0 = disc_split_[size_t(t)];
+        double waited = 0.0;  // s, for the cross contacts of later ranges (wait_for_cross)
         // The loads are zeroed just ahead of the first pair that adds to them (the blocks'
         // reach, split_force_pass), not all at the range's start: by the time the pairs of a
         // range's last discs came, their zeroed lines had left the cache.
@@ -537,7 +563,16 @@ void World::compute_forces(bool then_integrate) {
             std::fill(load + zeroed, load + e, DiscLoad{});
             zeroed = e;
         };
-        // cross contacts into this range's discs come first in their order
+        // cross contacts into this range's discs: computed here, then added first, in their order
+        if (ranges > 1) {
+            for (int32_t e = cross_in_start_[size_t(t)]; e < cross_in_start_[size_t(t) + 1]; ++e) {
+                const size_t m = size_t(cross_in_[size_t(e)]);
+                const size_t k = size_t(cross_[m]);
+                double overlap = 0.0;
+                if (!disc_pair_force(discs, pp, dd_[k], cross_out_[m], overlap)) disc_fault(k, overlap, t);
+            }
+            cross_done_[size_t(t)].pass.store(pass, std::memory_order_release);
+        }
         zero_to(cross_in_reach_[size_t(t)]);
         for (int32_t e = cross_in_start_[size_t(t)]; e < cross_in_start_[size_t(t) + 1]; ++e) {
             const size_t m = size_t(cross_in_[size_t(e)]);
@@ -561,7 +596,8 @@ void World::compute_forces(bool then_integrate) {
             zero_to(fb.reach);
             for (; k < fb.contact_end; ++k) {
                 DiscContact& c = dd_[k];
-                if (k == next_k) {  // computed in 1.
+                if (k == next_k) {  // computed by the range that owns c.j
+                    if (next == cross_start_[size_t(t)]) waited += wait_for_cross(size_t(t));
                     add_to_i(size_t(c.i), cross_out_[next]);
                     ++next;
                     next_k = next < cross_.size() ? size_t(cross_[next]) : SIZE_MAX;
@@ -668,7 +704,7 @@ void World::compute_forces(bool then_integrate) {
             b0 = b1;
         }
         range_clock_[size_t(t)].seconds +=
-            std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+            std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count() - waited;
     };
     if (force_ranges_ == 1)
         range_pass(0);
@@ -784,7 +820,7 @@ void World::integrate_discs(size_t begin, size_t end, int chunk, const Integrate
         const RotationDef& rot = def_.rotation;
         const IntegrateParams params{k.dt,          k.g,          k.g_abs,         rot.model, rot.rolling_form == RollingForm::Literal,
                                      rot.mu_br,     k.auto_dt,    k.dtf.rotation_free, k.dtf.phi_sq, k.dtf.phi_t_sq,
-                                     def_.domain_lo, def_.domain_hi};
+                                     def_.domain_lo, def_.domain_hi, dt_sq_chunk_[size_t(chunk)]};
         const IntegrateOut out = integrate_avx2(arrays, params, begin, end, ledger_blocks_.data(), kLedgerBlock);
         range_clock_[size_t(chunk)].touching_dd += out.touching_dd;
         integrate_note(chunk, out.fault, k.auto_dt ? out.best_sq : INFINITY, out.any_escaped, out.speed_l1, out.extent_l1);

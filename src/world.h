@@ -2,6 +2,7 @@
 // loop. One step (PFC's cycle, thesis Fig. 8): broad phase, contact forces (linear law),
 // time step, central-difference motion with the chosen rotation model, wall motion.
 #pragma once
+#include <atomic>
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -292,6 +293,13 @@ private:
     std::vector<FuseBlock> fuse_blocks_;
     std::vector<size_t> fuse_start_;      // per range: its first block (ranges + 1 entries)
     std::vector<size_t> cross_in_reach_;  // per range: the cross contacts into it add below this disc
+    // per range: the last force pass whose cross contacts into it are computed (compute_forces)
+    struct alignas(64) CrossDone {
+        std::atomic<uint64_t> pass{0};
+    };
+    std::unique_ptr<CrossDone[]> cross_done_;
+    size_t cross_done_size_ = 0;
+    uint64_t cross_pass_ = 0;
     // measured balance of the ranges (balance_force_pass)
     static constexpr int kBalanceWindow = 64;          // steps between checks
     static constexpr double kBalanceTolerance = 0.03;  // longest range over the mean, - 1
