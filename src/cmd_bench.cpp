@@ -21,6 +21,7 @@ struct BenchOptions {
     bool peer = false;
     int threads = 1;
     bool scalar = false;
+    bool no_avx512 = false;
 };
 
 // Runs the LAMMPS script and returns its particle-steps/s (0 if it could not run).
@@ -48,6 +49,7 @@ int bench(const BenchOptions& o) {
     WorldDef def = db9k_world_def();
     def.threads = o.threads;
     def.simd = !o.scalar;
+    def.avx512 = !o.no_avx512;
     World world(def);
     build_db9k(world, discs);
     world.finalize();
@@ -63,7 +65,7 @@ int bench(const BenchOptions& o) {
     const double rate = double(world.disc_count()) * double(o.steps) / secs;
     const auto& bs = world.broad_phase_stats();
     std::printf("DB-9k: N=%zu steps=%ld dt=%g s threads=%d, %s pair kernel\n", world.disc_count(), o.steps, world.dt(),
-                o.threads, world.simd_kernel() ? "AVX2" : "scalar");
+                o.threads, world.avx512_kernel() ? "AVX-512" : world.simd_kernel() ? "AVX2" : "scalar");
     std::printf("  wall time %.3f s, %.3e particle-steps/s, %.1f ns per particle-step\n", secs, rate,
                 1e9 * secs / (double(world.disc_count()) * double(o.steps)));
     std::printf("  broad phase: margin %.3g m, %ld updates, %ld re-insertions; contacts now %ld disc-disc, %ld disc-wall\n",
@@ -102,6 +104,7 @@ Command add_bench_command(CLI::App& app) {
     sub->add_option("--threads", opts->threads, "Worker threads (the final state is the same bits for any count)")
         ->capture_default_str()->check(CLI::Range(1, 64));
     sub->add_flag("--scalar", opts->scalar, "Use the scalar loops (pair forces, integration) even if the CPU has AVX2 (the same bits; for comparison)");
+    sub->add_flag("--no-avx512", opts->no_avx512, "Run the pair law four pairs at a time (AVX2) even if the CPU has AVX-512 (the same bits; for comparison)");
     sub->add_flag("--peer", opts->peer, "Also run LAMMPS (bench/db9k/lammps/run.sh) on the same work and print the ratio");
     return [opts] { return bench(*opts); };
 }

@@ -30,6 +30,7 @@ struct RunCliOptions {
     bool frames = false;
     int threads = 1;
     bool scalar = false;
+    bool no_avx512 = false;
     bool no_plots = false;
     double checkpoint_every = 0.0;
 };
@@ -69,6 +70,7 @@ int run_command(const RunCliOptions& o) {
     finish_scenario(s);
     s.world.threads = o.threads;
     s.world.simd = !o.scalar;
+    s.world.avx512 = !o.no_avx512;
     RunOptions ro;
     ro.out_dir = o.out.empty() ? "runs/" + s.name : o.out;
     ro.force = o.force;
@@ -99,6 +101,7 @@ Command add_run_command(CLI::App& app) {
     sub->add_option("--threads", o->threads, "Worker threads (results are the same bits for any count)")
         ->capture_default_str()->check(CLI::Range(1, 64));
     sub->add_flag("--scalar", o->scalar, "Use the scalar loops (pair forces, integration) even if the CPU has AVX2 (the same bits; for comparison)");
+    sub->add_flag("--no-avx512", o->no_avx512, "Run the pair law four pairs at a time (AVX2) even if the CPU has AVX-512 (the same bits; for comparison)");
     sub->add_flag("--frames", o->frames, "Render a PNG frame at every snapshot while running (RUN_DIR/frames)");
     sub->add_flag("--no-plots", o->no_plots, "Do not make the plots (RUN_DIR/plots) at the end");
     sub->add_option("--checkpoint-every", o->checkpoint_every,
@@ -112,6 +115,7 @@ struct ResumeCliOptions {
     std::string dir;
     int threads = 1;
     bool scalar = false;
+    bool no_avx512 = false;
     double checkpoint_every = -1.0;
 };
 
@@ -128,6 +132,7 @@ int resume_command(const ResumeCliOptions& o) {
     finish_scenario(s);
     s.world.threads = o.threads;
     s.world.simd = !o.scalar;
+    s.world.avx512 = !o.no_avx512;
     RunOptions ro;
     ro.out_dir = dir;
     ro.handle_signals = true;
@@ -161,6 +166,7 @@ Command add_resume_command(CLI::App& app) {
     sub->add_option("--threads", o->threads, "Worker threads (results are the same bits for any count)")
         ->capture_default_str()->check(CLI::Range(1, 64));
     sub->add_flag("--scalar", o->scalar, "Use the scalar loops (pair forces, integration) even if the CPU has AVX2 (the same bits; for comparison)");
+    sub->add_flag("--no-avx512", o->no_avx512, "Run the pair law four pairs at a time (AVX2) even if the CPU has AVX-512 (the same bits; for comparison)");
     sub->add_option("--checkpoint-every", o->checkpoint_every,
                     "Seconds of wall-clock time between checkpoints (default: as the run was started)")
         ->check(CLI::Range(0.0, 1.0e7));

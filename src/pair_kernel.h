@@ -150,12 +150,13 @@ struct alignas(64) DiscLoad {
 struct PairBatch {
     static constexpr size_t kSize = 64;  // pairs; the batch stays in L1 between kernel and sums
     size_t count = 0;                          // results in the batch
-    alignas(32) uint32_t index[kSize + 4];     // result b is contact index[b] of the batch
+    alignas(32) uint32_t index[kSize + 8];     // result b is contact index[b] of the batch
     alignas(32) uint32_t check[kSize + 4];     // the contacts the clearance test did not skip
     size_t skipped = 0;                        // pairs skipped by the clearance test, summed over calls
-    alignas(32) double to_i[kSize][4];         // into disc i: -fx, -fy (N/m), torque_i (N m/m), k_tran (N/m)
-    alignas(32) double to_j[kSize][4];         // into disc j: fx, fy, torque_j, k_tran
-    alignas(32) double to_both[kSize][2];      // into both: k_rot (N/m), half the dissipation (J/m)
+    // (64-byte aligned: the AVX-512 law stores two records of to_i, to_j and four of to_both at once)
+    alignas(64) double to_i[kSize][4];         // into disc i: -fx, -fy (N/m), torque_i (N m/m), k_tran (N/m)
+    alignas(64) double to_j[kSize][4];         // into disc j: fx, fy, torque_j, k_tran
+    alignas(64) double to_both[kSize][2];      // into both: k_rot (N/m), half the dissipation (J/m)
     alignas(32) int32_t touching[kSize];       // 1 or 0
 
     // force on j (B), N/m; i gets the opposite
@@ -200,6 +201,15 @@ bool cpu_has_avx2();
 // scalar kernel to report. Only call it when cpu_has_avx2().
 size_t disc_pairs_avx2(const DiscArrays& d, const PairPassParams& p, DiscContact* c, size_t n, PairBatch& out,
                        const PairSkip* skip = nullptr);
+
+// Does this CPU run disc_pairs_avx512 (AVX-512 F, DQ and VL)? (checked once per World)
+bool cpu_has_avx512();
+
+// disc_pairs_avx2 with the law eight pairs at a time in AVX-512 registers (pair_kernel_avx512.cpp):
+// the same selection, the same results and bits; a blown-up pair stops it before its group of
+// eight. Only call it when cpu_has_avx512().
+size_t disc_pairs_avx512(const DiscArrays& d, const PairPassParams& p, DiscContact* c, size_t n, PairBatch& out,
+                         const PairSkip* skip = nullptr);
 
 // Adds the batch's results into the discs' loads, in the batch's order; c is the batch's first
 // contact. Only call it when cpu_has_avx2().

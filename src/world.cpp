@@ -36,7 +36,8 @@ void validate(const WorldDef& d, const std::string& where) {
 }
 
 World::World(const WorldDef& def)
-    : def_(def), pool_(std::make_unique<ThreadPool>(def.threads)), avx2_(def.simd && cpu_has_avx2()) {
+    : def_(def), pool_(std::make_unique<ThreadPool>(def.threads)), avx2_(def.simd && cpu_has_avx2()),
+      avx512_(avx2_ && def.avx512 && cpu_has_avx512()) {
     broad_.set_pool(pool_.get());
     if (avx2_) pair_batch_.resize(size_t(pool_->size()));
 }
@@ -608,7 +609,8 @@ void World::compute_forces(bool then_integrate) {
                     // added in list order (what the scalar kernel below does pair by pair)
                     const size_t n = std::min({fb.contact_end, next_k, k + PairBatch::kSize}) - k;
                     skip_base.clearance = clearance + k;
-                    const size_t done = disc_pairs_avx2(discs, pp, &c, n, *batch, &skip_base);
+                    const size_t done = avx512_ ? disc_pairs_avx512(discs, pp, &c, n, *batch, &skip_base)
+                                                : disc_pairs_avx2(discs, pp, &c, n, *batch, &skip_base);
                     add_pair_batch_avx2(*batch, &c, load);
                     if (done > 0) {
                         k += done - 1;

@@ -53,6 +53,8 @@ struct WorldDef {
     int threads = 1;                       // worker threads; results are the same bits for any count
     bool simd = true;                      // the disc-disc kernel 4 pairs at a time when the CPU has AVX2
                                            // (pair_kernel_avx2.cpp); the same bits as the scalar kernel
+    bool avx512 = true;                    // with simd: its law 8 pairs at a time when the CPU has AVX-512
+                                           // (pair_kernel_avx512.cpp); the same bits again
 };
 
 void validate(const WorldDef& d, const std::string& where);
@@ -151,6 +153,7 @@ public:
     // many candidate pairs cross from one range to another (computed into slots first).
     int force_pass_ranges() const { return force_ranges_; }
     bool simd_kernel() const { return avx2_; }  // the AVX2 kernels are in use (pair forces, integration)
+    bool avx512_kernel() const { return avx512_; }  // and the pair law runs eight pairs at a time (AVX-512)
     size_t cross_contacts() const { return cross_.size(); }
     // disc-disc candidates the AVX2 pass skipped by the clearance test (PairSkip), summed over
     // the steps, and the approach bound now, m
@@ -275,6 +278,7 @@ private:
     std::vector<int32_t> cross_in_start_, cross_in_;  // per range: the cross contacts whose j it owns (CSR)
     int force_ranges_ = 1;
     bool avx2_ = false;                     // def_.simd and the CPU has AVX2
+    bool avx512_ = false;                   // and def_.avx512 and the CPU has AVX-512
     std::vector<PairBatch> pair_batch_;     // per range: the AVX2 kernel's results before they are added
     std::vector<double> default_k_tran_, default_k_rot_;  // per material, N/m (integrate_prepare)
     void split_force_pass();
