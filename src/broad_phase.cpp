@@ -60,21 +60,46 @@ void BroadPhase::query(const Vec2& lo, const Vec2& hi, std::vector<int32_t>& hit
 }
 
 // Read-only on the tree and the boxes (the re-insertions are done), so the threads can share
-// the escaped discs. A pair of two escaped discs is taken from the lower index.
+// the escaped discs. A pair of two escaped discs is taken from the lower index. The discs are
+// queried in groups (kQueryGroup): one walk for the group's union box, then each disc keeps
+// the hits whose fat box overlaps its own, tested as b2TestOverlap does (the boxes are the
+// tree's float boxes over a power of two, exact in doubles, and comparisons are exact), so
+// each disc gets the leaves its own walk would have reported.
 void BroadPhase::query_escaped(size_t begin, size_t end, QueryChunk& out) const {
     out.dd.clear();
     out.dw.clear();
-    for (size_t e = begin; e < end; ++e) {
-        const int32_t i = escaped_list_[e];
-        query(fat_lo_[size_t(i)], fat_hi_[size_t(i)], out.hits);
-        for (int32_t code : out.hits) {
-            const int32_t idx = code >> 1;
-            if (code & 1) {
-                out.dw.push_back(pair_key(i, pieces_[size_t(idx)].wall));
-            } else if (idx != i && !(escaped_[size_t(idx)] && idx < i) && may_touch(i, idx)) {
-                out.dd.push_back(idx < i ? pair_key(idx, i) : pair_key(i, idx));
+    out.walks = 0;
+    for (size_t e = begin; e < end;) {
+        const int32_t first = escaped_list_[e];
+        Vec2 ulo = fat_lo_[size_t(first)], uhi = fat_hi_[size_t(first)];
+        const Vec2 span = kQueryGroupSpan * (uhi - ulo);
+        size_t g = e + 1;
+        for (; g < end && g - e < query_group_; ++g) {
+            const size_t i = size_t(escaped_list_[g]);
+            const Vec2 lo = ulo.cwiseMin(fat_lo_[i]), hi = uhi.cwiseMax(fat_hi_[i]);
+            if (hi.x() - lo.x() > span.x() || hi.y() - lo.y() > span.y()) break;
+            ulo = lo;
+            uhi = hi;
+        }
+        query(ulo, uhi, out.hits);
+        ++out.walks;
+        for (size_t k = e; k < g; ++k) {
+            const int32_t i = escaped_list_[k];
+            const Vec2 lo = fat_lo_[size_t(i)], hi = fat_hi_[size_t(i)];
+            for (int32_t code : out.hits) {
+                const int32_t idx = code >> 1;
+                const Vec2& hlo = (code & 1) ? pieces_[size_t(idx)].fat_lo : fat_lo_[size_t(idx)];
+                const Vec2& hhi = (code & 1) ? pieces_[size_t(idx)].fat_hi : fat_hi_[size_t(idx)];
+                // b2TestOverlap(hit, box): apart if one lies beyond the other in x or y
+                if (lo.x() > hhi.x() || lo.y() > hhi.y() || hlo.x() > hi.x() || hlo.y() > hi.y()) continue;
+                if (code & 1) {
+                    out.dw.push_back(pair_key(i, pieces_[size_t(idx)].wall));
+                } else if (idx != i && !(escaped_[size_t(idx)] && idx < i) && may_touch(i, idx)) {
+                    out.dd.push_back(idx < i ? pair_key(idx, i) : pair_key(i, idx));
+                }
             }
         }
+        e = g;
     }
     out.queries = long(end - begin);
     std::sort(out.dd.begin(), out.dd.end());
@@ -181,6 +206,7 @@ void BroadPhase::query_all_escaped() {
         std::inplace_merge(scratch_dd_.begin(), mid, scratch_dd_.end());
         scratch_dw_.insert(scratch_dw_.end(), c.dw.begin(), c.dw.end());
         stats_.queries += c.queries;
+        stats_.tree_walks += c.walks;
         if (threads > 1) stats_.shared_queries += c.queries;
     }
 }
@@ -282,6 +308,7 @@ bool BroadPhase::update(const std::vector<Vec2>& pos, const std::vector<double>&
         if (pc.proxy < 0 || !changed[pc.wall]) continue;
         query(pc.fat_lo, pc.fat_hi, hits_);
         ++stats_.queries;
+        ++stats_.tree_walks;
         for (int32_t code : hits_)
             if (!(code & 1)) scratch_dw_.push_back(pair_key(code >> 1, pc.wall));
     }

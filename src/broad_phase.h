@@ -43,8 +43,9 @@ inline int32_t key_second(uint64_t k) { return int32_t(k & 0xffffffffu); }
 struct BroadPhaseStats {
     long updates = 0;          // calls to update() that changed the candidate lists
     long disc_reinserts = 0;   // discs re-inserted after leaving their fat box
-    long queries = 0;
+    long queries = 0;          // escaped discs (and moved wall pieces) whose candidates were queried
     long shared_queries = 0;   // of these, queries shared out among the pool's threads
+    long tree_walks = 0;       // walks of the tree for them (a group of escaped discs walks once)
 };
 
 class BroadPhase {
@@ -98,6 +99,9 @@ public:
     // Fewer escaped discs than this are queried by the caller alone: a query costs about a
     // microsecond, the hand-over tens of them when the other thread has gone to sleep.
     static constexpr size_t kMinSharedQueries = 256;
+    // Escaped discs per walk of the tree, at most (kQueryGroup below; 1: a walk per disc). For
+    // tests and measurements: no candidate depends on it.
+    void set_query_group(size_t n) { query_group_ = n < 1 ? 1 : n; }
 
 private:
     struct Piece {
@@ -115,8 +119,17 @@ private:
     struct QueryChunk {
         std::vector<int32_t> hits;
         std::vector<uint64_t> dd, dw;
-        long queries = 0;
+        long queries = 0, walks = 0;
     };
+    // The escaped discs are queried in groups of consecutive ones (in index order, which is
+    // space order for a generated mass) whose fat boxes' union stays within kQueryGroupSpan
+    // times the first box in x and y, up to kQueryGroup of them: one walk of the tree for the
+    // union, then each disc takes the hits that overlap its own box (the tree's own test on
+    // the same float boxes, so the candidates are the same). A walk cost about 1.3 us, most of
+    // it the descent through a tree of about a megabyte (docs/performance.md, session 10).
+    static constexpr size_t kQueryGroup = 8;
+    size_t query_group_ = kQueryGroup;
+    static constexpr double kQueryGroupSpan = 4.0;
     void query_escaped(size_t begin, size_t end, QueryChunk& out) const;
     void query_all_escaped();
 

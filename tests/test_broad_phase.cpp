@@ -226,3 +226,45 @@ TEST(BroadPhase, PadsFollowTheDiscsSpeeds) {
     EXPECT_EQ(bp.stats().disc_reinserts, 3 + 1);
     EXPECT_FALSE(bp.update(pos, radius, {}, {}, {}, false, &vel, dt, true));  // nothing more to do
 }
+
+// Escaped discs are queried in groups, one walk of the tree for a group's union box
+// (BroadPhase::query_escaped): the candidate lists are those of a walk per disc, update after
+// update. The discs are numbered in space order (rows of a jittered grid), so groups form.
+TEST(BroadPhase, GroupedQueriesGiveTheSameCandidateLists) {
+    std::mt19937_64 rng(3);
+    const size_t side = 40;
+    const double r_max = 0.0015;
+    std::vector<Vec2> pos, vel;
+    std::vector<double> radius;
+    for (size_t k = 0; k < side * side; ++k) {
+        pos.emplace_back(0.004 * double(k % side) + uniform(rng, 0.0, 0.0008), 0.004 * double(k / side) + uniform(rng, 0.0, 0.0008));
+        radius.push_back(uniform(rng, 0.001, r_max));
+        vel.emplace_back(uniform(rng, -3.0, 3.0), uniform(rng, -3.0, 3.0));
+    }
+    const std::vector<WallGeom> walls = {make_geom(segment(Vec2(-0.01, -0.002), Vec2(0.17, -0.002), 0.3, SegmentSolid::Right))};
+    const std::vector<uint8_t> active = {1}, moving = {0};
+    BroadPhase one, grouped;
+    one.set_query_group(1);
+    for (BroadPhase* b : {&one, &grouped}) b->init(0.0005, 0.05, pos, radius, walls, active);
+    ASSERT_EQ(one.disc_pairs(), grouped.disc_pairs());
+    ASSERT_EQ(one.wall_pairs(), grouped.wall_pairs());
+    const double dt = 2e-5;
+    int updates = 0;
+    for (int step = 0; step < 600; ++step) {
+        for (size_t k = 0; k < pos.size(); ++k) pos[k] += vel[k] * dt;
+        const bool a = one.update(pos, radius, walls, active, moving, true, &vel, dt, step % 32 == 0);
+        const bool b = grouped.update(pos, radius, walls, active, moving, true, &vel, dt, step % 32 == 0);
+        ASSERT_EQ(a, b) << "step " << step;
+        if (!a) continue;
+        ++updates;
+        ASSERT_EQ(one.disc_pairs(), grouped.disc_pairs()) << "step " << step;
+        ASSERT_EQ(one.wall_pairs(), grouped.wall_pairs()) << "step " << step;
+    }
+    EXPECT_GT(updates, 15);
+    EXPECT_GT(grouped.disc_pairs().size(), 2 * pos.size());
+    EXPECT_FALSE(grouped.wall_pairs().empty());
+    // the groups formed: fewer walks than queries (one walk a disc without them)
+    EXPECT_EQ(one.stats().tree_walks, one.stats().queries);
+    EXPECT_LT(grouped.stats().tree_walks, grouped.stats().queries / 2);
+    EXPECT_EQ(grouped.stats().queries, one.stats().queries);
+}
