@@ -144,7 +144,11 @@ DEMLAB_AVX2 double lane_of(__m256d a, int l) {
     // The ledger's sums, disc by disc in order as the scalar loops add them (two chains of
     // additions that run beside the vector work; as passes of their own after the loop they
     // cost 3 % of DB-9k's step, docs/performance.md)
-    double sum_contacts = 0.0, sum_rotation = 0.0, sum_kinetic = 0.0;
+    double sum_contacts = 0.0, sum_rotation = 0.0;
+    // the kinetic energy, per lane (disc i in lane i % 4: the groups start at multiples of 4)
+    // and added up at the block's end: no chain of additions for it (IntegrateKernel's
+    // microbenchmark: the ledger's chains were a sixth of this loop's time)
+    __m256d kinetic_lanes = _mm256_setzero_pd();
     // the touching disc-disc contacts, n_disc summed as 64-bit integers (any order gives the
     // same count)
     __m256i touching = _mm256_setzero_si256();
@@ -265,34 +269,36 @@ DEMLAB_AVX2 double lane_of(__m256d a, int l) {
         // the ledger: the contacts' dissipation and the rotation rules' terms, added disc by
         // disc; a block's sums are written when its last disc is added
         if (n == 4 && i0 + 4 < block_end) {
+            kinetic_lanes = _mm256_add_pd(kinetic_lanes, kinetic);
             sum_contacts += lane_of(ld.dissipated, 0);
             sum_rotation += lane_of(diss_rot, 0);
-            sum_kinetic += lane_of(kinetic, 0);
             sum_contacts += lane_of(ld.dissipated, 1);
             sum_rotation += lane_of(diss_rot, 1);
-            sum_kinetic += lane_of(kinetic, 1);
             sum_contacts += lane_of(ld.dissipated, 2);
             sum_rotation += lane_of(diss_rot, 2);
-            sum_kinetic += lane_of(kinetic, 2);
             sum_contacts += lane_of(ld.dissipated, 3);
             sum_rotation += lane_of(diss_rot, 3);
-            sum_kinetic += lane_of(kinetic, 3);
         } else {
-            alignas(32) double diss_terms[4], rot_terms[4], kinetic_terms[4];
+            // (a block ends inside a group only at the range's end: the lanes after it are
+            // beyond n, and add +0)
+            const __m256d valid_l = _mm256_castsi256_pd(
+                _mm256_cmpgt_epi64(_mm256_set1_epi64x(int64_t(n)), _mm256_setr_epi64x(0, 1, 2, 3)));
+            kinetic_lanes = _mm256_add_pd(kinetic_lanes, _mm256_and_pd(valid_l, kinetic));
+            alignas(32) double diss_terms[4], rot_terms[4];
             _mm256_store_pd(diss_terms, ld.dissipated);
             _mm256_store_pd(rot_terms, diss_rot);
-            _mm256_store_pd(kinetic_terms, kinetic);
             for (size_t l = 0; l < n; ++l) {
                 sum_contacts += diss_terms[l];
                 sum_rotation += rot_terms[l];
-                sum_kinetic += kinetic_terms[l];
                 if (i0 + l + 1 == block_end) {
                     LedgerBlock& b = blocks[block];
                     b.contacts = sum_contacts;
                     b.local = 0.0;  // no local damping in this loop
                     b.rotation = sum_rotation;
-                    b.kinetic = sum_kinetic;
-                    sum_contacts = sum_rotation = sum_kinetic = 0.0;
+                    b.kinetic = (lane_of(kinetic_lanes, 0) + lane_of(kinetic_lanes, 1)) +
+                                (lane_of(kinetic_lanes, 2) + lane_of(kinetic_lanes, 3));
+                    kinetic_lanes = _mm256_setzero_pd();
+                    sum_contacts = sum_rotation = 0.0;
                     ++block;
                     block_end = std::min(block_end + block_size, end);
                 }

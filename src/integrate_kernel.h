@@ -55,7 +55,9 @@ struct LedgerBlock {
     double local = 0.0;     // J/m, local damping
     double rotation = 0.0;  // J/m, rolling resistance and rotational damping
     double kinetic = 0.0;   // J/m, the discs' kinetic energy after the step: per disc
-                            // 0.5 m |v|^2 + 0.5 I omega^2 (the second term unless rotation is locked)
+                            // 0.5 m |v|^2 + 0.5 I omega^2 (the second term unless rotation is locked),
+                            // summed in four lanes (disc i in lane i % 4, each in disc order) and
+                            // then (lane 0 + lane 1) + (lane 2 + lane 3)
 };
 
 // What the range's integration found.
@@ -74,6 +76,7 @@ struct IntegrateOut {
 // rolling resistance and the rotational damping took out, 0 for local damping, and the
 // discs' kinetic energy after the step. Only call
 // it when cpu_has_avx2().
+// begin is a multiple of 4 (the World's ranges and blocks are whole ledger blocks).
 IntegrateOut integrate_avx2(const IntegrateArrays& a, const IntegrateParams& p, size_t begin, size_t end,
                             LedgerBlock* blocks, size_t block_size);
 

@@ -865,7 +865,8 @@ void World::integrate_discs(size_t begin, size_t end, int chunk, const Integrate
     double speed_l1 = 0.0, extent_l1 = 0.0;  // the clearance test's bound (integrate_finish)
     const Vec2 lo = def_.domain_lo, hi = def_.domain_hi;
     // the ledger's shares per block of discs (see compute_forces' ledger)
-    double block_local = 0.0, block_rot = 0.0, block_kinetic = 0.0;
+    double block_local = 0.0, block_rot = 0.0;
+    double kinetic_lanes[4] = {0.0, 0.0, 0.0, 0.0};  // disc i in lane i % 4, as the AVX2 loop sums it
     for (size_t i = begin; i < end; ++i) {
         if (auto_dt)
             best_sq = std::min(best_sq, critical_step_squared_at(load[i], materials[size_t(material[i])], mass[i],
@@ -922,13 +923,14 @@ void World::integrate_discs(size_t begin, size_t end, int chunk, const Integrate
         }
         block_local += diss_local;
         block_rot += diss_rot;
-        block_kinetic += kinetic;
+        kinetic_lanes[i % 4] += kinetic;
         if ((i + 1) % kLedgerBlock == 0 || i + 1 == end) {
             LedgerBlock& b = ledger_blocks[i / kLedgerBlock];
             b.local = block_local;
             b.rotation = block_rot;
-            b.kinetic = block_kinetic;
-            block_local = block_rot = block_kinetic = 0.0;
+            b.kinetic = (kinetic_lanes[0] + kinetic_lanes[1]) + (kinetic_lanes[2] + kinetic_lanes[3]);
+            block_local = block_rot = 0.0;
+            kinetic_lanes[0] = kinetic_lanes[1] = kinetic_lanes[2] = kinetic_lanes[3] = 0.0;
         }
         // Outside the (finite) domain, or not a number: one test, without branches. A
         // non-finite velocity shows in the position it has just moved (v dt is inf or NaN).
