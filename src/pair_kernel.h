@@ -148,7 +148,7 @@ struct alignas(64) DiscLoad {
 // becomes -0 (round to nearest); x + (-0) is x for every x. So the sums are the bits the
 // scalar pass gets by skipping the open pairs. (i's force is added as -f: x + (-f) is x - f.)
 struct PairBatch {
-    static constexpr size_t kSize = 64;  // pairs; the batch stays in L1 between kernel and sums
+    static constexpr size_t kSize = 128;  // pairs; the batch stays in L1 between kernel and sums (64: 2-3 % slower, 256: slower again, session 10)
     size_t count = 0;                          // results in the batch
     alignas(32) uint32_t index[kSize + 8];     // result b is contact index[b] of the batch
     alignas(32) uint32_t check[kSize + 4];     // the contacts the clearance test did not skip

@@ -46,9 +46,10 @@ DEMLAB_AVX2 size_t select_pairs(const DiscArrays& d, DiscContact* c, size_t n, P
     const double* pos = d.pos->data();
     static_assert(offsetof(DiscContact, damp_s) == offsetof(DiscContact, damp_n) + sizeof(float));
     const size_t covered = n - n % 4;
-    // The pairs to do, as a bit per contact (n <= 64): listed in list order at the end.
-    static_assert(PairBatch::kSize <= 64);
-    uint64_t todo_bits = 0;
+    // The pairs to do, as a bit per contact: listed in list order at the end.
+    static_assert(PairBatch::kSize % 64 == 0);
+    constexpr size_t kWords = PairBatch::kSize / 64;
+    uint64_t todo_bits[kWords] = {};
     // 0. The clearance test (PairSkip): a negative clearance marks a pair the law found
     // touching in its last step (to do: no need to look); one above the approach, a pair
     // that is still clear (skipped); the others are looked at, by their offsets from c.
@@ -61,12 +62,14 @@ DEMLAB_AVX2 size_t select_pairs(const DiscArrays& d, DiscContact* c, size_t n, P
             const __m128 cl = _mm_loadu_ps(clearance + g);
             const unsigned known = unsigned(_mm_movemask_ps(cl));  // the sign bits
             const unsigned look = unsigned(_mm_movemask_ps(_mm_cmp_ps(cl, approach_hi, _CMP_NGT_UQ))) & ~known;
-            todo_bits |= uint64_t(known) << g;
+            todo_bits[g / 64] |= uint64_t(known) << (g % 64);
             _mm_storeu_si128(reinterpret_cast<__m128i*>(out.check + mc),
                              _mm_add_epi32(_mm_set1_epi32(int(g)), _mm_load_si128(&kPackedLanes[look])));
             mc += size_t(__builtin_popcount(look));
         }
-        out.skipped += covered - mc - size_t(__builtin_popcountll(todo_bits));
+        size_t known_count = 0;
+        for (uint64_t w : todo_bits) known_count += size_t(__builtin_popcountll(w));
+        out.skipped += covered - mc - known_count;
     } else {
         for (size_t g = 0; g < covered; ++g) out.check[g] = uint32_t(g);
         mc = covered;
@@ -122,11 +125,13 @@ DEMLAB_AVX2 size_t select_pairs(const DiscArrays& d, DiscContact* c, size_t n, P
         }
         const unsigned valid = mc - g >= 4 ? 15u : (1u << (mc - g)) - 1u;
         const unsigned todo = unsigned(_mm_movemask_ps(_mm_castsi128_ps(todo_lanes))) & valid;
-        for (unsigned l = 0; l < 4; ++l) todo_bits |= uint64_t(todo >> l & 1u) << at[l];
+        for (unsigned l = 0; l < 4; ++l) todo_bits[at[l] / 64] |= uint64_t(todo >> l & 1u) << (at[l] % 64);
     }
     // the pairs to do in list order
     size_t m = 0;
-    for (uint64_t bits = todo_bits; bits != 0; bits &= bits - 1) out.index[m++] = uint32_t(__builtin_ctzll(bits));
+    for (size_t w = 0; w < kWords; ++w)
+        for (uint64_t bits = todo_bits[w]; bits != 0; bits &= bits - 1)
+            out.index[m++] = uint32_t(64 * w + size_t(__builtin_ctzll(bits)));
     // pad the law's last group (of `group` lanes) with its last pair: that lane computes what
     // the last lane did and writes the same history back; its results are not counted
     for (size_t l = m; l % group != 0; ++l) out.index[l] = out.index[m - 1];
