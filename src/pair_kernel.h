@@ -211,6 +211,15 @@ bool cpu_has_avx512();
 size_t disc_pairs_avx512(const DiscArrays& d, const PairPassParams& p, DiscContact* c, size_t n, PairBatch& out,
                          const PairSkip* skip = nullptr);
 
+// The law alone for the contacts c + out.index[b], b < out.count (out.count <= PairBatch::kSize,
+// filled by the caller; any contacts, touching or not), results into out in that order, the
+// histories updated in place: what disc_pair_force gives, the same bits, with an open pair's
+// terms +0 (PairBatch). No clearance test. Returns how many it did: out.count, or fewer when a
+// group (of four, of eight) holds a blown-up pair; the rest is the scalar kernel's. Only call
+// them when cpu_has_avx2(), cpu_has_avx512().
+size_t pair_law_avx2(const DiscArrays& d, const PairPassParams& p, DiscContact* c, PairBatch& out);
+size_t pair_law_avx512(const DiscArrays& d, const PairPassParams& p, DiscContact* c, PairBatch& out);
+
 // Adds the batch's results into the discs' loads, in the batch's order; c is the batch's first
 // contact. Only call it when cpu_has_avx2().
 void add_pair_batch_avx2(const PairBatch& batch, const DiscContact* c, DiscLoad* load);

@@ -76,9 +76,13 @@ DEMLAB_AVX2 PairLanes pair_lanes(const PairPassParams& p, const DiscArrays& d, s
             _mm256_set_pd(pm3->k_tran, pm2->k_tran, pm1->k_tran, pm0->k_tran)};
 }
 
+// The law for the contacts c + out.index[b], b < out.count (the list padded to a multiple of
+// four), results into out in that order. Returns how many it did: out.count, or fewer when a
+// group of four holds a blown-up pair: then it stops before that group (out.count is cut
+// there) and writes nothing from there on, for the scalar kernel to report. With skip, the
+// clearances of the pairs it does are marked.
 template <bool kOneMaterial>
-DEMLAB_AVX2 size_t disc_pairs(const DiscArrays& d, const PairPassParams& p, DiscContact* c, size_t n, PairBatch& out,
-                              const PairSkip* skip) {
+DEMLAB_AVX2 size_t law(const DiscArrays& d, const PairPassParams& p, DiscContact* c, PairBatch& out, const PairSkip* skip) {
     const PairLanes one = kOneMaterial ? broadcast_lanes(p.materials[0]) : PairLanes{};
     const double* pos = d.pos->data();
     const double* vel = d.vel->data();
@@ -94,7 +98,6 @@ DEMLAB_AVX2 size_t disc_pairs(const DiscArrays& d, const PairPassParams& p, Disc
     const __m256d minus_half_last_dt = _mm256_set1_pd(-0.5 * p.last_dt);
     const __m256d ratio = _mm256_set1_pd(p.max_overlap_ratio);
     static_assert(offsetof(DiscContact, damp_s) == offsetof(DiscContact, damp_n) + sizeof(float));
-    const size_t covered = pair_select::select_pairs(d, c, n, out, skip, 4);
     const size_t m = out.count;
 
     // 2. The law, four of those pairs at a time.
@@ -121,7 +124,7 @@ DEMLAB_AVX2 size_t disc_pairs(const DiscArrays& d, const PairPassParams& p, Disc
         // reports it.
         if (_mm256_movemask_pd(fault) != 0) {
             out.count = g;
-            return out.index[g];
+            return g;
         }
 
         const __m256d nx = _mm256_div_pd(dxx, dist), ny = _mm256_div_pd(dxy, dist);
@@ -215,7 +218,16 @@ DEMLAB_AVX2 size_t disc_pairs(const DiscArrays& d, const PairPassParams& p, Disc
             for (int l = 0; l < 4; ++l) skip->clearance[out.index[g + l]] = v[l];
         }
     }
-    return covered;
+    return m;
+}
+
+template <bool kOneMaterial>
+DEMLAB_AVX2 size_t disc_pairs(const DiscArrays& d, const PairPassParams& p, DiscContact* c, size_t n, PairBatch& out,
+                              const PairSkip* skip) {
+    const size_t covered = pair_select::select_pairs(d, c, n, out, skip, 4);
+    const size_t m = out.count;
+    const size_t done = law<kOneMaterial>(d, p, c, out, skip);
+    return done < m ? out.index[done] : covered;
 }
 
 }  // namespace
@@ -249,7 +261,15 @@ DEMLAB_AVX2 size_t disc_pairs(const DiscArrays& d, const PairPassParams& p, Disc
                                                PairBatch& out, const PairSkip* skip) {
     return p.n_materials == 1 ? disc_pairs<true>(d, p, c, n, out, skip) : disc_pairs<false>(d, p, c, n, out, skip);
 }
+
+[[gnu::target("avx2")]] size_t pair_law_avx2(const DiscArrays& d, const PairPassParams& p, DiscContact* c, PairBatch& out) {
+    const size_t m = out.count;
+    if (m == 0) return 0;
+    for (size_t l = m; l % 4 != 0; ++l) out.index[l] = out.index[m - 1];  // padding: the last pair again
+    return p.n_materials == 1 ? law<true>(d, p, c, out, nullptr) : law<false>(d, p, c, out, nullptr);
+}
 #else
+size_t pair_law_avx2(const DiscArrays&, const PairPassParams&, DiscContact*, PairBatch&) { return 0; }
 size_t disc_pairs_avx2(const DiscArrays&, const PairPassParams&, DiscContact*, size_t, PairBatch&, const PairSkip*) {
     return 0;
 }

@@ -127,9 +127,10 @@ DEMLAB_AVX512 PairLanes8 pair_lanes8(const PairPassParams& p, const DiscArrays& 
     return {_mm512_load_pd(kn), _mm512_load_pd(ks), _mm512_load_pd(mu), _mm512_load_pd(inv_ks), _mm512_load_pd(k_tran)};
 }
 
+// The law for the contacts c + out.index[b], b < out.count (padded to a multiple of eight),
+// as pair_kernel_avx2.cpp's law: returns how many it did.
 template <bool kOneMaterial>
-DEMLAB_AVX512 size_t disc_pairs8(const DiscArrays& d, const PairPassParams& p, DiscContact* c, size_t n, PairBatch& out,
-                                 const PairSkip* skip) {
+DEMLAB_AVX512 size_t law8(const DiscArrays& d, const PairPassParams& p, DiscContact* c, PairBatch& out, const PairSkip* skip) {
     const PairLanes8 one = kOneMaterial ? broadcast_lanes8(p.materials[0]) : PairLanes8{};
     const double* pos = d.pos->data();
     const double* vel = d.vel->data();
@@ -142,7 +143,6 @@ DEMLAB_AVX512 size_t disc_pairs8(const DiscArrays& d, const PairPassParams& p, D
     const __m512d dt = _mm512_set1_pd(p.dt), last_dt = _mm512_set1_pd(p.last_dt);
     const __m512d minus_half_last_dt = _mm512_set1_pd(-0.5 * p.last_dt);
     const __m512d ratio = _mm512_set1_pd(p.max_overlap_ratio);
-    const size_t covered = pair_select::select_pairs(d, c, n, out, skip, 8);
     const size_t m = out.count;
 
     // The law, eight of the selected pairs at a time (pair_kernel_avx2.cpp has the same
@@ -171,7 +171,7 @@ DEMLAB_AVX512 size_t disc_pairs8(const DiscArrays& d, const PairPassParams& p, D
         // a blown-up pair: leave this group untouched, stop before its first pair
         if (fault != 0) {
             out.count = g;
-            return out.index[g];
+            return g;
         }
 
         const __m512d nx = _mm512_div_pd(dxx, dist), ny = _mm512_div_pd(dxy, dist);
@@ -259,7 +259,16 @@ DEMLAB_AVX512 size_t disc_pairs8(const DiscArrays& d, const PairPassParams& p, D
             for (int l = 0; l < 8; ++l) skip->clearance[out.index[g + size_t(l)]] = v[l];
         }
     }
-    return covered;
+    return m;
+}
+
+template <bool kOneMaterial>
+DEMLAB_AVX512 size_t disc_pairs8(const DiscArrays& d, const PairPassParams& p, DiscContact* c, size_t n, PairBatch& out,
+                                 const PairSkip* skip) {
+    const size_t covered = pair_select::select_pairs(d, c, n, out, skip, 8);
+    const size_t m = out.count;
+    const size_t done = law8<kOneMaterial>(d, p, c, out, skip);
+    return done < m ? out.index[done] : covered;
 }
 
 }  // namespace
@@ -269,7 +278,16 @@ DEMLAB_AVX512 size_t disc_pairs8(const DiscArrays& d, const PairPassParams& p, D
                                                                              const PairSkip* skip) {
     return p.n_materials == 1 ? disc_pairs8<true>(d, p, c, n, out, skip) : disc_pairs8<false>(d, p, c, n, out, skip);
 }
+
+[[gnu::target("avx2,avx512f,avx512dq,avx512vl")]] size_t pair_law_avx512(const DiscArrays& d, const PairPassParams& p,
+                                                                           DiscContact* c, PairBatch& out) {
+    const size_t m = out.count;
+    if (m == 0) return 0;
+    for (size_t l = m; l % 8 != 0; ++l) out.index[l] = out.index[m - 1];  // padding: the last pair again
+    return p.n_materials == 1 ? law8<true>(d, p, c, out, nullptr) : law8<false>(d, p, c, out, nullptr);
+}
 #else
+size_t pair_law_avx512(const DiscArrays&, const PairPassParams&, DiscContact*, PairBatch&) { return 0; }
 size_t disc_pairs_avx512(const DiscArrays&, const PairPassParams&, DiscContact*, size_t, PairBatch&, const PairSkip*) {
     return 0;
 }

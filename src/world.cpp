@@ -566,11 +566,37 @@ void World::compute_forces(bool then_integrate) {
         };
         // cross contacts into this range's discs: computed here, then added first, in their order
         if (ranges > 1) {
-            for (int32_t e = cross_in_start_[size_t(t)]; e < cross_in_start_[size_t(t) + 1]; ++e) {
-                const size_t m = size_t(cross_in_[size_t(e)]);
-                const size_t k = size_t(cross_[m]);
-                double overlap = 0.0;
-                if (!disc_pair_force(discs, pp, dd_[k], cross_out_[m], overlap)) disc_fault(k, overlap, t);
+            PairBatch* const batch = avx2_ ? &pair_batch_[size_t(t)] : nullptr;
+            const size_t e0 = size_t(cross_in_start_[size_t(t)]), e1 = size_t(cross_in_start_[size_t(t) + 1]);
+            for (size_t e = e0; e < e1;) {
+                // the SIMD law over a batch of them, in place (an open pair's results are +0,
+                // which is what the slot of a pair with nothing to do adds); from a group with
+                // a blown-up pair on, the scalar kernel, which reports it
+                size_t done = 0;
+                const size_t n = std::min(PairBatch::kSize, e1 - e);
+                if (batch) {
+                    for (size_t b = 0; b < n; ++b) batch->index[b] = uint32_t(cross_[size_t(cross_in_[e + b])]);
+                    batch->count = n;
+                    done = avx512_ ? pair_law_avx512(discs, pp, dd_.data(), *batch) : pair_law_avx2(discs, pp, dd_.data(), *batch);
+                    for (size_t b = 0; b < done; ++b) {
+                        PairOut& o = cross_out_[size_t(cross_in_[e + b])];
+                        o.touching = batch->touching[b] != 0;
+                        o.f = Vec2(batch->fx(b), batch->fy(b));
+                        o.torque_i = batch->torque_i(b);
+                        o.torque_j = batch->torque_j(b);
+                        o.k_tran = batch->k_tran(b);
+                        o.k_rot = batch->k_rot(b);
+                        // the pass adds half of it: exactly the half the batch holds
+                        o.dissipated = 2.0 * batch->half_dissipated(b);
+                    }
+                }
+                for (size_t b = done; b < n; ++b) {
+                    const size_t m = size_t(cross_in_[e + b]);
+                    const size_t k = size_t(cross_[m]);
+                    double overlap = 0.0;
+                    if (!disc_pair_force(discs, pp, dd_[k], cross_out_[m], overlap)) disc_fault(k, overlap, t);
+                }
+                e += n;
             }
             cross_done_[size_t(t)].pass.store(pass, std::memory_order_release);
         }

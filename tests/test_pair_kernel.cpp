@@ -209,6 +209,63 @@ TEST(PairKernel, SimdKernelsGiveTheScalarKernelsBits) {
     }
 }
 
+// The law alone over a list of contacts (pair_law_avx2, pair_law_avx512: World's cross-range
+// pairs), every pair whatever its state, in the list's order: the scalar kernel's bits, with an
+// open pair's terms +0 and half its dissipation.
+TEST(PairKernel, IndexedLawGivesTheScalarKernelsBits) {
+    struct Law {
+        const char* name;
+        bool available;
+        size_t (*run)(const DiscArrays&, const PairPassParams&, DiscContact*, PairBatch&);
+    };
+    const Law laws[] = {{"AVX2", cpu_has_avx2(), pair_law_avx2}, {"AVX-512", cpu_has_avx512(), pair_law_avx512}};
+    if (!cpu_has_avx2()) GTEST_SKIP() << "this CPU has no AVX2";
+    for (const Law& law : laws) {
+        if (!law.available) continue;
+        SCOPED_TRACE(law.name);
+        const KernelCase k(31);
+        const DiscArrays d = k.arrays();
+        const PairPassParams p = k.params(DashpotMode::NoTensionNoShearWhileSliding);
+        std::vector<DiscContact> scalar = k.contacts, simd = k.contacts;
+        // every third contact, from the end backwards: a list in no particular order
+        std::vector<uint32_t> list;
+        for (size_t c = simd.size(); c-- > 0;)
+            if (c % 3 == 0) list.push_back(uint32_t(c));
+        size_t touching = 0, open = 0;
+        PairBatch batch;
+        for (size_t e = 0; e < list.size(); e += PairBatch::kSize) {
+            const size_t n = std::min(PairBatch::kSize, list.size() - e);
+            for (size_t b = 0; b < n; ++b) batch.index[b] = list[e + b];
+            batch.count = n;
+            ASSERT_EQ(law.run(d, p, simd.data(), batch), n);
+            for (size_t b = 0; b < n; ++b) {
+                DiscContact& c = scalar[list[e + b]];
+                PairOut o{};
+                double overlap = 0.0;
+                ASSERT_TRUE(disc_pair_force(d, p, c, o, overlap));
+                ASSERT_TRUE(same_history(simd[list[e + b]], c)) << "contact " << list[e + b];
+                ASSERT_EQ(batch.touching[b], int32_t(o.touching));
+                ASSERT_EQ(bits(batch.half_dissipated(b)), bits(0.5 * o.dissipated));
+                if (o.touching) {
+                    ++touching;
+                    ASSERT_EQ(bits(batch.fx(b)), bits(o.f.x()));
+                    ASSERT_EQ(bits(batch.fy(b)), bits(o.f.y()));
+                    ASSERT_EQ(bits(batch.torque_i(b)), bits(o.torque_i));
+                    ASSERT_EQ(bits(batch.torque_j(b)), bits(o.torque_j));
+                    ASSERT_EQ(bits(batch.k_tran(b)), bits(o.k_tran));
+                    ASSERT_EQ(bits(batch.k_rot(b)), bits(o.k_rot));
+                } else {
+                    ++open;
+                    for (double x : {batch.fx(b), batch.fy(b), batch.torque_j(b), batch.k_tran(b), batch.k_rot(b)})
+                        ASSERT_EQ(bits(x), bits(0.0));
+                }
+            }
+        }
+        EXPECT_GT(touching, 200u);
+        EXPECT_GT(open, 200u);
+    }
+}
+
 // The clearance test (PairSkip): what it records is a bound of each open pair's gap above
 // the approach, the pairs it then skips are those, and the others get the scalar kernel's bits.
 TEST(PairKernel, ClearanceTestSkipsOnlyPairsThatCannotTouch) {
