@@ -479,3 +479,60 @@ TEST(PairKernel, BenchKernelFlagsChooseTheKernelAndKeepTheChecksum) {
     EXPECT_EQ(checksum, line_with(avx2, "final-state checksum"));
     EXPECT_EQ(checksum, line_with(scalar, "final-state checksum"));
 }
+
+// When the clearances are reset (a disc moved by hand), every pair is looked at again, and a pair
+// that has come apart with its history still set must have it ended. Eight pairs of discs
+// collide head-on; at the step where they have come apart with their histories still set, a
+// disc far away is moved by hand. The SIMD world must end those histories (and count their
+// dashpots' last half-step of work) as the scalar world does.
+TEST(PairKernel, ClearanceResetKeepsPairsWithAHistoryToDo) {
+    if (!cpu_has_avx2()) GTEST_SKIP() << "this CPU has no AVX2";
+    std::unique_ptr<World> w[2];
+    for (int k = 0; k < 2; ++k) {
+        WorldDef def;
+        def.simd = k == 0;
+        def.gravity = Vec2::Zero();
+        def.timestep.automatic = false;
+        def.timestep.fixed = 2e-6;
+        def.damping.beta_n = def.damping.beta_s = 0.3;
+        w[k] = std::make_unique<World>(def);
+        MaterialDef m;
+        m.kn = m.ks = 1e8;
+        m.friction = 0.3;
+        const int mat = w[k]->add_material(m);
+        for (int p = 0; p < 8; ++p) {
+            const double x = 0.05 * p;
+            w[k]->add_disc({Vec2(x, 0.0), 0.001, Vec2(1.0, 0.3), 0.0, 0.0, mat});
+            w[k]->add_disc({Vec2(x + 0.0021, 0.0), 0.001, Vec2(-1.0, -0.3), 0.0, 0.0, mat});
+        }
+        w[k]->add_disc({Vec2(1.0, 1.0), 0.001, Vec2::Zero(), 0.0, 0.0, mat});  // the one moved by hand
+        w[k]->finalize();
+    }
+    ASSERT_TRUE(w[0]->simd_kernel());
+    auto parted_with_history = [](const World& x) {
+        for (const DiscContact& c : x.disc_contacts()) {
+            const double gap = (x.positions()[size_t(c.j)] - x.positions()[size_t(c.i)]).norm() -
+                               (x.radii()[size_t(c.i)] + x.radii()[size_t(c.j)]);
+            if (gap > 0.0 && (c.fs != 0.0 || c.damp_n != 0.0f)) return true;
+        }
+        return false;
+    };
+    bool touched = false, reset = false;
+    for (int s = 0; s < 4000 && !reset; ++s) {
+        touched = touched || w[0]->touching_disc_pairs() == 8;
+        if (touched && parted_with_history(*w[0])) {
+            ASSERT_TRUE(parted_with_history(*w[1]));
+            for (auto& x : w) x->set_position(16, Vec2(1.0, 1.0));  // forgets the clearances
+            reset = true;
+        }
+        for (auto& x : w) x->step();
+    }
+    ASSERT_TRUE(reset) << "the pairs did not come apart";
+    for (auto& x : w) x->run(20);
+    EXPECT_EQ(state_hash(*w[0]), state_hash(*w[1]));
+    const EnergyReport a = w[0]->energy(), b = w[1]->energy();
+    EXPECT_GT(a.dissipated_contacts, 0.0);
+    EXPECT_EQ(bits(a.dissipated_contacts), bits(b.dissipated_contacts));
+    for (size_t c = 0; c < w[0]->disc_contacts().size(); ++c)
+        EXPECT_TRUE(same_history(w[0]->disc_contacts()[c], w[1]->disc_contacts()[c])) << "contact " << c;
+}
