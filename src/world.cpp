@@ -315,12 +315,32 @@ void World::refresh_contacts() {
 // corrected from the measured times: balance_force_pass); the cross contacts and, per range,
 // which of them it receives. Rebuilt with the candidate lists. How the work is cut changes no
 // bit: every disc sums its terms in contact-list order in any case (compute_forces).
+//
+// Ranges pay off when discs near in space are near in index, so that few pairs cross (flume
+// 2 %, DB-9k 1 % of the candidates on 2 threads). A world in random order (the release
+// generator's, before its mass is ordered in space) has half its pairs crossing: the first
+// range then waits for the second to compute them all before its first pair, and 2 threads
+// took 131 s where 1 thread took 89 s for the release of geometry A (session 11). Above
+// max_cross_share_ of the candidates crossing, the pass runs as one range on the calling
+// thread: the same bits, at the 1-thread speed. The limit, 10 %, is where 2 ranges stopped
+// beating one on DB-9k with part of its discs swapped at random (ns per particle-step,
+// 1 / 2 threads: 0.7 % crossing 30 / 19-25, 5 % 31-48 / 28, 9 % 32-38 / 31-32, 16 % 36-38 /
+// 39-44, 27 % 45 / 52, 42 % 34 / 65).
 void World::split_force_pass() {
     const size_t n = pos_.size();
-    force_ranges_ = pool_->shares(n) ? pool_->size() : 1;
-    const size_t r = size_t(force_ranges_);
-    if (range_share_.size() != r) range_share_.assign(r, 1.0 / double(r));
+    const size_t wanted = pool_->shares(n) ? size_t(pool_->size()) : 1;
+    if (range_share_.size() != wanted) range_share_.assign(wanted, 1.0 / double(wanted));
+    cut_ranges(wanted);
+    if (wanted > 1 && double(cross_.size()) > max_cross_share_ * double(dd_.size())) {
+        ++one_range_cuts_;
+        cut_ranges(1);
+    }
     restart_balance_window();
+}
+
+void World::cut_ranges(size_t r) {
+    const size_t n = pos_.size();
+    force_ranges_ = int(r);
     ledger_blocks_.resize((n + kLedgerBlock - 1) / kLedgerBlock);
     // the ranges' first disc, disc-disc contact and wall contact (both lists are sorted by disc)
     disc_split_.assign(r + 1, n);
@@ -418,7 +438,7 @@ void World::balance_force_pass() {
 }
 
 void World::restart_balance_window() {
-    range_clock_.assign(range_share_.size(), RangeClock{});
+    range_clock_.assign(size_t(force_ranges_), RangeClock{});
     balance_steps_ = 0;
 }
 
@@ -436,6 +456,13 @@ void World::cut_force_pass(const std::vector<double>& shares) {
                          " finite shares >= 0 summing to 1 expected (one per range)");
     range_share_ = shares;
     split_force_pass();
+}
+
+void World::set_cross_share_limit(double share) {
+    if (!(share >= 0.0 && share <= 1.0))
+        throw InputError("force-pass cross share limit: " + format_number(share) + " is not in [0, 1]");
+    max_cross_share_ = share;
+    if (finalized_) split_force_pass();
 }
 
 // the float nearest a double on the safe side: no greater / no smaller than it

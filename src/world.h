@@ -164,6 +164,12 @@ public:
     // balancing, and how often the ranges were re-cut to balance their times
     const std::vector<double>& force_pass_shares() const { return range_share_; }
     long force_pass_rebalances() const { return rebalances_; }
+    // How often the pass ran as one range although the pool has more threads, because more
+    // than the limit's share of the disc-disc candidates crossed between ranges (discs not
+    // in space order; split_force_pass). The limit can be set for tests and experiments, from
+    // 0 to 1 (1: never one range); no bit depends on it.
+    long force_pass_one_range_cuts() const { return one_range_cuts_; }
+    void set_cross_share_limit(double share);
     // Re-cuts the ranges in these shares of the work model (one per range, summing to 1; the
     // measured balancing continues from them). For tests and experiments: no bit depends on it.
     void cut_force_pass(const std::vector<double>& shares);
@@ -282,6 +288,9 @@ private:
     std::vector<PairBatch> pair_batch_;     // per range: the AVX2 kernel's results before they are added
     std::vector<double> default_k_tran_, default_k_rot_;  // per material, N/m (integrate_prepare)
     void split_force_pass();
+    void cut_ranges(size_t r);
+    double max_cross_share_ = 0.10;  // of the disc-disc candidates (split_force_pass)
+    long one_range_cuts_ = 0;
     // The range pass goes block by block, a block being kFuseBlock discs (whole ledger
     // blocks) and the contacts whose first disc is in it; each block is integrated as soon as
     // its pairs and wall contacts are done (compute_forces). Measured on the flume and DB-9k:
