@@ -42,8 +42,8 @@ b2AABB BroadPhase::to_tree(const Vec2& lo, const Vec2& hi) const {
     return box;
 }
 
-void BroadPhase::read_fat(int32_t proxy, Vec2& lo, Vec2& hi) const {
-    const b2AABB& f = tree_.GetFatAABB(proxy);
+void BroadPhase::read_fat(const b2DynamicTree& tree, int32_t proxy, Vec2& lo, Vec2& hi) const {
+    const b2AABB& f = tree.GetFatAABB(proxy);
     // scale_ is a power of two: these divisions are exact
     lo = Vec2(double(f.lowerBound.x) / scale_, double(f.lowerBound.y) / scale_);
     hi = Vec2(double(f.upperBound.x) / scale_, double(f.upperBound.y) / scale_);
@@ -51,12 +51,14 @@ void BroadPhase::read_fat(int32_t proxy, Vec2& lo, Vec2& hi) const {
 
 void BroadPhase::query(const Vec2& lo, const Vec2& hi, std::vector<int32_t>& hits) const {
     hits.clear();
-    Collector c{&hits, &tree_};
     // the stored fat boxes are exactly representable in tree units
     b2AABB box;
     box.lowerBound.Set(float(lo.x() * scale_), float(lo.y() * scale_));
     box.upperBound.Set(float(hi.x() * scale_), float(hi.y() * scale_));
-    tree_.Query(&c, box);
+    for (const b2DynamicTree& tree : trees_) {
+        Collector c{&hits, &tree};
+        tree.Query(&c, box);
+    }
 }
 
 // Read-only on the tree and the boxes (the re-insertions are done), so the threads can share
@@ -134,14 +136,15 @@ void BroadPhase::init(double margin_target, double wall_piece_length, const std:
                       const std::vector<uint8_t>& wall_active) {
     // b2_aabbExtension (0.1 tree units) = margin in metres  =>  scale = 0.1 / margin
     // a second init (a restored checkpoint) starts from an empty tree
-    for (int32_t proxy : disc_proxy_) tree_.DestroyProxy(proxy);
+    for (size_t i = 0; i < disc_proxy_.size(); ++i) tree_of(i).DestroyProxy(disc_proxy_[i]);
     for (const Piece& pc : pieces_)
-        if (pc.proxy >= 0) tree_.DestroyProxy(pc.proxy);
+        if (pc.proxy >= 0) trees_[0].DestroyProxy(pc.proxy);
     const int k = int(std::lround(std::log2(0.1 / margin_target)));
     scale_ = std::ldexp(1.0, k);
     margin_ = double(0.1f) / scale_;
 
     const size_t n = pos.size();
+    tree_split_ = pool_ && pool_->shares(n) ? n / 2 : n;
     disc_proxy_.resize(n);
     fat_lo_.resize(n);
     fat_hi_.resize(n);
@@ -152,8 +155,8 @@ void BroadPhase::init(double margin_target, double wall_piece_length, const std:
     escaped_list_.clear();
     for (size_t i = 0; i < n; ++i) {
         const Vec2 rr(radius[i], radius[i]);
-        disc_proxy_[i] = tree_.CreateProxy(to_tree(pos[i] - rr, pos[i] + rr), encode(int32_t(i), 0));
-        read_fat(disc_proxy_[i], fat_lo_[i], fat_hi_[i]);
+        disc_proxy_[i] = tree_of(i).CreateProxy(to_tree(pos[i] - rr, pos[i] + rr), encode(int32_t(i), 0));
+        read_fat(tree_of(i), disc_proxy_[i], fat_lo_[i], fat_hi_[i]);
         escaped_list_.push_back(int32_t(i));
     }
     pieces_.clear();
@@ -164,8 +167,8 @@ void BroadPhase::init(double margin_target, double wall_piece_length, const std:
             if (wall_active[w]) {
                 Vec2 lo, hi;
                 wall_piece_bounds(walls[w], pc.f0, pc.f1, lo, hi);
-                pc.proxy = tree_.CreateProxy(to_tree(lo, hi), encode(int32_t(pieces_.size()), 1));
-                read_fat(pc.proxy, pc.fat_lo, pc.fat_hi);
+                pc.proxy = trees_[0].CreateProxy(to_tree(lo, hi), encode(int32_t(pieces_.size()), 1));
+                read_fat(trees_[0], pc.proxy, pc.fat_lo, pc.fat_hi);
             }
             pieces_.push_back(pc);
         }
@@ -202,12 +205,39 @@ void BroadPhase::query_all_escaped() {
         pool_->for_each_thread(part);
     for (int k = 0; k < threads; ++k) {
         const QueryChunk& c = chunks_[size_t(k)];
-        const auto mid = scratch_dd_.insert(scratch_dd_.end(), c.dd.begin(), c.dd.end());
-        std::inplace_merge(scratch_dd_.begin(), mid, scratch_dd_.end());
+        // into a kept buffer: std::inplace_merge takes a temporary buffer from the heap each
+        // time (a few hundred kB: fresh pages from the kernel at every update)
+        merge_buffer_.resize(scratch_dd_.size() + c.dd.size());
+        std::merge(scratch_dd_.begin(), scratch_dd_.end(), c.dd.begin(), c.dd.end(), merge_buffer_.begin());
+        scratch_dd_.swap(merge_buffer_);
         scratch_dw_.insert(scratch_dw_.end(), c.dw.begin(), c.dw.end());
         stats_.queries += c.queries;
         stats_.tree_walks += c.walks;
         if (threads > 1) stats_.shared_queries += c.queries;
+    }
+}
+
+void BroadPhase::reinsert_escaped(size_t begin, size_t end, const std::vector<Vec2>& pos,
+                                  const std::vector<double>& radius, const std::vector<Vec2>* vel, double dt) {
+    for (size_t e = begin; e < end; ++e) {
+        const size_t i = size_t(escaped_list_[e]);
+        b2DynamicTree& tree = tree_of(i);
+        const Vec2 rr(radius[i], radius[i]);
+        // the pad from the disc's speed: the box grows by `extra`, the tree adds the margin
+        const double pad = pad_for(vel ? (*vel)[i] : Vec2::Zero(), dt);
+        const double extra = pad - margin_;
+        half_pad_[i] = 0.5 * pad;
+        const Vec2 lo = pos[i] - rr - Vec2(extra, extra), hi = pos[i] + rr + Vec2(extra, extra);
+        // MoveProxy keeps the old fat box of a disc that has not left it yet: re-create those
+        if (contains(fat_lo_[i], fat_hi_[i], pos[i] - rr, pos[i] + rr)) {
+            tree.DestroyProxy(disc_proxy_[i]);
+            disc_proxy_[i] = tree.CreateProxy(to_tree(lo, hi), encode(int32_t(i), 0));
+        } else {
+            tree.MoveProxy(disc_proxy_[i], to_tree(lo, hi), b2Vec2(0.0f, 0.0f));
+        }
+        read_fat(tree, disc_proxy_[i], fat_lo_[i], fat_hi_[i]);
+        box_radius_[i] = radius[i];
+        escaped_[i] = 1;
     }
 }
 
@@ -223,7 +253,7 @@ bool BroadPhase::update(const std::vector<Vec2>& pos, const std::vector<double>&
     for (Piece& pc : pieces_) {
         const int32_t w = pc.wall;
         if (pc.proxy >= 0 && !wall_active[w]) {
-            tree_.DestroyProxy(pc.proxy);
+            trees_[0].DestroyProxy(pc.proxy);
             pc.proxy = -1;
             changed[w] = 1;
             any_wall = true;
@@ -265,31 +295,24 @@ bool BroadPhase::update(const std::vector<Vec2>& pos, const std::vector<double>&
         escaped_list_.erase(std::unique(escaped_list_.begin(), escaped_list_.end()), escaped_list_.end());
     }
 
-    for (int32_t i : escaped_list_) {
-        const Vec2 rr(radius[i], radius[i]);
-        // the pad from the disc's speed: the box grows by `extra`, the tree adds the margin
-        const double pad = pad_for(vel ? (*vel)[size_t(i)] : Vec2::Zero(), dt);
-        const double extra = pad - margin_;
-        half_pad_[size_t(i)] = 0.5 * pad;
-        const Vec2 lo = pos[i] - rr - Vec2(extra, extra), hi = pos[i] + rr + Vec2(extra, extra);
-        // MoveProxy keeps the old fat box of a disc that has not left it yet: re-create those
-        if (contains(fat_lo_[i], fat_hi_[i], pos[i] - rr, pos[i] + rr)) {
-            tree_.DestroyProxy(disc_proxy_[i]);
-            disc_proxy_[i] = tree_.CreateProxy(to_tree(lo, hi), encode(i, 0));
-        } else {
-            tree_.MoveProxy(disc_proxy_[i], to_tree(lo, hi), b2Vec2(0.0f, 0.0f));
-        }
-        read_fat(disc_proxy_[i], fat_lo_[i], fat_hi_[i]);
-        box_radius_[size_t(i)] = radius[size_t(i)];
-        escaped_[i] = 1;
-    }
+    // each tree's discs by one thread (escaped_list_ is in index order)
+    const size_t split = size_t(std::lower_bound(escaped_list_.begin(), escaped_list_.end(), int32_t(tree_split_)) -
+                                escaped_list_.begin());
+    if (pool_ && pool_->size() > 1 && split >= kMinSharedReinserts && escaped_list_.size() - split >= kMinSharedReinserts) {
+        pool_->for_each_thread([&](int k) {
+            if (k == 0) reinsert_escaped(0, split, pos, radius, vel, dt);
+            if (k == 1) reinsert_escaped(split, escaped_list_.size(), pos, radius, vel, dt);
+        });
+        stats_.shared_reinserts += long(escaped_list_.size());
+    } else
+        reinsert_escaped(0, escaped_list_.size(), pos, radius, vel, dt);
     stats_.disc_reinserts += long(escaped_list_.size());
     for (Piece& pc : pieces_) {
         if (pc.proxy >= 0 && changed[pc.wall]) {
             Vec2 lo, hi;
             wall_piece_bounds(walls[pc.wall], pc.f0, pc.f1, lo, hi);
-            tree_.MoveProxy(pc.proxy, to_tree(lo, hi), b2Vec2(0.0f, 0.0f));
-            read_fat(pc.proxy, pc.fat_lo, pc.fat_hi);
+            trees_[0].MoveProxy(pc.proxy, to_tree(lo, hi), b2Vec2(0.0f, 0.0f));
+            read_fat(trees_[0], pc.proxy, pc.fat_lo, pc.fat_hi);
         }
     }
 

@@ -1,6 +1,8 @@
 // Broad phase: Box2D's b2DynamicTree holds one proxy per disc and a few per wall (long walls
 // are cut into pieces so that a slope's bounding box does not cover the whole mass). The tree
-// only answers "which fat boxes overlap"; the physics is ours.
+// only answers "which fat boxes overlap"; the physics is ours. With 2 threads or more the
+// discs are held in two trees, half the indices each, so that the re-insertions are shared
+// (trees_ below).
 //
 // Fat boxes: the tree pads every box by b2_aabbExtension = 0.1 tree units. We choose the
 // units: tree coordinate = metres * scale with scale a power of two, so the pad is
@@ -45,6 +47,7 @@ struct BroadPhaseStats {
     long disc_reinserts = 0;   // discs re-inserted after leaving their fat box
     long queries = 0;          // escaped discs (and moved wall pieces) whose candidates were queried
     long shared_queries = 0;   // of these, queries shared out among the pool's threads
+    long shared_reinserts = 0; // re-insertions made by two threads at once, one per tree
     long tree_walks = 0;       // walks of the tree for them (a group of escaped discs walks once)
 };
 
@@ -99,6 +102,8 @@ public:
     // Fewer escaped discs than this are queried by the caller alone: a query costs about a
     // microsecond, the hand-over tens of them when the other thread has gone to sleep.
     static constexpr size_t kMinSharedQueries = 256;
+    // Fewer escaped discs than this in either tree are re-inserted by the caller alone.
+    static constexpr size_t kMinSharedReinserts = 64;
     // Escaped discs per walk of the tree, at most (kQueryGroup below; 1: a walk per disc). For
     // tests and measurements: no candidate depends on it.
     void set_query_group(size_t n) { query_group_ = n < 1 ? 1 : n; }
@@ -111,7 +116,7 @@ private:
         Vec2 fat_lo, fat_hi;
     };
     b2AABB to_tree(const Vec2& lo, const Vec2& hi) const;
-    void read_fat(int32_t proxy, Vec2& lo, Vec2& hi) const;
+    void read_fat(const b2DynamicTree& tree, int32_t proxy, Vec2& lo, Vec2& hi) const;
     void query(const Vec2& lo, const Vec2& hi, std::vector<int32_t>& hits) const;
     bool may_touch(int32_t i, int32_t j) const;
     double pad_for(const Vec2& v, double dt) const;  // m, the speed rule's pad
@@ -133,7 +138,18 @@ private:
     void query_escaped(size_t begin, size_t end, QueryChunk& out) const;
     void query_all_escaped();
 
-    b2DynamicTree tree_;
+    // Two trees when the pool has two threads or more: discs below tree_split_ in the first,
+    // the others in the second, the wall pieces in the first. Each thread re-inserts the
+    // escaped discs of one tree (reinsert_escaped): on 2 threads the re-insertions were the
+    // largest serial part of a step (DB-9k: 6 % of the wall time, the other thread waiting).
+    // A query walks both. Which tree holds a disc changes no candidate: the lists are the
+    // overlap tests' answers, sorted.
+    b2DynamicTree trees_[2];
+    size_t tree_split_ = 0;
+    b2DynamicTree& tree_of(size_t disc) { return trees_[disc < tree_split_ ? 0 : 1]; }
+    // re-inserts escaped_list_[begin, end) (discs of one tree)
+    void reinsert_escaped(size_t begin, size_t end, const std::vector<Vec2>& pos, const std::vector<double>& radius,
+                          const std::vector<Vec2>* vel, double dt);
     double scale_ = 1.0;
     double margin_ = 0.1;
     std::vector<int32_t> disc_proxy_;
@@ -142,7 +158,7 @@ private:
     std::vector<double> half_pad_;    // half the pad each disc's fat box was made with, m
     double reach_length_ = 0.0;       // L of the speed rule, m
     std::vector<Piece> pieces_;
-    std::vector<uint64_t> dd_, dw_, scratch_dd_, scratch_dw_;
+    std::vector<uint64_t> dd_, dw_, scratch_dd_, scratch_dw_, merge_buffer_;
     std::vector<uint8_t> escaped_;
     std::vector<int32_t> escaped_list_, hits_;
     std::vector<uint8_t> wall_changed_;  // per wall, in update()

@@ -68,9 +68,10 @@ int bench(const BenchOptions& o) {
                 o.threads, world.avx512_kernel() ? "AVX-512" : world.simd_kernel() ? "AVX2" : "scalar");
     std::printf("  wall time %.3f s, %.3e particle-steps/s, %.1f ns per particle-step\n", secs, rate,
                 1e9 * secs / (double(world.disc_count()) * double(o.steps)));
-    std::printf("  broad phase: margin %.3g m, %ld updates, %ld re-insertions, %ld queries in %ld tree walks; contacts now "
-                "%ld disc-disc, %ld disc-wall\n",
-                world.broad_phase_margin(), bs.updates, bs.disc_reinserts, bs.queries, bs.tree_walks,
+    std::printf("  broad phase: margin %.3g m, %ld updates (%.3f s, %.1f %% of the wall time), %ld re-insertions, %ld "
+                "queries in %ld tree walks; contacts now %ld disc-disc, %ld disc-wall\n",
+                world.broad_phase_margin(), bs.updates, world.list_update_seconds(),
+                100.0 * world.list_update_seconds() / secs, bs.disc_reinserts, bs.queries, bs.tree_walks,
                 world.touching_disc_pairs(), world.touching_wall_pairs());
     std::printf("  force pass: %d disc range(s), %zu of %zu candidate pairs cross ranges; %.1f %% of the candidates "
                 "skipped as clear\n",

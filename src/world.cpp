@@ -266,33 +266,41 @@ double World::contact_mass_disc(int i, int j) const { return effective_mass(mass
 void World::refresh_contacts() {
     const size_t nm = materials_.size(), nw = walls_.size();
     const auto& keys = broad_.disc_pairs();
-    dd_scratch_.clear();
-    dd_scratch_.reserve(keys.size());
-    clearance_scratch_.clear();
-    clearance_scratch_.reserve(keys.size());
+    // The new list has one contact per key, in key order: contact m is key m's, so the
+    // threads can each take a part of the keys and find where to read the old list by a
+    // binary search (measured on DB-9k, 2 threads: the serial merge was 2.5 % of the wall time)
+    dd_scratch_.resize(keys.size());
+    clearance_scratch_.resize(keys.size());
     clearance_.resize(dd_.size(), 0.0f);
-    size_t o = 0;
-    for (uint64_t key : keys) {
-        const int32_t i = key_first(key), j = key_second(key);
-        while (o < dd_.size() && pair_key(dd_[o].i, dd_[o].j) < key) ++o;
-        if (o < dd_.size() && dd_[o].i == i && dd_[o].j == j) {
-            dd_scratch_.push_back(dd_[o]);
-            clearance_scratch_.push_back(clearance_[o]);  // still a bound: the approach goes on
-            continue;
+    auto merge = [&](size_t begin, size_t end, int) {
+        if (begin == end) return;
+        size_t o = size_t(std::lower_bound(dd_.begin(), dd_.end(), keys[begin],
+                                           [](const DiscContact& c, uint64_t key) { return pair_key(c.i, c.j) < key; }) -
+                          dd_.begin());
+        for (size_t m = begin; m < end; ++m) {
+            const uint64_t key = keys[m];
+            const int32_t i = key_first(key), j = key_second(key);
+            while (o < dd_.size() && pair_key(dd_[o].i, dd_[o].j) < key) ++o;
+            if (o < dd_.size() && dd_[o].i == i && dd_[o].j == j) {
+                dd_scratch_[m] = dd_[o];
+                clearance_scratch_[m] = clearance_[o];  // still a bound: the approach goes on
+                continue;
+            }
+            clearance_scratch_[m] = 0.0f;  // a new pair: look at it
+            const PairMaterial& pm = mat_dd_[size_t(material_[size_t(i)]) * nm + size_t(material_[size_t(j)])];
+            const double m_eff = contact_mass_disc(i, j);
+            dd_scratch_[m] = {i, j, 0.0, dashpot_coefficient(def_.damping.beta_n, m_eff, pm.kn),
+                              dashpot_coefficient(def_.damping.beta_s, m_eff, pm.ks), 0.0f, 0.0f};
         }
-        clearance_scratch_.push_back(0.0f);  // a new pair: look at it
-        const PairMaterial& pm = mat_dd_[size_t(material_[size_t(i)]) * nm + size_t(material_[size_t(j)])];
-        const double m_eff = contact_mass_disc(i, j);
-        dd_scratch_.push_back({i, j, 0.0, dashpot_coefficient(def_.damping.beta_n, m_eff, pm.kn),
-                               dashpot_coefficient(def_.damping.beta_s, m_eff, pm.ks), 0.0f, 0.0f});
-    }
+    };
+    pool_->parallel_for(keys.size(), merge);
     dd_.swap(dd_scratch_);
     clearance_.swap(clearance_scratch_);
 
     const auto& wkeys = broad_.wall_pairs();
     dw_scratch_.clear();
     dw_scratch_.reserve(wkeys.size());
-    o = 0;
+    size_t o = 0;
     for (uint64_t key : wkeys) {
         const int32_t i = key_first(key), w = key_second(key);
         while (o < dw_.size() && pair_key(dw_[o].disc, dw_[o].wall) < key) ++o;
@@ -1095,8 +1103,11 @@ void World::step() {
     // every kPadCheckSteps steps the broad phase also looks for pads wider than the discs'
     // speeds ask for (a scan of the discs: a tenth of a step's time, once in 128 steps)
     const bool check_pads = steps_ % kPadCheckSteps == 0;
-    if (broad_.update(pos_, radius_, geom_, wall_active_, wall_moving_, discs_may_have_escaped_, &vel_, dt_, check_pads))
+    const auto t_list = std::chrono::steady_clock::now();
+    if (broad_.update(pos_, radius_, geom_, wall_active_, wall_moving_, discs_may_have_escaped_, &vel_, dt_, check_pads)) {
         refresh_contacts();
+        list_seconds_ += std::chrono::duration<double>(std::chrono::steady_clock::now() - t_list).count();
+    }
     compute_forces(true);
     integrate_finish();
     balance_force_pass();

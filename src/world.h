@@ -164,6 +164,9 @@ public:
     // balancing, and how often the ranges were re-cut to balance their times
     const std::vector<double>& force_pass_shares() const { return range_share_; }
     long force_pass_rebalances() const { return rebalances_; }
+    // Wall-clock seconds in the steps' candidate-list updates (broad phase and contact lists),
+    // summed: mostly the calling thread's alone (docs/performance.md).
+    double list_update_seconds() const { return list_seconds_; }
     // How often the pass ran as one range although the pool has more threads, because more
     // than the limit's share of the disc-disc candidates crossed between ranges (discs not
     // in space order; split_force_pass). The limit can be set for tests and experiments, from
@@ -291,6 +294,7 @@ private:
     void cut_ranges(size_t r);
     double max_cross_share_ = 0.10;  // of the disc-disc candidates (split_force_pass)
     long one_range_cuts_ = 0;
+    double list_seconds_ = 0.0;
     // The range pass goes block by block, a block being kFuseBlock discs (whole ledger
     // blocks) and the contacts whose first disc is in it; each block is integrated as soon as
     // its pairs and wall contacts are done (compute_forces). Measured on the flume and DB-9k:

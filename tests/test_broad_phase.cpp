@@ -49,7 +49,8 @@ PairSet brute_force_walls(const World& w) {
 
 // A box of dense, random, not overlapping discs (rejection sampling) flying in all
 // directions at up to v_max, with a floor, a curved wall and a side wall; finalized.
-std::unique_ptr<World> random_flying_world(unsigned seed, size_t count, double r_max, double v_max, int threads = 1) {
+std::unique_ptr<World> random_flying_world(unsigned seed, size_t count, double r_max, double v_max, int threads = 1,
+                                           double r_min = 0.001) {
     WorldDef def;
     def.rotation.model = 2;
     def.rotation.u_rr = 0.0;
@@ -60,7 +61,7 @@ std::unique_ptr<World> random_flying_world(unsigned seed, size_t count, double r
     std::vector<Vec2> placed;
     std::vector<double> radii;
     while (placed.size() < count) {
-        const double r = uniform(rng, 0.001, r_max);
+        const double r = uniform(rng, r_min, r_max);
         const Vec2 p(uniform(rng, 0.02, 0.13), uniform(rng, 0.03, 0.15));
         bool free = true;
         for (size_t k = 0; k < placed.size() && free; ++k) free = (placed[k] - p).norm() >= r + radii[k];
@@ -126,6 +127,36 @@ TEST(BroadPhase, SharedQueriesGiveTheSameCandidateLists) {
     // beyond the first build's 700 queries, updates were shared too
     EXPECT_GT(two->broad_phase_stats().shared_queries, 700 + long(BroadPhase::kMinSharedQueries));
     EXPECT_EQ(one->positions(), two->positions());
+}
+
+// From 4,096 discs on, with 2 threads, the discs are in two trees (the lower and the upper
+// half of the indices) and each thread re-inserts one tree's escaped discs; and the contact
+// list is merged by both threads, each from a binary search into the old list. The contacts
+// must still be every touching pair, and the lists those of 1 thread, pair for pair.
+TEST(BroadPhase, TwoTreesGiveTheSameCandidateListsAsOne) {
+    auto build = [](int threads) { return random_flying_world(11, 5000, 0.0008, 3.0, threads, 0.0004); };
+    auto keys = [](const World& w) {
+        std::vector<std::pair<int, int>> k;
+        for (const DiscContact& c : w.disc_contacts()) k.push_back({c.i, c.j});
+        for (const WallContact& c : w.wall_contacts()) k.push_back({-1 - c.disc, c.wall});
+        return k;
+    };
+    auto one = build(1), two = build(2);
+    long touching_seen = 0;
+    for (int round = 0; round < 6; ++round) {
+        ASSERT_EQ(keys(*one), keys(*two)) << "round " << round;
+        const PairSet expect_dd = brute_force_discs(*two);
+        EXPECT_EQ(engine_discs(*two), expect_dd) << "round " << round;
+        EXPECT_EQ(engine_walls(*two), brute_force_walls(*two)) << "round " << round;
+        touching_seen += long(expect_dd.size());
+        one->run(60);
+        two->run(60);
+    }
+    EXPECT_GT(touching_seen, 1000);
+    EXPECT_EQ(one->broad_phase_stats().shared_reinserts, 0);
+    EXPECT_GT(two->broad_phase_stats().shared_reinserts, 2 * long(BroadPhase::kMinSharedReinserts));
+    EXPECT_EQ(one->positions(), two->positions());
+    EXPECT_EQ(one->velocities(), two->velocities());
 }
 
 TEST(BroadPhase, MarginIsAPowerOfTwoFractionOfTheTreePad) {
