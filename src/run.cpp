@@ -455,6 +455,8 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
     sum.broadphase_reinserts = w.broad_phase_stats().disc_reinserts;
     sum.broadphase_mean_candidates = pair_samples > 0 ? candidate_sum / double(pair_samples) : 0.0;
     sum.broadphase_mean_touching = pair_samples > 0 ? touching_sum / double(pair_samples) : 0.0;
+    sum.broadphase_update_seconds = w.list_update_seconds();
+    sum.force_pass_one_range_cuts = w.force_pass_one_range_cuts();
     sum.steps = w.step_count();
     sum.t_end = w.time();
     sum.dt = w.dt();
@@ -530,7 +532,9 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
       << "  \"broadphase_updates\": " << sum.broadphase_updates << ",\n"
       << "  \"broadphase_reinserts\": " << sum.broadphase_reinserts << ",\n"
       << "  \"broadphase_mean_candidates\": " << json_number(sum.broadphase_mean_candidates) << ",\n"
-      << "  \"broadphase_mean_touching\": " << json_number(sum.broadphase_mean_touching);
+      << "  \"broadphase_mean_touching\": " << json_number(sum.broadphase_mean_touching) << ",\n"
+      << "  \"broadphase_update_seconds\": " << json_number(sum.broadphase_update_seconds) << ",\n"
+      << "  \"force_pass_one_range_cuts\": " << sum.force_pass_one_range_cuts;
     if (s.dam_break.enabled) {
         j << ",\n  \"gamma_ges\": " << json_number(angles.gamma_ges);
         for (int i = 0; i < 5; ++i) j << ",\n  \"gamma_" << i + 1 << "\": " << json_number(angles.gamma[i]);

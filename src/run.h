@@ -62,6 +62,8 @@ struct RunSummary {
     long broadphase_reinserts = 0;      // discs re-inserted into the tree
     double broadphase_mean_candidates = 0;    // disc-disc candidate pairs per step
     double broadphase_mean_touching = 0;      // of which touching
+    double broadphase_update_seconds = 0;     // s, wall-clock in the candidate-list updates (mostly serial)
+    long force_pass_one_range_cuts = 0;       // list updates whose force pass ran as one range (discs out of space order)
 };
 
 RunSummary run_scenario(const Scenario& s, const RunOptions& o);
