@@ -77,6 +77,14 @@ std::unique_ptr<World> random_flying_world(unsigned seed, size_t count, double r
     return w;
 }
 
+// The candidate lists, disc-disc pairs then disc-wall ones (discs as -1 - index), in order.
+std::vector<std::pair<int, int>> candidate_keys(const World& w) {
+    std::vector<std::pair<int, int>> k;
+    for (const DiscContact& c : w.disc_contacts()) k.push_back({c.i, c.j});
+    for (const WallContact& c : w.wall_contacts()) k.push_back({-1 - c.disc, c.wall});
+    return k;
+}
+
 PairSet engine_walls(const World& w) {
     PairSet s;
     for (const WallContact& c : w.wall_contacts()) {
@@ -110,15 +118,9 @@ TEST(BroadPhase, ContactSetEqualsBruteForceOnRandomConfigurations) {
 // the candidate lists must be the same, pair for pair and in the same order.
 TEST(BroadPhase, SharedQueriesGiveTheSameCandidateLists) {
     auto build = [](int threads) { return random_flying_world(7, 700, 0.002, 3.0, threads); };
-    auto keys = [](const World& w) {
-        std::vector<std::pair<int, int>> k;
-        for (const DiscContact& c : w.disc_contacts()) k.push_back({c.i, c.j});
-        for (const WallContact& c : w.wall_contacts()) k.push_back({-1 - c.disc, c.wall});
-        return k;
-    };
     auto one = build(1), two = build(2);
     for (int round = 0; round < 8; ++round) {
-        ASSERT_EQ(keys(*one), keys(*two)) << "round " << round;
+        ASSERT_EQ(candidate_keys(*one), candidate_keys(*two)) << "round " << round;
         one->run(50);
         two->run(50);
     }
@@ -135,16 +137,10 @@ TEST(BroadPhase, SharedQueriesGiveTheSameCandidateLists) {
 // must still be every touching pair, and the lists those of 1 thread, pair for pair.
 TEST(BroadPhase, TwoTreesGiveTheSameCandidateListsAsOne) {
     auto build = [](int threads) { return random_flying_world(11, 5000, 0.0008, 3.0, threads, 0.0004); };
-    auto keys = [](const World& w) {
-        std::vector<std::pair<int, int>> k;
-        for (const DiscContact& c : w.disc_contacts()) k.push_back({c.i, c.j});
-        for (const WallContact& c : w.wall_contacts()) k.push_back({-1 - c.disc, c.wall});
-        return k;
-    };
     auto one = build(1), two = build(2);
     long touching_seen = 0;
     for (int round = 0; round < 6; ++round) {
-        ASSERT_EQ(keys(*one), keys(*two)) << "round " << round;
+        ASSERT_EQ(candidate_keys(*one), candidate_keys(*two)) << "round " << round;
         const PairSet expect_dd = brute_force_discs(*two);
         EXPECT_EQ(engine_discs(*two), expect_dd) << "round " << round;
         EXPECT_EQ(engine_walls(*two), brute_force_walls(*two)) << "round " << round;

@@ -15,6 +15,22 @@ using namespace demlab;
 using namespace demlab::test;
 
 namespace {
+// DB-9k's world (or these discs of it) on this many threads, finalized, after `steps` steps:
+// its state hash; `look` sees the world then.
+template <typename Look>
+uint64_t db9k_hash_after(const std::vector<XyrDisc>& discs, int threads, long steps, Look&& look) {
+    WorldDef def = db9k_world_def();
+    def.threads = threads;
+    World w(def);
+    build_db9k(w, discs);
+    w.finalize();
+    w.run(steps);
+    look(w);
+    return state_hash(w);
+}
+uint64_t db9k_hash_after(const std::vector<XyrDisc>& discs, int threads, long steps) {
+    return db9k_hash_after(discs, threads, steps, [](const World&) {});
+}
 double uniform(std::mt19937_64& rng, double lo, double hi) { return lo + (hi - lo) * double(rng() >> 11) * 0x1.0p-53; }
 
 // n discs with random velocities in a closed box of walls (0.2 m x 0.2 m).
@@ -135,15 +151,7 @@ TEST(Determinism, OneAndTwoThreadsGiveTheSameBits) {
     // DB-9k, the whole column, 20,000 steps (0.1 s: the densest phase)
     const auto discs = read_xyr(default_db9k_path());
     uint64_t h[2];
-    for (int threads : {1, 2}) {
-        WorldDef def = db9k_world_def();
-        def.threads = threads;
-        World w(def);
-        build_db9k(w, discs);
-        w.finalize();
-        w.run(20000);
-        h[threads - 1] = state_hash(w);
-    }
+    for (int threads : {1, 2}) h[threads - 1] = db9k_hash_after(discs, threads, 20000);
     EXPECT_EQ(h[0], h[1]);
     // The bits every build since the first engine has given (docs/performance.md): a change
     // meant only to be faster must keep them. One that changes the arithmetic on purpose
@@ -199,22 +207,13 @@ TEST(ForcePassBalance, DiscsOutOfSpaceOrderRunAsOneRange) {
             std::mt19937_64 rng(7);
             std::shuffle(discs.begin(), discs.end(), rng);
         }
-        uint64_t h[2];
-        for (int threads : {1, 2}) {
-            WorldDef def = db9k_world_def();
-            def.threads = threads;
-            World w(def);
-            build_db9k(w, discs);
-            w.finalize();
-            w.run(300);
-            h[threads - 1] = state_hash(w);
-            if (threads == 2) {
-                EXPECT_EQ(w.force_pass_ranges(), shuffled ? 1 : 2) << "shuffled " << shuffled;
-                EXPECT_EQ(w.force_pass_one_range_cuts() > 0, shuffled);
-                EXPECT_EQ(w.cross_contacts() == 0, shuffled);
-            }
-        }
-        EXPECT_EQ(h[0], h[1]) << "shuffled " << shuffled;
+        const uint64_t one = db9k_hash_after(discs, 1, 300);
+        const uint64_t two = db9k_hash_after(discs, 2, 300, [&](const World& w) {
+            EXPECT_EQ(w.force_pass_ranges(), shuffled ? 1 : 2) << "shuffled " << shuffled;
+            EXPECT_EQ(w.force_pass_one_range_cuts() > 0, shuffled);
+            EXPECT_EQ(w.cross_contacts() == 0, shuffled);
+        });
+        EXPECT_EQ(one, two) << "shuffled " << shuffled;
     }
     WorldDef def = db9k_world_def();
     World w(def);

@@ -102,9 +102,13 @@ TEST(GeometryA20, GenerationToRestBalancesAndDeterminism) {
         EXPECT_GT(s.broadphase_mean_touching, 0.0);
         // a candidate may not touch, a touching pair is always a candidate
         EXPECT_LE(s.broadphase_mean_touching, s.broadphase_mean_candidates);
+        EXPECT_GT(s.broadphase_update_seconds, 0.0);
+        EXPECT_LT(s.broadphase_update_seconds, s.wall_seconds);
+        EXPECT_EQ(s.force_pass_one_range_cuts, 0);  // a released mass is in space order
         const std::string json = read_file(first.dir / "summary.json");
         for (const char* key : {"broadphase_margin", "broadphase_updates", "broadphase_reinserts",
-                                "broadphase_mean_candidates", "broadphase_mean_touching"})
+                                "broadphase_mean_candidates", "broadphase_mean_touching", "broadphase_update_seconds",
+                                "force_pass_one_range_cuts"})
             EXPECT_NE(json.find(std::string("\"") + key + "\": "), std::string::npos) << key;
     }
     {
