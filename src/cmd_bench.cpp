@@ -3,8 +3,11 @@
 #include <array>
 #include <chrono>
 #include <cstdio>
+#include <latch>
 #include <memory>
 #include <string>
+#include <thread>
+#include <vector>
 
 #include "commands.h"
 #include "db9k.h"
@@ -22,7 +25,65 @@ struct BenchOptions {
     int threads = 1;
     bool scalar = false;
     bool no_avx512 = false;
+    bool ceiling = false;
 };
+
+// One DB-9k run on `threads` threads, timed from its first step; `start`, when given, holds
+// every run back until all are built (runs side by side).
+struct TimedRun {
+    double seconds = 0;
+    uint64_t hash = 0;
+};
+TimedRun timed_db9k(const std::vector<XyrDisc>& discs, const BenchOptions& o, int threads, std::latch* start) {
+    WorldDef def = db9k_world_def();
+    def.threads = threads;
+    def.simd = !o.scalar;
+    def.avx512 = !o.no_avx512;
+    World world(def);
+    build_db9k(world, discs);
+    world.finalize();
+    if (start) start->arrive_and_wait();
+    const auto t0 = std::chrono::steady_clock::now();
+    world.run(o.steps);
+    TimedRun r;
+    r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    r.hash = state_hash(world);
+    return r;
+}
+
+// What the machine's cores give together: `copies` independent 1-thread runs side by side
+// (one thread each, nothing shared) against one 1-thread run alone. Two cores of a virtual
+// machine need not give twice one core: they share the last-level cache and memory, and the
+// host may run other work on them. Measured here (session 12), two runs side by side each ran
+// 0-25 % slower than one alone, so the 2-thread figure is best read against this ceiling.
+void print_ceiling(const std::vector<XyrDisc>& discs, const BenchOptions& o, double rate_shared) {
+    const double n = double(discs.size()) * double(o.steps);
+    const TimedRun alone = timed_db9k(discs, o, 1, nullptr);
+    const int copies = o.threads;
+    std::vector<TimedRun> side(static_cast<size_t>(copies));
+    {
+        std::latch start(copies);
+        std::vector<std::thread> runs;
+        for (int k = 0; k < copies; ++k)
+            runs.emplace_back([&, k] { side[size_t(k)] = timed_db9k(discs, o, 1, &start); });
+        for (std::thread& t : runs) t.join();
+    }
+    const double rate_alone = n / alone.seconds;
+    double rate_sum = 0.0;
+    bool same_bits = true;
+    std::printf("ceiling: one 1-thread run alone %.3e particle-steps/s (%.1f ns); %d side by side:", rate_alone,
+                1e9 * alone.seconds / n, copies);
+    for (const TimedRun& r : side) {
+        rate_sum += n / r.seconds;
+        same_bits = same_bits && r.hash == alone.hash;
+        std::printf(" %.1f", 1e9 * r.seconds / n);
+    }
+    std::printf(" ns\n");
+    std::printf("  the %d cores give %.2fx one core; demlab on %d threads gave %.2fx one 1-thread run, %.0f %% of "
+                "the ceiling%s\n",
+                copies, rate_sum / rate_alone, o.threads, rate_shared / rate_alone, 100.0 * rate_shared / rate_sum,
+                same_bits ? "" : " (the runs' checksums differ: a bug)");
+}
 
 // Runs the LAMMPS script and returns its particle-steps/s (0 if it could not run).
 double run_peer(long steps, int ranks) {
@@ -81,8 +142,19 @@ int bench(const BenchOptions& o) {
         std::printf("  force-pass shares after %ld re-cut(s) to balance the ranges' times:", world.force_pass_rebalances());
         for (double s : world.force_pass_shares()) std::printf(" %.3f", s);
         std::printf("\n");
+        std::printf("  shared force passes: %.3f s wall (%.1f %% of the wall time); the ranges worked %.1f %% of the "
+                    "threads' time in them, waited %.1f %% (at the join for the slower range, for cross contacts, "
+                    "for the hand-over)\n",
+                    world.force_pass_shared_seconds(), 100.0 * world.force_pass_shared_seconds() / secs,
+                    100.0 * world.force_pass_busy_share(), 100.0 * (1.0 - world.force_pass_busy_share()));
     }
     std::printf("  final-state checksum %016llx\n", static_cast<unsigned long long>(state_hash(world)));
+    if (o.ceiling) {
+        if (o.threads < 2)
+            std::printf("ceiling: needs --threads 2 or more (runs that many 1-thread copies side by side)\n");
+        else
+            print_ceiling(discs, o, rate);
+    }
     if (o.peer) {
         const int ranks = o.threads > 1 ? 2 : 1;
         std::printf("peer: LAMMPS, %ld steps, %d rank(s)\n", o.steps, ranks);
@@ -107,6 +179,9 @@ Command add_bench_command(CLI::App& app) {
         ->capture_default_str()->check(CLI::Range(1, 64));
     sub->add_flag("--scalar", opts->scalar, "Use the scalar loops (pair forces, integration) even if the CPU has AVX2 (the same bits; for comparison)");
     sub->add_flag("--no-avx512", opts->no_avx512, "Run the pair law four pairs at a time (AVX2) even if the CPU has AVX-512 (the same bits; for comparison)");
+    sub->add_flag("--ceiling", opts->ceiling,
+                  "With --threads T >= 2: also run one 1-thread copy alone and T side by side, and print what the "
+                  "cores give together (the ceiling of the T-thread figure on this machine)");
     sub->add_flag("--peer", opts->peer, "Also run LAMMPS (bench/db9k/lammps/run.sh) on the same work and print the ratio");
     return [opts] { return bench(*opts); };
 }

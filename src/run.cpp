@@ -457,6 +457,7 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
     sum.broadphase_mean_touching = pair_samples > 0 ? touching_sum / double(pair_samples) : 0.0;
     sum.broadphase_update_seconds = w.list_update_seconds();
     sum.force_pass_one_range_cuts = w.force_pass_one_range_cuts();
+    sum.force_pass_busy_share = w.force_pass_busy_share();
     sum.steps = w.step_count();
     sum.t_end = w.time();
     sum.dt = w.dt();
@@ -534,7 +535,8 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
       << "  \"broadphase_mean_candidates\": " << json_number(sum.broadphase_mean_candidates) << ",\n"
       << "  \"broadphase_mean_touching\": " << json_number(sum.broadphase_mean_touching) << ",\n"
       << "  \"broadphase_update_seconds\": " << json_number(sum.broadphase_update_seconds) << ",\n"
-      << "  \"force_pass_one_range_cuts\": " << sum.force_pass_one_range_cuts;
+      << "  \"force_pass_one_range_cuts\": " << sum.force_pass_one_range_cuts << ",\n"
+      << "  \"force_pass_busy_share\": " << json_number(sum.force_pass_busy_share);
     if (s.dam_break.enabled) {
         j << ",\n  \"gamma_ges\": " << json_number(angles.gamma_ges);
         for (int i = 0; i < 5; ++i) j << ",\n  \"gamma_" << i + 1 << "\": " << json_number(angles.gamma[i]);

@@ -766,13 +766,20 @@ void World::compute_forces(bool then_integrate) {
             if (integrate) integrate_discs(b0, b1, t, ic);
             b0 = b1;
         }
-        range_clock_[size_t(t)].seconds +=
-            std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count() - waited;
+        const double busy = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count() - waited;
+        range_clock_[size_t(t)].seconds += busy;
+        range_clock_[size_t(t)].last = busy;
     };
-    if (force_ranges_ == 1)
+    if (force_ranges_ == 1) {
         range_pass(0);
-    else
+    } else {
+        const auto pass_started = std::chrono::steady_clock::now();
         pool_->for_each_thread(range_pass);
+        const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - pass_started).count();
+        shared_pass_seconds_ += wall;
+        shared_pass_thread_seconds_ += wall * double(ranges);
+        for (const RangeClock& c : range_clock_) shared_pass_busy_seconds_ += c.last;
+    }
     for (PairBatch& b : pair_batch_) {
         pairs_skipped_ += long(b.skipped);
         b.skipped = 0;

@@ -172,6 +172,15 @@ public:
     // in space order; split_force_pass). The limit can be set for tests and experiments, from
     // 0 to 1 (1: never one range); no bit depends on it.
     long force_pass_one_range_cuts() const { return one_range_cuts_; }
+    // Wall-clock seconds of the force passes that ran as more than one range, summed, and the
+    // share of the threads' time in them that the ranges spent working (1 - the share they
+    // waited: at the join for the slowest range, for another range's cross contacts, and for
+    // the hand-over). 1 when no pass was shared out. The step-to-step balance on a machine
+    // whose cores' speeds vary (docs/performance.md, session 12).
+    double force_pass_shared_seconds() const { return shared_pass_seconds_; }
+    double force_pass_busy_share() const {
+        return shared_pass_thread_seconds_ > 0.0 ? shared_pass_busy_seconds_ / shared_pass_thread_seconds_ : 1.0;
+    }
     void set_cross_share_limit(double share);
     // Re-cuts the ranges in these shares of the work model (one per range, summing to 1; the
     // measured balancing continues from them). For tests and experiments: no bit depends on it.
@@ -295,6 +304,8 @@ private:
     double max_cross_share_ = 0.10;  // of the disc-disc candidates (split_force_pass)
     long one_range_cuts_ = 0;
     double list_seconds_ = 0.0;
+    // passes shared out: their wall time, times the ranges, and the ranges' working time (s)
+    double shared_pass_seconds_ = 0.0, shared_pass_thread_seconds_ = 0.0, shared_pass_busy_seconds_ = 0.0;
     // The range pass goes block by block, a block being kFuseBlock discs (whole ledger
     // blocks) and the contacts whose first disc is in it; each block is integrated as soon as
     // its pairs and wall contacts are done (compute_forces). Measured on the flume and DB-9k:
@@ -322,6 +333,7 @@ private:
     static constexpr double kBalanceTolerance = 0.03;  // longest range over the mean, - 1
     struct alignas(64) RangeClock {
         double seconds = 0.0;  // s, in the force pass and integration since the last check
+        double last = 0.0;     // s, the same in the last pass alone
         long touching_dd = 0;  // touching disc-disc contacts counted by its discs (each pair twice)
     };
     // The energy ledger's per-step sums, per block of kLedgerBlock discs: the ranges are cut at

@@ -151,7 +151,19 @@ TEST(Determinism, OneAndTwoThreadsGiveTheSameBits) {
     // DB-9k, the whole column, 20,000 steps (0.1 s: the densest phase)
     const auto discs = read_xyr(default_db9k_path());
     uint64_t h[2];
-    for (int threads : {1, 2}) h[threads - 1] = db9k_hash_after(discs, threads, 20000);
+    for (int threads : {1, 2})
+        h[threads - 1] = db9k_hash_after(discs, threads, 20000, [threads](const World& w) {
+            // the shared passes' accounting: none on 1 thread; on 2 a share of the threads'
+            // time worked, below 1 (a pass has a hand-over and a join) and well above 0
+            if (threads == 1) {
+                EXPECT_EQ(w.force_pass_shared_seconds(), 0.0);
+                EXPECT_EQ(w.force_pass_busy_share(), 1.0);
+            } else {
+                EXPECT_GT(w.force_pass_shared_seconds(), 0.0);
+                EXPECT_LT(w.force_pass_busy_share(), 1.0);
+                EXPECT_GT(w.force_pass_busy_share(), 0.2);
+            }
+        });
     EXPECT_EQ(h[0], h[1]);
     // The bits every build since the first engine has given (docs/performance.md): a change
     // meant only to be faster must keep them. One that changes the arithmetic on purpose

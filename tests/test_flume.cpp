@@ -105,10 +105,12 @@ TEST(GeometryA20, GenerationToRestBalancesAndDeterminism) {
         EXPECT_GT(s.broadphase_update_seconds, 0.0);
         EXPECT_LT(s.broadphase_update_seconds, s.wall_seconds);
         EXPECT_EQ(s.force_pass_one_range_cuts, 0);  // a released mass is in space order
+        EXPECT_GT(s.force_pass_busy_share, 0.0);
+        EXPECT_LE(s.force_pass_busy_share, 1.0);
         const std::string json = read_file(first.dir / "summary.json");
         for (const char* key : {"broadphase_margin", "broadphase_updates", "broadphase_reinserts",
                                 "broadphase_mean_candidates", "broadphase_mean_touching", "broadphase_update_seconds",
-                                "force_pass_one_range_cuts"})
+                                "force_pass_one_range_cuts", "force_pass_busy_share"})
             EXPECT_NE(json.find(std::string("\"") + key + "\": "), std::string::npos) << key;
     }
     {
