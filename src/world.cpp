@@ -858,11 +858,7 @@ double World::automatic_dt() const {
 // complete (compute_forces): integrate_prepare before, integrate_finish after.
 World::IntegrateConsts World::integrate_prepare() {
     const size_t chunks = size_t(pool_->size());
-    integrate_fault_.assign(chunks, SIZE_MAX);  // no allocation after the first step
-    dt_sq_chunk_.assign(chunks, INFINITY);
-    escaped_chunk_.assign(chunks, 0);
-    speed_chunk_.assign(chunks, 0.0);
-    extent_chunk_.assign(chunks, 0.0);
+    chunk_note_.assign(chunks, ChunkNote{});  // no allocation after the first step
     // the AVX2 loop's inputs: a disc without contacts uses its material's stiffnesses for its
     // step bound; each range's ledger terms, per disc
     default_k_tran_.resize(materials_.size());
@@ -890,7 +886,7 @@ void World::integrate_discs(size_t begin, size_t end, int chunk, const Integrate
         const RotationDef& rot = def_.rotation;
         const IntegrateParams params{k.dt,          k.g,          k.g_abs,         rot.model, rot.rolling_form == RollingForm::Literal,
                                      rot.mu_br,     k.auto_dt,    k.dtf.rotation_free, k.dtf.phi_sq, k.dtf.phi_t_sq,
-                                     def_.domain_lo, def_.domain_hi, dt_sq_chunk_[size_t(chunk)]};
+                                     def_.domain_lo, def_.domain_hi, chunk_note_[size_t(chunk)].dt_sq};
         const IntegrateOut out = integrate_avx2(arrays, params, begin, end, ledger_blocks_.data(), kLedgerBlock);
         range_clock_[size_t(chunk)].touching_dd += out.touching_dd;
         integrate_note(chunk, out.fault, k.auto_dt ? out.best_sq : INFINITY, out.any_escaped, out.speed_l1, out.extent_l1);
@@ -1018,18 +1014,19 @@ void World::integrate_discs(size_t begin, size_t end, int chunk, const Integrate
 // to the chunk's slots (reset by integrate_prepare): the first fault, the smallest step, any
 // escape, the largest speed and extent.
 void World::integrate_note(int chunk, size_t fault, double best_sq, bool any_escaped, double speed_l1, double extent_l1) {
-    const size_t c = size_t(chunk);
-    if (integrate_fault_[c] == SIZE_MAX) integrate_fault_[c] = fault;
-    dt_sq_chunk_[c] = std::min(dt_sq_chunk_[c], best_sq);
-    if (any_escaped) escaped_chunk_[c] = 1;
-    speed_chunk_[c] = std::max(speed_chunk_[c], speed_l1);
-    extent_chunk_[c] = std::max(extent_chunk_[c], extent_l1);
+    ChunkNote& note = chunk_note_[size_t(chunk)];
+    if (note.fault == SIZE_MAX) note.fault = fault;
+    note.dt_sq = std::min(note.dt_sq, best_sq);
+    note.escaped = note.escaped || any_escaped;
+    note.speed = std::max(note.speed, speed_l1);
+    note.extent = std::max(note.extent, extent_l1);
 }
 
 void World::integrate_finish() {
     discs_may_have_escaped_ = false;
-    for (uint8_t e : escaped_chunk_) discs_may_have_escaped_ = discs_may_have_escaped_ || e != 0;
-    for (size_t i : integrate_fault_) {
+    for (const ChunkNote& note : chunk_note_) discs_may_have_escaped_ = discs_may_have_escaped_ || note.escaped;
+    for (const ChunkNote& note : chunk_note_) {
+        const size_t i = note.fault;
         if (i == SIZE_MAX) continue;
         const Vec2& p = pos_[i];
         if (!std::isfinite(p.x() + p.y() + vel_[i].x() + vel_[i].y()))
@@ -1054,9 +1051,9 @@ void World::integrate_finish() {
     // The factors below are generous against the rounding of this sum. A range that was not
     // integrated met a fault, and the run stops above.
     double speed = 0.0, extent = 0.0;
-    for (size_t c = 0; c < speed_chunk_.size(); ++c) {
-        speed = std::max(speed, speed_chunk_[c]);
-        extent = std::max(extent, extent_chunk_[c]);
+    for (const ChunkNote& note : chunk_note_) {
+        speed = std::max(speed, note.speed);
+        extent = std::max(extent, note.extent);
     }
     const double moved = speed * dt_ * (1.0 + 0x1p-40) + 0x1p-50 * extent;
     approach_ += 2.0 * moved;
@@ -1125,7 +1122,7 @@ void World::step() {
     ++steps_;
     if (def_.timestep.automatic) {
         double best_sq = INFINITY;
-        for (double b : dt_sq_chunk_) best_sq = std::min(best_sq, b);
+        for (const ChunkNote& note : chunk_note_) best_sq = std::min(best_sq, note.dt_sq);
         dt_ = step_from_critical_squared(best_sq);
     }
 }

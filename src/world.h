@@ -354,18 +354,25 @@ private:
         std::string message;
     };
     std::vector<Fault> dd_fault_, dw_fault_;
-    std::vector<size_t> integrate_fault_;
-    std::vector<double> dt_sq_chunk_;       // per chunk: the smallest critical step squared of this step
-    std::vector<uint8_t> escaped_chunk_;
+    // What each chunk's integration found in this step (integrate_note), a cache line per
+    // chunk: the threads write theirs after every block, and in five shared vectors (two
+    // chunks' values in one line) the lines went back and forth between the cores
+    // (docs/performance.md, session 12).
+    struct alignas(64) ChunkNote {
+        size_t fault = SIZE_MAX;    // the first disc that left the domain or went non-finite
+        double dt_sq = INFINITY;    // s^2, the smallest critical step squared
+        double speed = 0.0;         // m/s, the largest |vx| + |vy| (the clearance test's approach)
+        double extent = 0.0;        // m, the largest |x| + |y|
+        bool escaped = false;       // a disc left its fat box
+    };
+    std::vector<ChunkNote> chunk_note_;
     bool discs_may_have_escaped_ = true;  // false when integrate_discs() saw every disc inside its fat box
     std::vector<DiscContact> dd_, dd_scratch_;
     // The AVX2 pass' clearance test (PairSkip, pair_kernel.h): per disc-disc contact, the
     // approach below which it is known to be open with a zero history (carried with the
-    // contact when the lists are rebuilt); the approach since the last reset, m; per chunk,
-    // the integration's largest |vx| + |vy| (m/s) and |x| + |y| (m) of the step.
+    // contact when the lists are rebuilt); the approach since the last reset, m.
     std::vector<float> clearance_, clearance_scratch_;
     double approach_ = 0.0;
-    std::vector<double> speed_chunk_, extent_chunk_;
     long pairs_skipped_ = 0;  // summed over the steps (the ranges' PairBatch::skipped)
     long candidate_passes_ = 0;
     bool clearances_stale_ = false;  // forget_clearances() was called: reset at the next force pass
