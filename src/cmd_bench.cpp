@@ -148,6 +148,10 @@ int bench(const BenchOptions& o) {
                     world.force_pass_shared_seconds(), 100.0 * world.force_pass_shared_seconds() / secs,
                     100.0 * world.force_pass_busy_share(), 100.0 * (1.0 - world.force_pass_busy_share()));
     }
+    if (world.force_pass_busy_fallbacks() > 0)
+        std::printf("  the machine was busy: the pass fell back to one range %ld time(s), for %ld of the %ld steps "
+                    "(a core taken by another process; give --threads no more than the free cores)\n",
+                    world.force_pass_busy_fallbacks(), world.force_pass_one_range_steps(), o.steps);
     std::printf("  final-state checksum %016llx\n", static_cast<unsigned long long>(state_hash(world)));
     if (o.ceiling) {
         if (o.threads < 2)

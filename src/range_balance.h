@@ -30,4 +30,16 @@ bool rebalance_shares(double* share, Seconds seconds, size_t r, double tolerance
     return true;
 }
 
+// Whether the pass would have gone faster as one range over the last window: the ranges
+// worked `busy` seconds in all, in passes of `wall` seconds on `r` threads. With the work cut
+// in r parts, r ranges take (work / r) / share of the time one range takes, share =
+// busy / (r wall); below 1 / r they are slower than one range. On an idle machine the share
+// is about 0.95 (DB-9k, geometry A, 2 threads). It falls when another process takes a core:
+// the operating system then stops one range for a time slice of milliseconds while the other
+// waits at the join (DB-9k on 2 threads beside a compiler: 13 %, three times slower than 1
+// thread; docs/performance.md, session 12).
+inline bool one_range_would_be_faster(double busy, double wall, size_t r) {
+    return r > 1 && wall > 0.0 && busy / (double(r) * wall) < 1.0 / double(r);
+}
+
 }  // namespace demlab

@@ -458,6 +458,7 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
     sum.broadphase_update_seconds = w.list_update_seconds();
     sum.force_pass_one_range_cuts = w.force_pass_one_range_cuts();
     sum.force_pass_busy_share = w.force_pass_busy_share();
+    sum.force_pass_busy_fallbacks = w.force_pass_busy_fallbacks();
     sum.steps = w.step_count();
     sum.t_end = w.time();
     sum.dt = w.dt();
@@ -536,7 +537,8 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
       << "  \"broadphase_mean_touching\": " << json_number(sum.broadphase_mean_touching) << ",\n"
       << "  \"broadphase_update_seconds\": " << json_number(sum.broadphase_update_seconds) << ",\n"
       << "  \"force_pass_one_range_cuts\": " << sum.force_pass_one_range_cuts << ",\n"
-      << "  \"force_pass_busy_share\": " << json_number(sum.force_pass_busy_share);
+      << "  \"force_pass_busy_share\": " << json_number(sum.force_pass_busy_share) << ",\n"
+      << "  \"force_pass_busy_fallbacks\": " << sum.force_pass_busy_fallbacks;
     if (s.dam_break.enabled) {
         j << ",\n  \"gamma_ges\": " << json_number(angles.gamma_ges);
         for (int i = 0; i < 5; ++i) j << ",\n  \"gamma_" << i + 1 << "\": " << json_number(angles.gamma[i]);

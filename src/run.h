@@ -65,6 +65,7 @@ struct RunSummary {
     double broadphase_update_seconds = 0;     // s, wall-clock in the candidate-list updates (mostly serial)
     long force_pass_one_range_cuts = 0;       // list updates whose force pass ran as one range (discs out of space order)
     double force_pass_busy_share = 1;         // of the threads' time in the shared force passes, the share the ranges worked (World)
+    long force_pass_busy_fallbacks = 0;       // times the pass fell back to one range for a busy machine (World)
 };
 
 RunSummary run_scenario(const Scenario& s, const RunOptions& o);

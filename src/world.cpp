@@ -336,7 +336,7 @@ void World::refresh_contacts() {
 // 39-44, 27 % 45 / 52, 42 % 34 / 65).
 void World::split_force_pass() {
     const size_t n = pos_.size();
-    const size_t wanted = pool_->shares(n) ? size_t(pool_->size()) : 1;
+    const size_t wanted = pool_->shares(n) && one_range_left_ == 0 ? size_t(pool_->size()) : 1;
     if (range_share_.size() != wanted) range_share_.assign(wanted, 1.0 / double(wanted));
     cut_ranges(wanted);
     if (wanted > 1 && double(cross_.size()) > max_cross_share_ * double(dd_.size())) {
@@ -434,8 +434,25 @@ void World::cut_ranges(size_t r) {
 // move halfway towards the measured speeds (rebalance_shares) and the pass is cut again. The
 // cut changes no bit. Measured on DB-9k, 2 threads: the shares settle near 0.48/0.52.
 void World::balance_force_pass() {
+    if (one_range_left_ > 0) {
+        ++one_range_steps_;
+        if (--one_range_left_ == 0) split_force_pass();  // try the pool again
+        return;
+    }
     const size_t r = range_clock_.size();
     if (r < 2 || ++balance_steps_ < kBalanceWindow) return;
+    // Three windows in a row, not one: on an idle machine a window now and then has a core
+    // stopped for a few milliseconds (one in 20,000 DB-9k steps fell back on the first try),
+    // while a core taken by another process slows every window.
+    double busy = 0.0;
+    for (const RangeClock& c : range_clock_) busy += c.seconds;
+    slow_windows_ = busy_fallback_ && one_range_would_be_faster(busy, window_pass_seconds_, r) ? slow_windows_ + 1 : 0;
+    if (slow_windows_ >= kSlowWindows) {
+        slow_windows_ = 0;
+        ++busy_fallbacks_;
+        run_as_one_range_for(kOneRangeSteps);
+        return;
+    }
     const auto seconds = [this](size_t t) { return range_clock_[t].seconds; };
     if (rebalance_shares(range_share_.data(), seconds, r, kBalanceTolerance)) {
         ++rebalances_;
@@ -448,6 +465,14 @@ void World::balance_force_pass() {
 void World::restart_balance_window() {
     range_clock_.assign(size_t(force_ranges_), RangeClock{});
     balance_steps_ = 0;
+    window_pass_seconds_ = 0.0;
+}
+
+void World::run_as_one_range_for(long steps) {
+    if (steps < 0) throw InputError("force pass: one range for " + std::to_string(steps) + " steps: must be >= 0");
+    if (!finalized_) finalize();
+    one_range_left_ = steps;
+    split_force_pass();
 }
 
 void World::cut_force_pass(const std::vector<double>& shares) {
@@ -777,6 +802,7 @@ void World::compute_forces(bool then_integrate) {
         pool_->for_each_thread(range_pass);
         const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - pass_started).count();
         shared_pass_seconds_ += wall;
+        window_pass_seconds_ += wall;
         shared_pass_thread_seconds_ += wall * double(ranges);
         for (const RangeClock& c : range_clock_) shared_pass_busy_seconds_ += c.last;
     }

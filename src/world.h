@@ -185,6 +185,17 @@ public:
     // Re-cuts the ranges in these shares of the work model (one per range, summing to 1; the
     // measured balancing continues from them). For tests and experiments: no bit depends on it.
     void cut_force_pass(const std::vector<double>& shares);
+    // Runs the force pass as one range for the next `steps` steps, then cuts it for the pool
+    // again. The step does this itself when the ranges worked less than 1 / ranges of the
+    // threads' time in kSlowWindows balancing windows in a row (another process on a core:
+    // one_range_would_be_faster, range_balance.h), for kOneRangeSteps; callable for tests and
+    // experiments. No bit depends on it.
+    void run_as_one_range_for(long steps);
+    // Whether the step may fall back so (on by default); off for tests that check the ranges.
+    void set_busy_fallback(bool on) { busy_fallback_ = on; }
+    // how often the step fell back to one range for a busy machine, and the steps it ran so
+    long force_pass_busy_fallbacks() const { return busy_fallbacks_; }
+    long force_pass_one_range_steps() const { return one_range_steps_; }
     const BroadPhaseStats& broad_phase_stats() const { return broad_.stats(); }
     double broad_phase_margin() const { return broad_.margin(); }
 
@@ -304,6 +315,15 @@ private:
     double max_cross_share_ = 0.10;  // of the disc-disc candidates (split_force_pass)
     long one_range_cuts_ = 0;
     double list_seconds_ = 0.0;
+    // one range for a busy machine (run_as_one_range_for): steps left, fallbacks, steps run so
+    static constexpr long kOneRangeSteps = 4096;
+    static constexpr int kSlowWindows = 3;  // balancing windows in a row that would have run faster as one range
+    int slow_windows_ = 0;
+    bool busy_fallback_ = true;
+    long one_range_left_ = 0;
+    long busy_fallbacks_ = 0;
+    long one_range_steps_ = 0;
+    double window_pass_seconds_ = 0.0;  // s, the shared passes' wall time in this balancing window
     // passes shared out: their wall time, times the ranges, and the ranges' working time (s)
     double shared_pass_seconds_ = 0.0, shared_pass_thread_seconds_ = 0.0, shared_pass_busy_seconds_ = 0.0;
     // The range pass goes block by block, a block being kFuseBlock discs (whole ledger

@@ -47,7 +47,7 @@ std::string summary_without_timing(const fs::path& p) {
         // timing, the broad phase's figures and the threads' balance are of the session (the
         // resume rebuilds the lists)
         if (line.find("wall_seconds") == std::string::npos && line.find("particle_steps_per_second") == std::string::npos &&
-            line.find("broadphase_") == std::string::npos && line.find("force_pass_busy_share") == std::string::npos)
+            line.find("broadphase_") == std::string::npos && line.find("force_pass_busy_") == std::string::npos)
             out += line + '\n';
     return out;
 }

@@ -110,7 +110,7 @@ TEST(GeometryA20, GenerationToRestBalancesAndDeterminism) {
         const std::string json = read_file(first.dir / "summary.json");
         for (const char* key : {"broadphase_margin", "broadphase_updates", "broadphase_reinserts",
                                 "broadphase_mean_candidates", "broadphase_mean_touching", "broadphase_update_seconds",
-                                "force_pass_one_range_cuts", "force_pass_busy_share"})
+                                "force_pass_one_range_cuts", "force_pass_busy_share", "force_pass_busy_fallbacks"})
             EXPECT_NE(json.find(std::string("\"") + key + "\": "), std::string::npos) << key;
     }
     {
