@@ -105,6 +105,9 @@ double run_peer(long steps, int ranks) {
 int bench(const BenchOptions& o) {
     if (o.workload != "db9k") throw InputError("bench: unknown workload '" + o.workload + "'; accepted: db9k");
     if (o.steps < 1) throw InputError("bench --steps = " + std::to_string(o.steps) + ": must be >= 1");
+    if (o.ceiling && o.threads < 2)
+        throw InputError("bench --ceiling with --threads = " + std::to_string(o.threads) +
+                         ": needs --threads 2 or more (it runs that many 1-thread copies side by side)");
     const std::string path = o.file.empty() ? default_db9k_path() : o.file;
     const auto discs = read_xyr(path);
     WorldDef def = db9k_world_def();
@@ -153,12 +156,7 @@ int bench(const BenchOptions& o) {
                     "(a core taken by another process; give --threads no more than the free cores)\n",
                     world.force_pass_busy_fallbacks(), world.force_pass_one_range_steps(), o.steps);
     std::printf("  final-state checksum %016llx\n", static_cast<unsigned long long>(state_hash(world)));
-    if (o.ceiling) {
-        if (o.threads < 2)
-            std::printf("ceiling: needs --threads 2 or more (runs that many 1-thread copies side by side)\n");
-        else
-            print_ceiling(discs, o, rate);
-    }
+    if (o.ceiling) print_ceiling(discs, o, rate);
     if (o.peer) {
         const int ranks = o.threads > 1 ? 2 : 1;
         std::printf("peer: LAMMPS, %ld steps, %d rank(s)\n", o.steps, ranks);

@@ -6,11 +6,14 @@
 
 #include <bit>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <memory>
 #include <random>
 #include <string>
 #include <vector>
+
+#include <sys/wait.h>
 
 #include "db9k.h"
 #include "pair_kernel.h"
@@ -478,6 +481,19 @@ TEST(PairKernel, BenchKernelFlagsChooseTheKernelAndKeepTheChecksum) {
     ASSERT_NE(checksum, "") << simd;
     EXPECT_EQ(checksum, line_with(avx2, "final-state checksum"));
     EXPECT_EQ(checksum, line_with(scalar, "final-state checksum"));
+}
+
+TEST(Bench, CeilingRunsCopiesSideBySideAndNeedsTwoThreads) {
+    // two 1-thread copies beside one alone: their figures, and the 2-thread run's against them
+    const std::string out = demlab_output("bench db9k --steps 200 --threads 2 --ceiling");
+    EXPECT_NE(line_with(out, "ceiling: one 1-thread run alone"), "") << out;
+    EXPECT_NE(line_with(out, "2 side by side:"), "") << out;
+    EXPECT_NE(line_with(out, "the 2 cores give"), "") << out;
+    EXPECT_EQ(line_with(out, "checksums differ"), "") << out;  // every copy ends in the same bits
+    // with one thread there is nothing to compare: an input error (exit code 2) before any run
+    const int status = std::system((std::string(DEMLAB_EXE) + " bench db9k --ceiling --steps 200 >/dev/null 2>&1").c_str());
+    ASSERT_TRUE(WIFEXITED(status));
+    EXPECT_EQ(WEXITSTATUS(status), 2);
 }
 
 // When the clearances are reset (a disc moved by hand), every pair is looked at again, and a pair
