@@ -55,7 +55,8 @@ TimedRun timed_db9k(const std::vector<XyrDisc>& discs, const BenchOptions& o, in
 // (one thread each, nothing shared) against one 1-thread run alone. Two cores of a virtual
 // machine need not give twice one core: they share the last-level cache and memory, and the
 // host may run other work on them. Measured here (session 12), two runs side by side each ran
-// 0-25 % slower than one alone, so the 2-thread figure is best read against this ceiling.
+// from 8 % faster to 27 % slower than one alone, so the 2-thread figure is best read against
+// this ceiling.
 void print_ceiling(const std::vector<XyrDisc>& discs, const BenchOptions& o, double rate_shared) {
     const double n = double(discs.size()) * double(o.steps);
     const TimedRun alone = timed_db9k(discs, o, 1, nullptr);
@@ -145,12 +146,13 @@ int bench(const BenchOptions& o) {
         std::printf("  force-pass shares after %ld re-cut(s) to balance the ranges' times:", world.force_pass_rebalances());
         for (double s : world.force_pass_shares()) std::printf(" %.3f", s);
         std::printf("\n");
+    }
+    if (world.force_pass_shared_seconds() > 0.0)
         std::printf("  shared force passes: %.3f s wall (%.1f %% of the wall time); the ranges worked %.1f %% of the "
                     "threads' time in them, waited %.1f %% (at the join for the slower range, for cross contacts, "
                     "for the hand-over)\n",
                     world.force_pass_shared_seconds(), 100.0 * world.force_pass_shared_seconds() / secs,
                     100.0 * world.force_pass_busy_share(), 100.0 * (1.0 - world.force_pass_busy_share()));
-    }
     if (world.force_pass_busy_fallbacks() > 0)
         std::printf("  the machine was busy: the pass fell back to one range %ld time(s), for %ld of the %ld steps "
                     "(a core taken by another process; give --threads no more than the free cores)\n",

@@ -30,16 +30,31 @@ bool rebalance_shares(double* share, Seconds seconds, size_t r, double tolerance
     return true;
 }
 
-// Whether the pass would have gone faster as one range over the last window: the ranges
-// worked `busy` seconds in all, in passes of `wall` seconds on `r` threads. With the work cut
-// in r parts, r ranges take (work / r) / share of the time one range takes, share =
-// busy / (r wall); below 1 / r they are slower than one range. On an idle machine the share
-// is about 0.95 (DB-9k, geometry A, 2 threads). It falls when another process takes a core:
-// the operating system then stops one range for a time slice of milliseconds while the other
-// waits at the join (DB-9k on 2 threads beside a compiler: 13 %, three times slower than 1
-// thread; docs/performance.md, session 12).
-inline bool one_range_would_be_faster(double busy, double wall, size_t r) {
-    return r > 1 && wall > 0.0 && busy / (double(r) * wall) < 1.0 / double(r);
-}
+// Whether the pass would have gone faster as one range over the last window: the r ranges
+// worked `busy` seconds in all, in passes of `wall` seconds. One range does the same work in
+// about `busy` seconds (the ranges split it without loss: docs/performance.md, session 12), so
+// it is faster when busy < wall, i.e. when the ranges worked less than 1 / r of the threads'
+// time (r wall). On an idle machine they work about 0.95 of it (DB-9k, geometry A, 2 threads).
+// It falls when another process takes a core: the operating system then stops one range for
+// a time slice of milliseconds while the other waits at the join (DB-9k on 2 threads beside a
+// compiler: 0.13, three times slower than 1 thread).
+inline bool one_range_would_be_faster(double busy, double wall, size_t r) { return r > 1 && busy < wall; }
+
+// The decision to fall back to one range (World::balance_force_pass): after kWindows
+// balancing windows in a row in which one range would have been faster. One window is not
+// enough: on an idle machine a window now and then has a core stopped for a few milliseconds
+// (one DB-9k run in seven fell back once), while a core taken by another process slows every
+// window.
+struct BusyWatch {
+    static constexpr int kWindows = 3;
+    int slow = 0;  // windows in a row so far
+    // one window's figures; true when the pass should now run as one range (and starts counting again)
+    bool window(double busy, double wall, size_t r) {
+        slow = one_range_would_be_faster(busy, wall, r) ? slow + 1 : 0;
+        if (slow < kWindows) return false;
+        slow = 0;
+        return true;
+    }
+};
 
 }  // namespace demlab

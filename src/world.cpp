@@ -441,14 +441,9 @@ void World::balance_force_pass() {
     }
     const size_t r = range_clock_.size();
     if (r < 2 || ++balance_steps_ < kBalanceWindow) return;
-    // Three windows in a row, not one: on an idle machine a window now and then has a core
-    // stopped for a few milliseconds (one in 20,000 DB-9k steps fell back on the first try),
-    // while a core taken by another process slows every window.
     double busy = 0.0;
     for (const RangeClock& c : range_clock_) busy += c.seconds;
-    slow_windows_ = busy_fallback_ && one_range_would_be_faster(busy, window_pass_seconds_, r) ? slow_windows_ + 1 : 0;
-    if (slow_windows_ >= kSlowWindows) {
-        slow_windows_ = 0;
+    if (busy_fallback_ && busy_watch_.window(busy, window_pass_seconds_, r)) {
         ++busy_fallbacks_;
         run_as_one_range_for(kOneRangeSteps);
         return;
@@ -466,6 +461,11 @@ void World::restart_balance_window() {
     range_clock_.assign(size_t(force_ranges_), RangeClock{});
     balance_steps_ = 0;
     window_pass_seconds_ = 0.0;
+}
+
+double World::force_pass_busy_share() const {
+    // a shared pass has one range per thread of the pool
+    return shared_pass_seconds_ > 0.0 ? shared_pass_busy_seconds_ / (shared_pass_seconds_ * double(pool_->size())) : 1.0;
 }
 
 void World::run_as_one_range_for(long steps) {
@@ -803,7 +803,6 @@ void World::compute_forces(bool then_integrate) {
         const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - pass_started).count();
         shared_pass_seconds_ += wall;
         window_pass_seconds_ += wall;
-        shared_pass_thread_seconds_ += wall * double(ranges);
         for (const RangeClock& c : range_clock_) shared_pass_busy_seconds_ += c.last;
     }
     for (PairBatch& b : pair_batch_) {

@@ -13,6 +13,7 @@
 #include "contact_law.h"
 #include "material.h"
 #include "pair_kernel.h"
+#include "range_balance.h"
 #include "rotation.h"
 #include "vec2.h"
 #include "wall.h"
@@ -178,16 +179,14 @@ public:
     // the hand-over). 1 when no pass was shared out. The step-to-step balance on a machine
     // whose cores' speeds vary (docs/performance.md, session 12).
     double force_pass_shared_seconds() const { return shared_pass_seconds_; }
-    double force_pass_busy_share() const {
-        return shared_pass_thread_seconds_ > 0.0 ? shared_pass_busy_seconds_ / shared_pass_thread_seconds_ : 1.0;
-    }
+    double force_pass_busy_share() const;
     void set_cross_share_limit(double share);
     // Re-cuts the ranges in these shares of the work model (one per range, summing to 1; the
     // measured balancing continues from them). For tests and experiments: no bit depends on it.
     void cut_force_pass(const std::vector<double>& shares);
     // Runs the force pass as one range for the next `steps` steps, then cuts it for the pool
     // again. The step does this itself when the ranges worked less than 1 / ranges of the
-    // threads' time in kSlowWindows balancing windows in a row (another process on a core:
+    // threads' time in BusyWatch::kWindows balancing windows in a row (another process on a core:
     // one_range_would_be_faster, range_balance.h), for kOneRangeSteps; callable for tests and
     // experiments. No bit depends on it.
     void run_as_one_range_for(long steps);
@@ -317,15 +316,14 @@ private:
     double list_seconds_ = 0.0;
     // one range for a busy machine (run_as_one_range_for): steps left, fallbacks, steps run so
     static constexpr long kOneRangeSteps = 4096;
-    static constexpr int kSlowWindows = 3;  // balancing windows in a row that would have run faster as one range
-    int slow_windows_ = 0;
+    BusyWatch busy_watch_;
     bool busy_fallback_ = true;
     long one_range_left_ = 0;
     long busy_fallbacks_ = 0;
     long one_range_steps_ = 0;
     double window_pass_seconds_ = 0.0;  // s, the shared passes' wall time in this balancing window
-    // passes shared out: their wall time, times the ranges, and the ranges' working time (s)
-    double shared_pass_seconds_ = 0.0, shared_pass_thread_seconds_ = 0.0, shared_pass_busy_seconds_ = 0.0;
+    // passes shared out: their wall time and the ranges' working time, s
+    double shared_pass_seconds_ = 0.0, shared_pass_busy_seconds_ = 0.0;
     // The range pass goes block by block, a block being kFuseBlock discs (whole ledger
     // blocks) and the contacts whose first disc is in it; each block is integrated as soon as
     // its pairs and wall contacts are done (compute_forces). Measured on the flume and DB-9k:

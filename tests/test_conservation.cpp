@@ -275,6 +275,25 @@ TEST(ForcePassBalance, OneRangeWhenRangesWorkLessThanTheirShare) {
     EXPECT_FALSE(one_range_would_be_faster(0.0, 0.0, 2));
 }
 
+TEST(ForcePassBalance, BusyWatchFallsBackAfterThreeSlowWindowsInARow) {
+    // 2 ranges, windows of 10 ms of passes: slow = 5 ms worked in all, good = 19 ms
+    BusyWatch watch;
+    const double slow = 0.005, good = 0.019, wall = 0.010;
+    // a slow window now and then (a core stopped for a few ms on an idle machine): never
+    for (int k = 0; k < 10; ++k) {
+        EXPECT_FALSE(watch.window(slow, wall, 2));
+        EXPECT_FALSE(watch.window(slow, wall, 2));
+        EXPECT_FALSE(watch.window(good, wall, 2));
+    }
+    // a core taken by another process: the third slow window in a row, then counting again
+    EXPECT_FALSE(watch.window(slow, wall, 2));
+    EXPECT_FALSE(watch.window(slow, wall, 2));
+    EXPECT_TRUE(watch.window(slow, wall, 2));
+    EXPECT_FALSE(watch.window(slow, wall, 2));
+    EXPECT_FALSE(watch.window(slow, wall, 2));
+    EXPECT_TRUE(watch.window(slow, wall, 2));
+}
+
 TEST(ForcePassBalance, OneRangeForAWhileThenTheRangesAgain) {
     // The fallback for a busy machine (run_as_one_range_for), as the step takes it: one range
     // for its steps, across a list update, then the pool's ranges again; the same bits as
