@@ -1,7 +1,9 @@
 // demlab bench db9k: the speed workload (docs/BENCHMARK.md), and optionally the peer (LAMMPS)
 // on the same work in the same invocation.
+#include <algorithm>
 #include <array>
 #include <chrono>
+#include <cstdarg>
 #include <cstdio>
 #include <latch>
 #include <memory>
@@ -26,6 +28,9 @@ struct BenchOptions {
     bool scalar = false;
     bool no_avx512 = false;
     bool ceiling = false;
+    bool targets = false;
+    int rounds = 0;              // 0: not given (--targets: 5)
+    bool threads_given = false;  // --threads on the command line
 };
 
 // One DB-9k run on `threads` threads, timed from its first step; `start`, when given, holds
@@ -33,6 +38,8 @@ struct BenchOptions {
 struct TimedRun {
     double seconds = 0;
     uint64_t hash = 0;
+    double busy_share = 1.0;  // of the threads' time in the shared force passes, the share they worked
+    long fallbacks = 0;       // times the pass fell back to one range (a busy machine)
 };
 TimedRun timed_db9k(const std::vector<XyrDisc>& discs, const BenchOptions& o, int threads, std::latch* start) {
     WorldDef def = db9k_world_def();
@@ -48,6 +55,8 @@ TimedRun timed_db9k(const std::vector<XyrDisc>& discs, const BenchOptions& o, in
     TimedRun r;
     r.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     r.hash = state_hash(world);
+    if (world.force_pass_shared_seconds() > 0.0) r.busy_share = world.force_pass_busy_share();
+    r.fallbacks = world.force_pass_busy_fallbacks();
     return r;
 }
 
@@ -57,37 +66,49 @@ TimedRun timed_db9k(const std::vector<XyrDisc>& discs, const BenchOptions& o, in
 // host may run other work on them. Measured here (session 12), two runs side by side each ran
 // from 8 % faster to 27 % slower than one alone, so the 2-thread figure is best read against
 // this ceiling.
-void print_ceiling(const std::vector<XyrDisc>& discs, const BenchOptions& o, double rate_shared) {
-    const double n = double(discs.size()) * double(o.steps);
-    const TimedRun alone = timed_db9k(discs, o, 1, nullptr);
-    const int copies = o.threads;
-    std::vector<TimedRun> side(static_cast<size_t>(copies));
+struct Ceiling {
+    TimedRun alone;
+    std::vector<TimedRun> side;
+    double cores_give = 0.0;  // the copies' rates summed, in units of the run alone
+    bool same_bits = true;    // every copy ended in the run alone's state
+};
+Ceiling measure_ceiling(const std::vector<XyrDisc>& discs, const BenchOptions& o, int copies) {
+    Ceiling c;
+    c.alone = timed_db9k(discs, o, 1, nullptr);
+    c.side.resize(static_cast<size_t>(copies));
     {
         std::latch start(copies);
         std::vector<std::thread> runs;
         for (int k = 0; k < copies; ++k)
-            runs.emplace_back([&, k] { side[size_t(k)] = timed_db9k(discs, o, 1, &start); });
+            runs.emplace_back([&, k] { c.side[size_t(k)] = timed_db9k(discs, o, 1, &start); });
         for (std::thread& t : runs) t.join();
     }
-    const double rate_alone = n / alone.seconds;
-    double rate_sum = 0.0;
-    bool same_bits = true;
-    std::printf("ceiling: one 1-thread run alone %.3e particle-steps/s (%.1f ns); %d side by side:", rate_alone,
-                1e9 * alone.seconds / n, copies);
-    for (const TimedRun& r : side) {
-        rate_sum += n / r.seconds;
-        same_bits = same_bits && r.hash == alone.hash;
-        std::printf(" %.1f", 1e9 * r.seconds / n);
+    double rate_sum = 0.0;  // in units of 1/s: the same work in every run
+    for (const TimedRun& r : c.side) {
+        rate_sum += 1.0 / r.seconds;
+        c.same_bits = c.same_bits && r.hash == c.alone.hash;
     }
+    c.cores_give = rate_sum * c.alone.seconds;
+    return c;
+}
+
+void print_ceiling(const std::vector<XyrDisc>& discs, const BenchOptions& o, double rate_shared) {
+    const double n = double(discs.size()) * double(o.steps);
+    const Ceiling c = measure_ceiling(discs, o, o.threads);
+    const double rate_alone = n / c.alone.seconds;
+    std::printf("ceiling: one 1-thread run alone %.3e particle-steps/s (%.1f ns); %d side by side:", rate_alone,
+                1e9 * c.alone.seconds / n, o.threads);
+    for (const TimedRun& r : c.side) std::printf(" %.1f", 1e9 * r.seconds / n);
     std::printf(" ns\n");
     std::printf("  the %d cores give %.2fx one core; demlab on %d threads gave %.2fx one 1-thread run, %.0f %% of "
                 "the ceiling%s\n",
-                copies, rate_sum / rate_alone, o.threads, rate_shared / rate_alone, 100.0 * rate_shared / rate_sum,
-                same_bits ? "" : " (the runs' checksums differ: a bug)");
+                o.threads, c.cores_give, o.threads, rate_shared / rate_alone, 100.0 * rate_shared / (c.cores_give * rate_alone),
+                c.same_bits ? "" : " (the runs' checksums differ: a bug)");
 }
 
-// Runs the LAMMPS script and returns its particle-steps/s (0 if it could not run).
-double run_peer(long steps, int ranks) {
+// Runs the LAMMPS script and returns its particle-steps/s (0 if it could not run); `echo`
+// passes its lines on.
+double run_peer(long steps, int ranks, bool echo = true) {
     const std::string script = std::string(DEMLAB_SOURCE_DIR) + "/bench/db9k/lammps/run.sh";
     const std::string cmd = "bash '" + script + "' " + std::to_string(steps) + " " + std::to_string(ranks) + " 2>&1";
     std::unique_ptr<FILE, int (*)(FILE*)> pipe(popen(cmd.c_str(), "r"), pclose);
@@ -96,11 +117,141 @@ double run_peer(long steps, int ranks) {
     double rate = 0.0;
     while (fgets(buf.data(), int(buf.size()), pipe.get())) {
         std::string line(buf.data());
-        std::fputs(("  [lammps] " + line).c_str(), stdout);
+        if (echo) std::fputs(("  [lammps] " + line).c_str(), stdout);
         const auto pos = line.find("particle-steps/s  max ");
         if (pos != std::string::npos) rate = std::stod(line.substr(pos + 22));
     }
     return rate;
+}
+
+// printf into a string
+[[gnu::format(printf, 1, 2)]] std::string strf(const char* fmt, ...) {
+    char b[160];
+    va_list args;
+    va_start(args, fmt);
+    std::vsnprintf(b, sizeof b, fmt, args);
+    va_end(args);
+    return b;
+}
+
+double median_of(std::vector<double> v) {
+    std::sort(v.begin(), v.end());
+    const size_t n = v.size();
+    return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+// "lo-hi" of v, each figure printed with `fmt` (scaled by `scale`); "-" for no figures
+std::string range_of(const std::vector<double>& v, const char* fmt, double scale = 1.0) {
+    if (v.empty()) return "-";
+    const auto [lo, hi] = std::minmax_element(v.begin(), v.end());
+    return strf(fmt, scale * *lo, scale * *hi);
+}
+
+// "met in every round", "met in the median" or "not met", and in how many rounds
+std::string verdict(const std::vector<double>& v, double target) {
+    const long k = long(std::count_if(v.begin(), v.end(), [target](double x) { return x >= target; }));
+    const char* met = median_of(v) < target ? "not met" : k == long(v.size()) ? "met in every round" : "met in the median";
+    return strf("%s (%ld of %zu rounds)", met, k, v.size());
+}
+
+// The issue's figures in one invocation (docs/performance.md): rounds of demlab on 1 thread,
+// LAMMPS on 1 rank, demlab on 2 threads, LAMMPS on 2 ranks and the two cores' ceiling, one
+// after the other, so that the machine's drift (its speed wanders by 10-30 % over minutes
+// here) touches every figure of a round alike. Prints each round as it ends, then a table of
+// the rounds with their medians and ranges, then each target against the medians and round by
+// round. A final state that differs between runs is a determinism bug: exit code 3.
+int targets(const BenchOptions& o, const std::vector<XyrDisc>& discs) {
+    const double n = double(discs.size()) * double(o.steps);  // particle-steps of one run
+    const int rounds = o.rounds > 0 ? o.rounds : 5;
+    std::printf("DB-9k targets: %d round(s) of %ld steps; each round demlab on 1 thread%s, demlab on 2 threads%s, "
+                "then two 1-thread copies side by side against one alone\n",
+                rounds, o.steps, o.peer ? ", LAMMPS on 1 rank" : "", o.peer ? ", LAMMPS on 2 ranks" : "");
+    // per round
+    std::vector<double> ns1, ns2, peer1, peer2, ratio1, ratio2, speedup, busy, cores, of_ceiling;
+    bool peer = o.peer, same_bits = true;
+    uint64_t hash = 0;
+    long fallbacks = 0, runs = 0;
+    for (int r = 0; r < rounds; ++r) {
+        const TimedRun one = timed_db9k(discs, o, 1, nullptr);
+        const double p1 = peer ? run_peer(o.steps, 1, false) : 0.0;
+        const TimedRun two = timed_db9k(discs, o, 2, nullptr);
+        const double p2 = peer ? run_peer(o.steps, 2, false) : 0.0;
+        const Ceiling c = measure_ceiling(discs, o, 2);
+        if (r == 0) hash = one.hash;
+        same_bits = same_bits && one.hash == hash && two.hash == hash && c.alone.hash == hash && c.same_bits;
+        runs += 5;
+        fallbacks += two.fallbacks;
+        const double rate1 = n / one.seconds, rate2 = n / two.seconds;
+        ns1.push_back(1e9 / rate1);
+        ns2.push_back(1e9 / rate2);
+        speedup.push_back(rate2 / rate1);
+        busy.push_back(two.busy_share);
+        cores.push_back(c.cores_give);
+        of_ceiling.push_back(rate2 / (c.cores_give * n / c.alone.seconds));
+        std::printf("  round %d: 1 thread %.1f ns, 2 threads %.1f ns (%.2fx), the two cores give %.2fx", r + 1, ns1.back(),
+                    ns2.back(), speedup.back(), c.cores_give);
+        if (peer && (p1 <= 0.0 || p2 <= 0.0)) {
+            peer = false;
+            std::printf("; LAMMPS did not run (install it with scripts/install-deps.sh --peer)");
+        } else if (peer) {
+            peer1.push_back(p1);
+            peer2.push_back(p2);
+            ratio1.push_back(rate1 / p1);
+            ratio2.push_back(rate2 / p2);
+            std::printf("; demlab vs LAMMPS %.2f (1 thread vs 1 rank), %.2f (2 threads vs 2 ranks)", ratio1.back(), ratio2.back());
+        }
+        std::printf("\n");
+        std::fflush(stdout);
+    }
+
+    // the rounds as a table (figures as particle-steps/s, with ns per particle-step)
+    auto rate_cell = [](double ns) { return strf("%.3e (%.1f)", 1e9 / ns, ns); };
+    auto peer_cell = [&](const std::vector<double>& v, size_t r, const char* fmt) { return peer ? strf(fmt, v[r]) : "-"; };
+    std::printf("\n| round | 1 thread: demlab (ns) | LAMMPS 1 rank | ratio | 2 threads: demlab (ns) | LAMMPS 2 ranks | ratio "
+                "| 2 threads / 1 | busy share | the two cores give | 2 threads, of the ceiling |\n"
+                "|---|---|---|---|---|---|---|---|---|---|---|\n");
+    for (size_t r = 0; r < ns1.size(); ++r)
+        std::printf("| %zu | %s | %s | %s | %s | %s | %s | %.2f | %.1f %% | %.2fx | %.0f %% |\n", r + 1, rate_cell(ns1[r]).c_str(),
+                    peer_cell(peer1, r, "%.3e").c_str(), peer_cell(ratio1, r, "%.2f").c_str(), rate_cell(ns2[r]).c_str(),
+                    peer_cell(peer2, r, "%.3e").c_str(), peer_cell(ratio2, r, "%.2f").c_str(), speedup[r], 100.0 * busy[r],
+                    cores[r], 100.0 * of_ceiling[r]);
+    const std::string med_p1 = peer ? strf("%.3e", median_of(peer1)) : "-", med_r1 = peer ? strf("%.2f", median_of(ratio1)) : "-";
+    const std::string med_p2 = peer ? strf("%.3e", median_of(peer2)) : "-", med_r2 = peer ? strf("%.2f", median_of(ratio2)) : "-";
+    std::printf("| median | %s | %s | %s | %s | %s | %s | %.2f (%.2f from the medians) | %.1f %% | %.2fx | %.0f %% |\n",
+                rate_cell(median_of(ns1)).c_str(), med_p1.c_str(), med_r1.c_str(), rate_cell(median_of(ns2)).c_str(),
+                med_p2.c_str(), med_r2.c_str(), median_of(speedup), median_of(ns1) / median_of(ns2), 100.0 * median_of(busy),
+                median_of(cores), 100.0 * median_of(of_ceiling));
+    std::printf("| range | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s |\n", range_of(ns1, "%.1f-%.1f ns").c_str(),
+                range_of(peer1, "%.3e-%.3e").c_str(), range_of(ratio1, "%.2f-%.2f").c_str(),
+                range_of(ns2, "%.1f-%.1f ns").c_str(), range_of(peer2, "%.3e-%.3e").c_str(),
+                range_of(ratio2, "%.2f-%.2f").c_str(), range_of(speedup, "%.2f-%.2f").c_str(),
+                range_of(busy, "%.1f-%.1f %%", 100.0).c_str(), range_of(cores, "%.2f-%.2fx").c_str(),
+                range_of(of_ceiling, "%.0f-%.0f %%", 100.0).c_str());
+    if (fallbacks > 0)
+        std::printf("\nThe 2-thread runs fell back to one range %ld time(s): another process took a core, and their "
+                    "figures are not the machine's.\n",
+                    fallbacks);
+
+    // the targets (issue #6), against the medians, and in how many rounds
+    std::printf("\n| target | required | measured | verdict |\n|---|---|---|---|\n");
+    if (peer)
+        std::printf("| 1 thread vs LAMMPS 1 rank | 5x | %.2fx (median; %s) | %s |\n", median_of(ratio1),
+                    range_of(ratio1, "%.2f-%.2f").c_str(), verdict(ratio1, 5.0).c_str());
+    else
+        std::printf("| 1 thread vs LAMMPS 1 rank | 5x | - | not measured (give --peer; LAMMPS from scripts/install-deps.sh --peer) |\n");
+    std::printf("| 2 threads vs demlab's 1 thread | 1.8x | %.2fx (median pair by pair; %s; two independent copies got "
+                "%.2fx) | %s |\n",
+                median_of(speedup), range_of(speedup, "%.2f-%.2f").c_str(), median_of(cores), verdict(speedup, 1.8).c_str());
+    if (same_bits)
+        std::printf("| final state, 1 vs 2 threads | identical | checksum %016llx in all %ld runs | met |\n",
+                    static_cast<unsigned long long>(hash), runs);
+    else
+        std::printf("| final state, 1 vs 2 threads | identical | the checksums differ | NOT MET |\n");
+    if (!same_bits) {
+        std::fprintf(stderr, "demlab bench: runs of the same work ended in different states (a determinism bug)\n");
+        return kExitRun;
+    }
+    return kExitOk;
 }
 
 int bench(const BenchOptions& o) {
@@ -109,8 +260,13 @@ int bench(const BenchOptions& o) {
     if (o.ceiling && o.threads < 2)
         throw InputError("bench --ceiling with --threads = " + std::to_string(o.threads) +
                          ": needs --threads 2 or more (it runs that many 1-thread copies side by side)");
+    if (o.rounds > 0 && !o.targets) throw InputError("bench --rounds: only with --targets (the rounds of the targets' figures)");
+    if (o.targets && (o.threads_given || o.ceiling))
+        throw InputError(std::string("bench --targets with ") + (o.ceiling ? "--ceiling" : "--threads") +
+                         ": --targets runs 1 and 2 threads and the two cores' ceiling itself; leave it out");
     const std::string path = o.file.empty() ? default_db9k_path() : o.file;
     const auto discs = read_xyr(path);
+    if (o.targets) return targets(o, discs);
     WorldDef def = db9k_world_def();
     def.threads = o.threads;
     def.simd = !o.scalar;
@@ -179,7 +335,7 @@ Command add_bench_command(CLI::App& app) {
     sub->add_option("--steps", opts->steps, "Number of time steps (20000: the quick figure; 100000: the reference)")
         ->capture_default_str();
     sub->add_option("--file", opts->file, "Initial state 'id x y r' (default: the repository's bench/db9k/db9k_initial.xyr)");
-    sub->add_option("--threads", opts->threads, "Worker threads (the final state is the same bits for any count)")
+    CLI::Option* threads = sub->add_option("--threads", opts->threads, "Worker threads (the final state is the same bits for any count)")
         ->capture_default_str()->check(CLI::Range(1, 64));
     sub->add_flag("--scalar", opts->scalar, "Use the scalar loops (pair forces, integration) even if the CPU has AVX2 (the same bits; for comparison)");
     sub->add_flag("--no-avx512", opts->no_avx512, "Run the pair law four pairs at a time (AVX2) even if the CPU has AVX-512 (the same bits; for comparison)");
@@ -187,7 +343,15 @@ Command add_bench_command(CLI::App& app) {
                   "With --threads T >= 2: also run one 1-thread copy alone and T side by side, and print what the "
                   "cores give together (the ceiling of the T-thread figure on this machine)");
     sub->add_flag("--peer", opts->peer, "Also run LAMMPS (bench/db9k/lammps/run.sh) on the same work and print the ratio");
-    return [opts] { return bench(*opts); };
+    sub->add_flag("--targets", opts->targets,
+                  "The issue's side-by-side figures: rounds of 1 thread, 2 threads and the two cores' ceiling (with "
+                  "--peer, LAMMPS on 1 and 2 ranks too); prints a table with medians and ranges, and each target met or not");
+    sub->add_option("--rounds", opts->rounds, "With --targets: how many rounds (default 5; about a minute each with --peer)")
+        ->check(CLI::Range(1, 100));
+    return [opts, threads] {
+        opts->threads_given = threads->count() > 0;
+        return bench(*opts);
+    };
 }
 
 }  // namespace demlab

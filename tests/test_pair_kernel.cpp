@@ -496,6 +496,27 @@ TEST(Bench, CeilingRunsCopiesSideBySideAndNeedsTwoThreads) {
     EXPECT_EQ(WEXITSTATUS(status), 2);
 }
 
+// The figures in one invocation: rounds of 1 thread, 2 threads and the ceiling, a
+// table with medians and ranges, and the targets; every run ends in the same state.
+TEST(Bench, TargetsRunRoundsAndPrintTheTable) {
+    const std::string out = demlab_output("bench db9k --targets --rounds 2 --steps 100");
+    EXPECT_NE(line_with(out, "round 1: 1 thread"), "") << out;
+    EXPECT_NE(line_with(out, "round 2: 1 thread"), "") << out;
+    EXPECT_EQ(line_with(out, "round 3:"), "") << out;
+    EXPECT_NE(line_with(out, "| median |"), "") << out;
+    EXPECT_NE(line_with(out, "| range |"), "") << out;
+    EXPECT_NE(line_with(out, "| 2 threads vs demlab's 1 thread | 1.8x |"), "") << out;
+    // 2 rounds of 5 runs (1 thread, 2 threads, one alone, two side by side), all the same bits
+    EXPECT_NE(line_with(out, "in all 10 runs | met |"), "") << out;
+    // --rounds belongs to --targets, and --targets chooses the threads itself: input errors
+    for (const char* args : {"bench db9k --rounds 2 --steps 10", "bench db9k --targets --threads 2 --steps 10",
+                             "bench db9k --targets --ceiling --steps 10"}) {
+        const int status = std::system((std::string(DEMLAB_EXE) + " " + args + " >/dev/null 2>&1").c_str());
+        ASSERT_TRUE(WIFEXITED(status)) << args;
+        EXPECT_EQ(WEXITSTATUS(status), 2) << args;
+    }
+}
+
 // When the clearances are reset (a disc moved by hand), every pair is looked at again, and a pair
 // that has come apart with its history still set must have it ended. Eight pairs of discs
 // collide head-on; at the step where they have come apart with their histories still set, a
