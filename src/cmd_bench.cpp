@@ -1,5 +1,5 @@
 // demlab bench db9k: the speed workload (docs/BENCHMARK.md), and optionally the peer (LAMMPS)
-// on the same work in the same invocation.
+// on the same work in the same invocation; demlab bench jitter: the machine's interruptions.
 #include <algorithm>
 #include <array>
 #include <chrono>
@@ -14,6 +14,7 @@
 #include "commands.h"
 #include "db9k.h"
 #include "error.h"
+#include "jitter.h"
 #include "progress.h"
 
 namespace demlab {
@@ -31,6 +32,9 @@ struct BenchOptions {
     bool targets = false;
     int rounds = 0;              // 0: not given (--targets: 5)
     bool threads_given = false;  // --threads on the command line
+    bool steps_given = false;    // --steps on the command line
+    double seconds = 10.0;       // s, jitter: how long the probes run
+    bool seconds_given = false;
 };
 
 // One DB-9k run on `threads` threads, timed from its first step; `start`, when given, holds
@@ -254,8 +258,38 @@ int targets(const BenchOptions& o, const std::vector<XyrDisc>& discs) {
     return kExitOk;
 }
 
+// demlab bench jitter: the machine's interruptions on each core (jitter.h), and what they
+// cost a run whose threads join every step.
+int jitter(const BenchOptions& o) {
+    const int cores = o.threads_given ? o.threads : std::max(1, int(std::thread::hardware_concurrency()));
+    std::printf("jitter: a probe on each of %d core(s) reads the clock for %.1f s; a gap is two readings more than 10 us "
+                "apart\n",
+                cores, o.seconds);
+    double lost_share = 0.0;
+    for (const CoreGaps& g : measure_gaps(cores, o.seconds)) {
+        const double share = g.seconds > 0.0 ? g.lost / g.seconds : 0.0;
+        lost_share += share;
+        std::printf("  core %s: %ld gaps (%.0f a second), %.3f s lost (%.2f %%), mean %.0f us, longest %.0f us\n",
+                    g.core >= 0 ? std::to_string(g.core).c_str() : "(not pinned)", g.gaps,
+                    g.seconds > 0.0 ? double(g.gaps) / g.seconds : 0.0, g.lost, 100.0 * share,
+                    g.gaps > 0 ? 1e6 * g.lost / double(g.gaps) : 0.0, 1e6 * g.longest);
+    }
+    if (cores > 1)
+        std::printf("  a run whose %d threads join every step waits for every core's gaps: about %.1f %% of its time; "
+                    "independent runs lose only their own core's\n",
+                    cores, 100.0 * lost_share);
+    return kExitOk;
+}
+
 int bench(const BenchOptions& o) {
-    if (o.workload != "db9k") throw InputError("bench: unknown workload '" + o.workload + "'; accepted: db9k");
+    if (o.workload == "jitter") {
+        if (o.peer || o.targets || o.ceiling || o.rounds > 0 || o.steps_given || o.scalar || o.no_avx512 || !o.file.empty())
+            throw InputError("bench jitter: takes only --seconds and --threads (the cores to probe); the other options are "
+                             "DB-9k's");
+        return jitter(o);
+    }
+    if (o.seconds_given) throw InputError("bench --seconds: only with the jitter workload (bench jitter --seconds S)");
+    if (o.workload != "db9k") throw InputError("bench: unknown workload '" + o.workload + "'; accepted: db9k, jitter");
     if (o.steps < 1) throw InputError("bench --steps = " + std::to_string(o.steps) + ": must be >= 1");
     if (o.ceiling && o.threads < 2)
         throw InputError("bench --ceiling with --threads = " + std::to_string(o.threads) +
@@ -331,8 +365,10 @@ int bench(const BenchOptions& o) {
 Command add_bench_command(CLI::App& app) {
     auto opts = std::make_shared<BenchOptions>();
     CLI::App* sub = app.add_subcommand("bench", "Speed benchmark: prints particle-steps per second and a state checksum");
-    sub->add_option("workload", opts->workload, "Workload to run (db9k)")->capture_default_str();
-    sub->add_option("--steps", opts->steps, "Number of time steps (20000: the quick figure; 100000: the reference)")
+    sub->add_option("workload", opts->workload,
+                    "Workload to run: db9k (the speed workload), jitter (the machine's interruptions on each core)")
+        ->capture_default_str();
+    CLI::Option* steps = sub->add_option("--steps", opts->steps, "Number of time steps (20000: the quick figure; 100000: the reference)")
         ->capture_default_str();
     sub->add_option("--file", opts->file, "Initial state 'id x y r' (default: the repository's bench/db9k/db9k_initial.xyr)");
     CLI::Option* threads = sub->add_option("--threads", opts->threads, "Worker threads (the final state is the same bits for any count)")
@@ -348,8 +384,12 @@ Command add_bench_command(CLI::App& app) {
                   "--peer, LAMMPS on 1 and 2 ranks too); prints a table with medians and ranges, and each target met or not");
     sub->add_option("--rounds", opts->rounds, "With --targets: how many rounds (default 5; about a minute each with --peer)")
         ->check(CLI::Range(1, 100));
-    return [opts, threads] {
+    CLI::Option* seconds = sub->add_option("--seconds", opts->seconds, "jitter: how long the probes run, s")
+        ->capture_default_str()->check(CLI::Range(0.01, 600.0));
+    return [opts, threads, steps, seconds] {
         opts->threads_given = threads->count() > 0;
+        opts->steps_given = steps->count() > 0;
+        opts->seconds_given = seconds->count() > 0;
         return bench(*opts);
     };
 }

@@ -16,6 +16,7 @@
 #include <sys/wait.h>
 
 #include "db9k.h"
+#include "jitter.h"
 #include "pair_kernel.h"
 #include "world.h"
 
@@ -511,6 +512,36 @@ TEST(Bench, TargetsRunRoundsAndPrintTheTable) {
     // --rounds belongs to --targets, and --targets chooses the threads itself: input errors
     for (const char* args : {"bench db9k --rounds 2 --steps 10", "bench db9k --targets --threads 2 --steps 10",
                              "bench db9k --targets --ceiling --steps 10"}) {
+        const int status = std::system((std::string(DEMLAB_EXE) + " " + args + " >/dev/null 2>&1").c_str());
+        ASSERT_TRUE(WIFEXITED(status)) << args;
+        EXPECT_EQ(WEXITSTATUS(status), 2) << args;
+    }
+}
+
+// The jitter probe's accounting: with a threshold of 0 every step of the clock is a gap, so the
+// gaps add up to the whole time probed (integer clock ticks: exactly); with a threshold longer
+// than the probe, there are none.
+TEST(Bench, JitterProbeAccountsForEveryTick) {
+    const std::vector<CoreGaps> all = measure_gaps(1, 0.02, 0.0);
+    ASSERT_EQ(all.size(), 1u);
+    EXPECT_GT(all[0].gaps, 0);
+    EXPECT_GE(all[0].seconds, 0.02);
+    EXPECT_EQ(all[0].lost, all[0].seconds);
+    EXPECT_LE(all[0].longest, all[0].lost);
+    const std::vector<CoreGaps> none = measure_gaps(2, 0.02, 10.0);
+    ASSERT_EQ(none.size(), 2u);
+    for (const CoreGaps& g : none) {
+        EXPECT_EQ(g.gaps, 0);
+        EXPECT_EQ(g.lost, 0.0);
+        EXPECT_GE(g.seconds, 0.02);
+    }
+    // the command: a line per core and the cost to a run that joins its threads
+    const std::string out = demlab_output("bench jitter --threads 2 --seconds 0.05");
+    EXPECT_NE(line_with(out, "probe on each of 2 core(s)"), "") << out;
+    EXPECT_NE(line_with(out, "a run whose 2 threads join every step"), "") << out;
+    // --seconds belongs to jitter, and jitter takes none of DB-9k's options: input errors
+    for (const char* args : {"bench db9k --seconds 1 --steps 10", "bench jitter --steps 10 --seconds 0.05",
+                             "bench jitter --peer --seconds 0.05"}) {
         const int status = std::system((std::string(DEMLAB_EXE) + " " + args + " >/dev/null 2>&1").c_str());
         ASSERT_TRUE(WIFEXITED(status)) << args;
         EXPECT_EQ(WEXITSTATUS(status), 2) << args;
