@@ -462,6 +462,12 @@ std::string demlab_output(const std::string& args) {
     return out;
 }
 
+// The exit code of `demlab ARGS` (-1 if it did not exit normally).
+int demlab_exit_code(const std::string& args) {
+    const int status = std::system((std::string(DEMLAB_EXE) + " " + args + " >/dev/null 2>&1").c_str());
+    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
 std::string line_with(const std::string& text, const std::string& key) {
     const size_t at = text.find(key);
     if (at == std::string::npos) return "";
@@ -492,9 +498,7 @@ TEST(Bench, CeilingRunsCopiesSideBySideAndNeedsTwoThreads) {
     EXPECT_NE(line_with(out, "the 2 cores give"), "") << out;
     EXPECT_EQ(line_with(out, "checksums differ"), "") << out;  // every copy ends in the same bits
     // with one thread there is nothing to compare: an input error (exit code 2) before any run
-    const int status = std::system((std::string(DEMLAB_EXE) + " bench db9k --ceiling --steps 200 >/dev/null 2>&1").c_str());
-    ASSERT_TRUE(WIFEXITED(status));
-    EXPECT_EQ(WEXITSTATUS(status), 2);
+    EXPECT_EQ(demlab_exit_code("bench db9k --ceiling --steps 200"), 2);
 }
 
 // The figures in one invocation: rounds of 1 thread, 2 threads and the ceiling, a
@@ -511,11 +515,8 @@ TEST(Bench, TargetsRunRoundsAndPrintTheTable) {
     EXPECT_NE(line_with(out, "in all 10 runs | met |"), "") << out;
     // --rounds belongs to --targets, and --targets chooses the threads itself: input errors
     for (const char* args : {"bench db9k --rounds 2 --steps 10", "bench db9k --targets --threads 2 --steps 10",
-                             "bench db9k --targets --ceiling --steps 10"}) {
-        const int status = std::system((std::string(DEMLAB_EXE) + " " + args + " >/dev/null 2>&1").c_str());
-        ASSERT_TRUE(WIFEXITED(status)) << args;
-        EXPECT_EQ(WEXITSTATUS(status), 2) << args;
-    }
+                             "bench db9k --targets --ceiling --steps 10"})
+        EXPECT_EQ(demlab_exit_code(args), 2) << args;
 }
 
 // The jitter probe's accounting: with a threshold of 0 every step of the clock is a gap, so the
@@ -541,11 +542,8 @@ TEST(Bench, JitterProbeAccountsForEveryTick) {
     EXPECT_NE(line_with(out, "a run whose 2 threads join every step"), "") << out;
     // --seconds belongs to jitter, and jitter takes none of DB-9k's options: input errors
     for (const char* args : {"bench db9k --seconds 1 --steps 10", "bench jitter --steps 10 --seconds 0.05",
-                             "bench jitter --peer --seconds 0.05"}) {
-        const int status = std::system((std::string(DEMLAB_EXE) + " " + args + " >/dev/null 2>&1").c_str());
-        ASSERT_TRUE(WIFEXITED(status)) << args;
-        EXPECT_EQ(WEXITSTATUS(status), 2) << args;
-    }
+                             "bench jitter --peer --seconds 0.05"})
+        EXPECT_EQ(demlab_exit_code(args), 2) << args;
 }
 
 // When the clearances are reset (a disc moved by hand), every pair is looked at again, and a pair
