@@ -371,7 +371,7 @@ Command add_bench_command(CLI::App& app) {
     CLI::Option* steps = sub->add_option("--steps", opts->steps, "Number of time steps (20000: the quick figure; 100000: the reference)")
         ->capture_default_str();
     sub->add_option("--file", opts->file, "Initial state 'id x y r' (default: the repository's bench/db9k/db9k_initial.xyr)");
-    CLI::Option* threads = sub->add_option("--threads", opts->threads, "Worker threads (the final state is the same bits for any count)")
+    CLI::Option* threads = sub->add_option("--threads", opts->threads, "Worker threads (the final state is the same bits for any count); jitter: the cores to probe (default: all)")
         ->capture_default_str()->check(CLI::Range(1, 64));
     sub->add_flag("--scalar", opts->scalar, "Use the scalar loops (pair forces, integration) even if the CPU has AVX2 (the same bits; for comparison)");
     sub->add_flag("--no-avx512", opts->no_avx512, "Run the pair law four pairs at a time (AVX2) even if the CPU has AVX-512 (the same bits; for comparison)");
