@@ -374,7 +374,7 @@ Command add_bench_command(CLI::App& app) {
     CLI::Option* threads = sub->add_option("--threads", opts->threads, "Worker threads (the final state is the same bits for any count); jitter: the cores to probe (default: all)")
         ->capture_default_str()->check(CLI::Range(1, 64));
     sub->add_flag("--scalar", opts->scalar, "Use the scalar loops (pair forces, integration) even if the CPU has AVX2 (the same bits; for comparison)");
-    sub->add_flag("--no-avx512", opts->no_avx512, "Run the pair law four pairs at a time (AVX2) even if the CPU has AVX-512 (the same bits; for comparison)");
+    sub->add_flag("--no-avx512", opts->no_avx512, "Run the pair law four pairs and the integration four discs at a time (AVX2) even if the CPU has AVX-512 (the same bits; for comparison)");
     sub->add_flag("--ceiling", opts->ceiling,
                   "With --threads T >= 2: also run one 1-thread copy alone and T side by side, and print what the "
                   "cores give together (the ceiling of the T-thread figure on this machine)");

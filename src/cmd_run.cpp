@@ -101,7 +101,7 @@ Command add_run_command(CLI::App& app) {
     sub->add_option("--threads", o->threads, "Worker threads (results are the same bits for any count)")
         ->capture_default_str()->check(CLI::Range(1, 64));
     sub->add_flag("--scalar", o->scalar, "Use the scalar loops (pair forces, integration) even if the CPU has AVX2 (the same bits; for comparison)");
-    sub->add_flag("--no-avx512", o->no_avx512, "Run the pair law four pairs at a time (AVX2) even if the CPU has AVX-512 (the same bits; for comparison)");
+    sub->add_flag("--no-avx512", o->no_avx512, "Run the pair law four pairs and the integration four discs at a time (AVX2) even if the CPU has AVX-512 (the same bits; for comparison)");
     sub->add_flag("--frames", o->frames, "Render a PNG frame at every snapshot while running (RUN_DIR/frames)");
     sub->add_flag("--no-plots", o->no_plots, "Do not make the plots (RUN_DIR/plots) at the end");
     sub->add_option("--checkpoint-every", o->checkpoint_every,
@@ -166,7 +166,7 @@ Command add_resume_command(CLI::App& app) {
     sub->add_option("--threads", o->threads, "Worker threads (results are the same bits for any count)")
         ->capture_default_str()->check(CLI::Range(1, 64));
     sub->add_flag("--scalar", o->scalar, "Use the scalar loops (pair forces, integration) even if the CPU has AVX2 (the same bits; for comparison)");
-    sub->add_flag("--no-avx512", o->no_avx512, "Run the pair law four pairs at a time (AVX2) even if the CPU has AVX-512 (the same bits; for comparison)");
+    sub->add_flag("--no-avx512", o->no_avx512, "Run the pair law four pairs and the integration four discs at a time (AVX2) even if the CPU has AVX-512 (the same bits; for comparison)");
     sub->add_option("--checkpoint-every", o->checkpoint_every,
                     "Seconds of wall-clock time between checkpoints (default: as the run was started)")
         ->check(CLI::Range(0.0, 1.0e7));

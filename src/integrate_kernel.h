@@ -1,7 +1,8 @@
 // The integration of a range of discs (PFC's central differences, World::integrate_discs), four
-// discs at a time with AVX2, for the runs that use no local damping (alpha = 0: every flow run;
-// the release's settling uses it) and the per-disc rotational damping: the same operations in
-// the same order, lane by lane, so the same bits as the scalar loop (world.cpp).
+// discs at a time with AVX2 or eight with AVX-512, for the runs that use no local damping
+// (alpha = 0: every flow run; the release's settling uses it) and the per-disc rotational
+// damping: the same operations in the same order, lane by lane, so the same bits as the scalar
+// loop (world.cpp).
 #pragma once
 #include <cstddef>
 #include <cstdint>
@@ -79,5 +80,10 @@ struct IntegrateOut {
 // begin is a multiple of 4 (the World's ranges and blocks are whole ledger blocks).
 IntegrateOut integrate_avx2(const IntegrateArrays& a, const IntegrateParams& p, size_t begin, size_t end,
                             LedgerBlock* blocks, size_t block_size);
+
+// integrate_avx2 eight discs at a time in AVX-512 registers (integrate_avx512.cpp): the same
+// results and bits. Only call it when cpu_has_avx512().
+IntegrateOut integrate_avx512(const IntegrateArrays& a, const IntegrateParams& p, size_t begin, size_t end,
+                              LedgerBlock* blocks, size_t block_size);
 
 }  // namespace demlab

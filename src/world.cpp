@@ -912,7 +912,8 @@ void World::integrate_discs(size_t begin, size_t end, int chunk, const Integrate
         const IntegrateParams params{k.dt,          k.g,          k.g_abs,         rot.model, rot.rolling_form == RollingForm::Literal,
                                      rot.mu_br,     k.auto_dt,    k.dtf.rotation_free, k.dtf.phi_sq, k.dtf.phi_t_sq,
                                      def_.domain_lo, def_.domain_hi, chunk_note_[size_t(chunk)].dt_sq};
-        const IntegrateOut out = integrate_avx2(arrays, params, begin, end, ledger_blocks_.data(), kLedgerBlock);
+        const IntegrateOut out = avx512_ ? integrate_avx512(arrays, params, begin, end, ledger_blocks_.data(), kLedgerBlock)
+                                         : integrate_avx2(arrays, params, begin, end, ledger_blocks_.data(), kLedgerBlock);
         range_clock_[size_t(chunk)].touching_dd += out.touching_dd;
         integrate_note(chunk, out.fault, k.auto_dt ? out.best_sq : INFINITY, out.any_escaped, out.speed_l1, out.extent_l1);
         return;

@@ -54,8 +54,9 @@ struct WorldDef {
     int threads = 1;                       // worker threads; results are the same bits for any count
     bool simd = true;                      // the disc-disc kernel 4 pairs at a time when the CPU has AVX2
                                            // (pair_kernel_avx2.cpp); the same bits as the scalar kernel
-    bool avx512 = true;                    // with simd: its law 8 pairs at a time when the CPU has AVX-512
-                                           // (pair_kernel_avx512.cpp); the same bits again
+    bool avx512 = true;                    // with simd: its law 8 pairs and its integration 8 discs at a time
+                                           // when the CPU has AVX-512 (pair_kernel_avx512.cpp,
+                                           // integrate_avx512.cpp); the same bits again
 };
 
 void validate(const WorldDef& d, const std::string& where);
@@ -154,7 +155,7 @@ public:
     // many candidate pairs cross from one range to another (computed into slots first).
     int force_pass_ranges() const { return force_ranges_; }
     bool simd_kernel() const { return avx2_; }  // the AVX2 kernels are in use (pair forces, integration)
-    bool avx512_kernel() const { return avx512_; }  // and the pair law runs eight pairs at a time (AVX-512)
+    bool avx512_kernel() const { return avx512_; }  // and the pair law and integration run eight at a time (AVX-512)
     size_t cross_contacts() const { return cross_.size(); }
     // disc-disc candidates the AVX2 pass skipped by the clearance test (PairSkip), summed over
     // the steps, and the approach bound now, m

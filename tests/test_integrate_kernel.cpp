@@ -19,10 +19,11 @@ uint64_t bits(double x) { return std::bit_cast<uint64_t>(x); }
 // 301 discs (not a multiple of 4) with random velocities and spins, falling onto a 20-degree
 // floor between two side walls: they touch the walls (rolling resistance) and each other
 // (Model 3's damping), spinning both ways.
-std::unique_ptr<World> pile(int model, RollingForm form, bool simd) {
+std::unique_ptr<World> pile(int model, RollingForm form, bool simd, bool avx512 = false) {
     WorldDef def;
     def.threads = 2;
     def.simd = simd;
+    def.avx512 = avx512;
     def.rotation.model = model;
     def.rotation.u_rr = 0.0002;
     def.rotation.rolling_form = form;
@@ -46,21 +47,34 @@ std::unique_ptr<World> pile(int model, RollingForm form, bool simd) {
 }
 }  // namespace
 
+// The scalar loop, the AVX2 loop (four discs at a time) and, where the CPU has it, the
+// AVX-512 loop (eight): the same bits for every rotation rule (301 discs: the ranges end in
+// partial groups).
 TEST(IntegrateKernel, Avx2AndScalarGiveTheSameBitsForEveryRotationRule) {
     if (!cpu_has_avx2()) GTEST_SKIP() << "this CPU has no AVX2";
     for (int model : {1, 2, 3})
         for (RollingForm form : {RollingForm::Literal, RollingForm::NormalForce}) {
             if (model == 1 && form == RollingForm::NormalForce) continue;
             auto simd = pile(model, form, true), scalar = pile(model, form, false);
+            std::unique_ptr<World> wide = cpu_has_avx512() ? pile(model, form, true, true) : nullptr;
+            ASSERT_FALSE(simd->avx512_kernel());
+            if (wide) {
+                ASSERT_TRUE(wide->avx512_kernel());
+            }
             for (int round = 0; round < 4; ++round) {
-                simd->run(1500);
-                scalar->run(1500);
-                ASSERT_EQ(state_hash(*simd), state_hash(*scalar)) << "model " << model << " round " << round;
-                ASSERT_EQ(bits(simd->dt()), bits(scalar->dt()));
-                const EnergyReport a = simd->energy(), b = scalar->energy();
-                ASSERT_EQ(bits(a.dissipated_rotation), bits(b.dissipated_rotation));
-                ASSERT_EQ(bits(a.dissipated_contacts), bits(b.dissipated_contacts));
-                ASSERT_EQ(bits(simd->kinetic_energy()), bits(scalar->kinetic_energy()));
+                for (World* w : {simd.get(), scalar.get(), wide.get()})
+                    if (w) w->run(1500);
+                for (World* w : {simd.get(), wide.get()}) {
+                    if (!w) continue;
+                    const char* which = w == wide.get() ? "AVX-512" : "AVX2";
+                    ASSERT_EQ(state_hash(*w), state_hash(*scalar)) << which << " model " << model << " round " << round;
+                    ASSERT_EQ(bits(w->dt()), bits(scalar->dt())) << which;
+                    const EnergyReport a = w->energy(), b = scalar->energy();
+                    ASSERT_EQ(bits(a.dissipated_rotation), bits(b.dissipated_rotation)) << which;
+                    ASSERT_EQ(bits(a.dissipated_contacts), bits(b.dissipated_contacts)) << which;
+                    ASSERT_EQ(bits(w->kinetic_energy()), bits(scalar->kinetic_energy())) << which;
+                    ASSERT_EQ(w->touching_disc_pairs(), scalar->touching_disc_pairs()) << which;
+                }
             }
             // the case covers what it is meant to: contacts with walls and discs, spin taken out
             EXPECT_GT(simd->touching_disc_pairs(), 100);
