@@ -3,8 +3,10 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <random>
+#include <thread>
 
 #include "db9k.h"
 #include "error.h"
@@ -323,6 +325,40 @@ TEST(ForcePassBalance, OneRangeForAWhileThenTheRangesAgain) {
     w.run(200);
     EXPECT_EQ(state_hash(w), one);
     EXPECT_THROW(w.run_as_one_range_for(-1), InputError);
+}
+
+// The step's own fallback (balance_force_pass with BusyWatch): with more busy threads than
+// cores beside it, the 2-thread pass falls back to one range, and the bits stay those of 1
+// thread. The other tests turn the fallback off; this one keeps the cores busy on purpose.
+TEST(ForcePassBalance, StepFallsBackToOneRangeBesideBusyThreads) {
+    const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
+    if (cores > 8) GTEST_SKIP() << "too many cores to keep them all busy (" << cores << ")";
+    auto discs = read_xyr(default_db9k_path());
+    discs.resize(5000);
+    WorldDef def = db9k_world_def();
+    def.threads = 2;
+    World w(def);
+    build_db9k(w, discs);
+    w.finalize();
+    std::atomic<bool> stop{false};
+    std::vector<std::thread> hogs;
+    for (unsigned k = 0; k < cores; ++k)
+        hogs.emplace_back([&stop] {
+            volatile double x = 1.0;
+            while (!stop.load(std::memory_order_relaxed)) x = x * 1.0000001;
+        });
+    long steps = 0;
+    while (w.force_pass_busy_fallbacks() == 0 && steps < 20000) {
+        w.run(64);
+        steps += 64;
+    }
+    stop = true;
+    for (std::thread& t : hogs) t.join();
+    ASSERT_GT(w.force_pass_busy_fallbacks(), 0) << "no fallback in " << steps << " steps beside " << cores << " busy threads";
+    EXPECT_EQ(w.force_pass_ranges(), 1);
+    w.run(100);
+    EXPECT_GT(w.force_pass_one_range_steps(), 0);
+    EXPECT_EQ(state_hash(w), db9k_hash_after(discs, 1, steps + 100));
 }
 
 TEST(ForcePassBalance, CutSharesAreChecked) {
