@@ -45,14 +45,21 @@ struct TimedRun {
     double busy_share = 1.0;  // of the threads' time in the shared force passes, the share they worked
     long fallbacks = 0;       // times the pass fell back to one range (a busy machine)
 };
-TimedRun timed_db9k(const std::vector<XyrDisc>& discs, const BenchOptions& o, int threads, std::latch* start) {
+// DB-9k's world on `threads` threads with the options' kernels, ready to step
+std::unique_ptr<World> db9k_world(const std::vector<XyrDisc>& discs, const BenchOptions& o, int threads) {
     WorldDef def = db9k_world_def();
     def.threads = threads;
     def.simd = !o.scalar;
     def.avx512 = !o.no_avx512;
-    World world(def);
-    build_db9k(world, discs);
-    world.finalize();
+    auto world = std::make_unique<World>(def);
+    build_db9k(*world, discs);
+    world->finalize();
+    return world;
+}
+
+TimedRun timed_db9k(const std::vector<XyrDisc>& discs, const BenchOptions& o, int threads, std::latch* start) {
+    const std::unique_ptr<World> w = db9k_world(discs, o, threads);
+    World& world = *w;
     if (start) start->arrive_and_wait();
     const auto t0 = std::chrono::steady_clock::now();
     world.run(o.steps);
@@ -301,13 +308,8 @@ int bench(const BenchOptions& o) {
     const std::string path = o.file.empty() ? default_db9k_path() : o.file;
     const auto discs = read_xyr(path);
     if (o.targets) return targets(o, discs);
-    WorldDef def = db9k_world_def();
-    def.threads = o.threads;
-    def.simd = !o.scalar;
-    def.avx512 = !o.no_avx512;
-    World world(def);
-    build_db9k(world, discs);
-    world.finalize();
+    const std::unique_ptr<World> w = db9k_world(discs, o, o.threads);
+    World& world = *w;
 
     Progress progress(double(o.steps), "steps");
     const auto t0 = std::chrono::steady_clock::now();

@@ -374,9 +374,9 @@ private:
     };
     std::vector<Fault> dd_fault_, dw_fault_;
     // What each chunk's integration found in this step (integrate_note), a cache line per
-    // chunk: the threads write theirs after every block, and in five shared vectors (two
-    // chunks' values in one line) the lines went back and forth between the cores
-    // (docs/performance.md, session 12).
+    // chunk: the threads write theirs after every block. (It replaced five vectors whose
+    // shared lines both threads wrote; no measurable speed-up, docs/performance.md session 12,
+    // but one record and one reset.)
     struct alignas(64) ChunkNote {
         size_t fault = SIZE_MAX;    // the first disc that left the domain or went non-finite
         double dt_sq = INFINITY;    // s^2, the smallest critical step squared
