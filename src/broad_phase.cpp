@@ -55,7 +55,8 @@ void BroadPhase::query(const Vec2& lo, const Vec2& hi, std::vector<int32_t>& hit
     b2AABB box;
     box.lowerBound.Set(float(lo.x() * scale_), float(lo.y() * scale_));
     box.upperBound.Set(float(hi.x() * scale_), float(hi.y() * scale_));
-    for (const b2DynamicTree& tree : trees_) {
+    for (size_t t = 0; t < tree_count_; ++t) {
+        const b2DynamicTree& tree = trees_[t].tree;
         Collector c{&hits, &tree};
         tree.Query(&c, box);
     }
@@ -138,13 +139,14 @@ void BroadPhase::init(double margin_target, double wall_piece_length, const std:
     // a second init (a restored checkpoint) starts from an empty tree
     for (size_t i = 0; i < disc_proxy_.size(); ++i) tree_of(i).DestroyProxy(disc_proxy_[i]);
     for (const Piece& pc : pieces_)
-        if (pc.proxy >= 0) trees_[0].DestroyProxy(pc.proxy);
+        if (pc.proxy >= 0) trees_[0].tree.DestroyProxy(pc.proxy);
     const int k = int(std::lround(std::log2(0.1 / margin_target)));
     scale_ = std::ldexp(1.0, k);
     margin_ = double(0.1f) / scale_;
 
     const size_t n = pos.size();
-    tree_split_ = pool_ && pool_->shares(n) ? n / 2 : n;
+    tree_count_ = pool_ && pool_->shares(n) ? std::min(kMaxTrees, kTreesPerThread * size_t(pool_->size())) : 1;
+    tree_size_ = std::max<size_t>(1, (n + tree_count_ - 1) / tree_count_);
     disc_proxy_.resize(n);
     fat_lo_.resize(n);
     fat_hi_.resize(n);
@@ -167,8 +169,8 @@ void BroadPhase::init(double margin_target, double wall_piece_length, const std:
             if (wall_active[w]) {
                 Vec2 lo, hi;
                 wall_piece_bounds(walls[w], pc.f0, pc.f1, lo, hi);
-                pc.proxy = trees_[0].CreateProxy(to_tree(lo, hi), encode(int32_t(pieces_.size()), 1));
-                read_fat(trees_[0], pc.proxy, pc.fat_lo, pc.fat_hi);
+                pc.proxy = trees_[0].tree.CreateProxy(to_tree(lo, hi), encode(int32_t(pieces_.size()), 1));
+                read_fat(trees_[0].tree, pc.proxy, pc.fat_lo, pc.fat_hi);
             }
             pieces_.push_back(pc);
         }
@@ -241,6 +243,45 @@ void BroadPhase::reinsert_escaped(size_t begin, size_t end, const std::vector<Ve
     }
 }
 
+// escaped_list_ is in index order, so each tree's escaped discs are a stretch of it. Thread k
+// takes the trees from thread_first_tree_[k] on: a tree goes to the next thread once the
+// escaped discs before it reach that thread's share of them.
+void BroadPhase::reinsert_all_escaped(const std::vector<Vec2>& pos, const std::vector<double>& radius,
+                                      const std::vector<Vec2>* vel, double dt) {
+    const size_t total = escaped_list_.size();
+    const size_t threads = pool_ && tree_count_ > 1 ? size_t(pool_->size()) : 1;
+    if (threads == 1 || total < kMinSharedReinserts * threads) {
+        reinsert_escaped(0, total, pos, radius, vel, dt);
+        return;
+    }
+    tree_escapes_.resize(tree_count_ + 1);
+    tree_escapes_[0] = 0;
+    for (size_t t = 1; t <= tree_count_; ++t)
+        tree_escapes_[t] = size_t(std::lower_bound(escaped_list_.begin() + ptrdiff_t(tree_escapes_[t - 1]), escaped_list_.end(),
+                                                   int32_t(std::min(t * tree_size_, disc_proxy_.size()))) -
+                                  escaped_list_.begin());
+    thread_first_tree_.assign(threads + 1, tree_count_);
+    thread_first_tree_[0] = 0;
+    size_t t = 0;
+    for (size_t k = 1; k < threads; ++k) {
+        // the first tree whose escaped discs, with those before it, come nearer to k / threads
+        // of them if it goes to thread k than if thread k - 1 keeps it
+        const size_t target = total * k / threads;
+        while (t < tree_count_ && tree_escapes_[t + 1] <= target) ++t;
+        if (t < tree_count_ && tree_escapes_[t + 1] - target < target - tree_escapes_[t]) ++t;
+        thread_first_tree_[k] = std::max(t, thread_first_tree_[k - 1]);
+    }
+    pool_->for_each_thread([&](int k) {
+        const size_t first = thread_first_tree_[size_t(k)], last = thread_first_tree_[size_t(k) + 1];
+        reinsert_escaped(tree_escapes_[first], tree_escapes_[last], pos, radius, vel, dt);
+    });
+    size_t most = 0;
+    for (size_t k = 0; k < threads; ++k)
+        most = std::max(most, tree_escapes_[thread_first_tree_[k + 1]] - tree_escapes_[thread_first_tree_[k]]);
+    stats_.shared_reinserts += long(total);
+    stats_.shared_reinserts_most += long(most);
+}
+
 bool BroadPhase::update(const std::vector<Vec2>& pos, const std::vector<double>& radius,
                         const std::vector<WallGeom>& walls, const std::vector<uint8_t>& wall_active,
                         const std::vector<uint8_t>& wall_moving, bool discs_may_have_escaped,
@@ -253,7 +294,7 @@ bool BroadPhase::update(const std::vector<Vec2>& pos, const std::vector<double>&
     for (Piece& pc : pieces_) {
         const int32_t w = pc.wall;
         if (pc.proxy >= 0 && !wall_active[w]) {
-            trees_[0].DestroyProxy(pc.proxy);
+            trees_[0].tree.DestroyProxy(pc.proxy);
             pc.proxy = -1;
             changed[w] = 1;
             any_wall = true;
@@ -295,24 +336,14 @@ bool BroadPhase::update(const std::vector<Vec2>& pos, const std::vector<double>&
         escaped_list_.erase(std::unique(escaped_list_.begin(), escaped_list_.end()), escaped_list_.end());
     }
 
-    // each tree's discs by one thread (escaped_list_ is in index order)
-    const size_t split = size_t(std::lower_bound(escaped_list_.begin(), escaped_list_.end(), int32_t(tree_split_)) -
-                                escaped_list_.begin());
-    if (pool_ && pool_->size() > 1 && split >= kMinSharedReinserts && escaped_list_.size() - split >= kMinSharedReinserts) {
-        pool_->for_each_thread([&](int k) {
-            if (k == 0) reinsert_escaped(0, split, pos, radius, vel, dt);
-            if (k == 1) reinsert_escaped(split, escaped_list_.size(), pos, radius, vel, dt);
-        });
-        stats_.shared_reinserts += long(escaped_list_.size());
-    } else
-        reinsert_escaped(0, escaped_list_.size(), pos, radius, vel, dt);
+    reinsert_all_escaped(pos, radius, vel, dt);
     stats_.disc_reinserts += long(escaped_list_.size());
     for (Piece& pc : pieces_) {
         if (pc.proxy >= 0 && changed[pc.wall]) {
             Vec2 lo, hi;
             wall_piece_bounds(walls[pc.wall], pc.f0, pc.f1, lo, hi);
-            trees_[0].MoveProxy(pc.proxy, to_tree(lo, hi), b2Vec2(0.0f, 0.0f));
-            read_fat(trees_[0], pc.proxy, pc.fat_lo, pc.fat_hi);
+            trees_[0].tree.MoveProxy(pc.proxy, to_tree(lo, hi), b2Vec2(0.0f, 0.0f));
+            read_fat(trees_[0].tree, pc.proxy, pc.fat_lo, pc.fat_hi);
         }
     }
 

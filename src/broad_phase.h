@@ -1,8 +1,8 @@
 // Broad phase: Box2D's b2DynamicTree holds one proxy per disc and a few per wall (long walls
 // are cut into pieces so that a slope's bounding box does not cover the whole mass). The tree
 // only answers "which fat boxes overlap"; the physics is ours. With 2 threads or more the
-// discs are held in two trees, half the indices each, so that the re-insertions are shared
-// (trees_ below).
+// discs are held in several trees, a range of indices each, so that the re-insertions are
+// shared (trees_ below).
 //
 // Fat boxes: the tree pads every box by b2_aabbExtension = 0.1 tree units. We choose the
 // units: tree coordinate = metres * scale with scale a power of two, so the pad is
@@ -28,6 +28,7 @@
 #pragma once
 #include <box2d/b2_dynamic_tree.h>
 
+#include <algorithm>
 #include <cstdint>
 #include <vector>
 
@@ -47,7 +48,8 @@ struct BroadPhaseStats {
     long disc_reinserts = 0;   // discs re-inserted after leaving their fat box
     long queries = 0;          // escaped discs (and moved wall pieces) whose candidates were queried
     long shared_queries = 0;   // of these, queries shared out among the pool's threads
-    long shared_reinserts = 0; // re-insertions made by two threads at once, one per tree
+    long shared_reinserts = 0; // re-insertions shared out among the pool's threads, whole trees each
+    long shared_reinserts_most = 0;  // of these, the busiest thread's, summed over the updates
     long tree_walks = 0;       // walks of the tree for them (a group of escaped discs walks once)
 };
 
@@ -102,7 +104,7 @@ public:
     // Fewer escaped discs than this are queried by the caller alone: a query costs about a
     // microsecond, the hand-over tens of them when the other thread has gone to sleep.
     static constexpr size_t kMinSharedQueries = 256;
-    // Fewer escaped discs than this in either tree are re-inserted by the caller alone.
+    // Fewer escaped discs than this per thread are re-inserted by the caller alone.
     static constexpr size_t kMinSharedReinserts = 64;
     // Escaped discs per walk of the tree, at most (kQueryGroup below; 1: a walk per disc). For
     // tests and measurements: no candidate depends on it.
@@ -138,15 +140,35 @@ private:
     void query_escaped(size_t begin, size_t end, QueryChunk& out) const;
     void query_all_escaped();
 
-    // Two trees when the pool has two threads or more: discs below tree_split_ in the first,
-    // the others in the second, the wall pieces in the first. Each thread re-inserts the
-    // escaped discs of one tree (reinsert_escaped): on 2 threads the re-insertions were the
-    // largest serial part of a step (DB-9k: 6 % of the wall time, the other thread waiting).
-    // A query walks both. Which tree holds a disc changes no candidate: the lists are the
-    // overlap tests' answers, sorted.
-    b2DynamicTree trees_[2];
-    size_t tree_split_ = 0;
-    b2DynamicTree& tree_of(size_t disc) { return trees_[disc < tree_split_ ? 0 : 1]; }
+    // kTreesPerThread trees per thread when the pool shares the discs, one otherwise: tree t
+    // holds discs [t tree_size_, (t + 1) tree_size_), the wall pieces are in tree 0. The
+    // threads re-insert the escaped discs of whole trees each (reinsert_all_escaped), the
+    // trees shared out so that each thread gets about as many escaped discs: on 2 threads the
+    // re-insertions were the largest serial part of a list update. With two trees, half the
+    // indices each, DB-9k's escapes fell 39/61 % between them; with eight the worse thread gets
+    // 51 % (docs/performance.md, session 14). A query walks every tree; a tree whose discs lie
+    // elsewhere costs it the root's test. Which tree holds a disc changes no candidate: the
+    // lists are the overlap tests' answers, sorted.
+    //
+    // Each tree is alone on its cache lines (PaddedTree): a b2DynamicTree's root, node count
+    // and free list sit in a few bytes that every insertion writes, and two trees side by side
+    // shared a line between the two threads re-inserting into them. That cost each
+    // re-insertion 40-80 % more on 2 threads than on 1 (DB-9k: 0.96 and 0.74 us against
+    // 0.52 us).
+    static constexpr size_t kTreesPerThread = 4;
+    static constexpr size_t kMaxTrees = 64;
+    struct alignas(64) PaddedTree {
+        b2DynamicTree tree;
+    };
+    PaddedTree trees_[kMaxTrees];
+    size_t tree_count_ = 1;
+    size_t tree_size_ = 1;  // discs per tree (the last may hold fewer)
+    b2DynamicTree& tree_of(size_t disc) { return trees_[std::min(disc / tree_size_, tree_count_ - 1)].tree; }
+    // re-inserts the escaped discs, the trees shared among the pool's threads
+    void reinsert_all_escaped(const std::vector<Vec2>& pos, const std::vector<double>& radius,
+                              const std::vector<Vec2>* vel, double dt);
+    std::vector<size_t> tree_escapes_;  // escaped_list_'s first disc of each tree, then its end
+    std::vector<size_t> thread_first_tree_;
     // re-inserts escaped_list_[begin, end) (discs of one tree)
     void reinsert_escaped(size_t begin, size_t end, const std::vector<Vec2>& pos, const std::vector<double>& radius,
                           const std::vector<Vec2>* vel, double dt);

@@ -131,11 +131,11 @@ TEST(BroadPhase, SharedQueriesGiveTheSameCandidateLists) {
     EXPECT_EQ(one->positions(), two->positions());
 }
 
-// From 4,096 discs on, with 2 threads, the discs are in two trees (the lower and the upper
-// half of the indices) and each thread re-inserts one tree's escaped discs; and the contact
-// list is merged by both threads, each from a binary search into the old list. The contacts
-// must still be every touching pair, and the lists those of 1 thread, pair for pair.
-TEST(BroadPhase, TwoTreesGiveTheSameCandidateListsAsOne) {
+// From 4,096 discs on, with 2 threads, the discs are in several trees (a range of indices
+// each) and each thread re-inserts the escaped discs of whole trees; and the contact list is
+// merged by both threads, each from a binary search into the old list. The contacts must
+// still be every touching pair, and the lists those of 1 thread, pair for pair.
+TEST(BroadPhase, SeveralTreesGiveTheSameCandidateListsAsOne) {
     auto build = [](int threads) { return random_flying_world(11, 5000, 0.0008, 3.0, threads, 0.0004); };
     auto one = build(1), two = build(2);
     long touching_seen = 0;
@@ -153,6 +153,38 @@ TEST(BroadPhase, TwoTreesGiveTheSameCandidateListsAsOne) {
     EXPECT_GT(two->broad_phase_stats().shared_reinserts, 2 * long(BroadPhase::kMinSharedReinserts));
     EXPECT_EQ(one->positions(), two->positions());
     EXPECT_EQ(one->velocities(), two->velocities());
+}
+
+// The trees are shared out by their escaped discs, not by halves of the indices: when only
+// the last quarter of the discs move (a lattice without contacts or gravity, discs numbered
+// row by row), one thread must not re-insert them all. With two trees, one per half of the
+// indices, the second thread did all of them.
+TEST(BroadPhase, ReinsertionsAreSharedWhereTheDiscsEscape) {
+    auto build = [](int threads) {
+        WorldDef def;
+        def.gravity = Vec2::Zero();
+        def.threads = threads;
+        auto w = std::make_unique<World>(def);
+        const int m = w->add_material(material(0.3));
+        const int columns = 80, rows = 64;
+        for (int row = 0; row < rows; ++row)
+            for (int col = 0; col < columns; ++col) {
+                const bool moving = row >= 3 * rows / 4;
+                const Vec2 v = moving ? Vec2(0.5 * std::cos(0.1 * col), 0.5 * std::sin(0.1 * col)) : Vec2::Zero();
+                w->add_disc({Vec2(0.01 * col, 0.01 * row), 0.002, v, 0, 0, m});
+            }
+        w->finalize();
+        return w;
+    };
+    auto one = build(1), two = build(2);
+    one->run(400);
+    two->run(400);
+    const BroadPhaseStats& s = two->broad_phase_stats();
+    EXPECT_EQ(s.disc_reinserts, one->broad_phase_stats().disc_reinserts);
+    EXPECT_GT(s.shared_reinserts, 4 * long(BroadPhase::kMinSharedReinserts));
+    EXPECT_LE(double(s.shared_reinserts_most), 0.6 * double(s.shared_reinserts));
+    EXPECT_GE(s.shared_reinserts_most * 2, s.shared_reinserts);
+    EXPECT_EQ(one->positions(), two->positions());
 }
 
 TEST(BroadPhase, MarginIsAPowerOfTwoFractionOfTheTreePad) {
