@@ -1,5 +1,6 @@
 #include "snapshot.h"
 
+#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -15,12 +16,43 @@ SnapshotWriter::SnapshotWriter(std::string dir, std::vector<int> layer, std::vec
 }
 
 namespace {
+// Appends v as an ostream with precision p writes it in the default format: std::to_chars
+// with a precision is printf's %.pg in the "C" locale, the same text. A std::ostringstream per
+// disc, as before, made a snapshot of geometry A's 9,101 discs take 25 ms (about 3 s of a run
+// to rest, with the other thread idle).
+void put_g(std::string& o, double v, int p) {
+    char b[40];
+    const auto r = std::to_chars(b, b + sizeof b, v, std::chars_format::general, p);
+    o.append(b, r.ptr);
+}
+void put_int(std::string& o, long v) {
+    char b[24];
+    const auto r = std::to_chars(b, b + sizeof b, v);
+    o.append(b, r.ptr);
+}
+// a 2D point as "x y 0"
+void put_xy0(std::string& o, const Vec2& v, int p) {
+    put_g(o, v.x(), p);
+    o += ' ';
+    put_g(o, v.y(), p);
+    o += " 0";
+}
+
+// put(o, i) appends item i
 template <typename F>
-void data_array(std::ostringstream& o, const char* type, const char* name, int components, size_t n, F value) {
-    o << "        <DataArray type=\"" << type << "\" Name=\"" << name << "\" NumberOfComponents=\"" << components
-      << "\" format=\"ascii\">\n";
-    for (size_t i = 0; i < n; ++i) o << value(i) << (i + 1 == n ? "\n" : " ");
-    o << "        </DataArray>\n";
+void data_array(std::string& o, const char* type, const char* name, int components, size_t n, F put) {
+    o += "        <DataArray type=\"";
+    o += type;
+    o += "\" Name=\"";
+    o += name;
+    o += "\" NumberOfComponents=\"";
+    put_int(o, components);
+    o += "\" format=\"ascii\">\n";
+    for (size_t i = 0; i < n; ++i) {
+        put(o, i);
+        o += i + 1 == n ? '\n' : ' ';
+    }
+    o += "        </DataArray>\n";
 }
 }  // namespace
 
@@ -28,38 +60,32 @@ void SnapshotWriter::write(const World& w) {
     const int index = int(times_.size());
     char name[64];
     const size_t n = w.disc_count();
-    std::ostringstream o;
-    o.precision(9);
-    o << "<?xml version=\"1.0\"?>\n<VTKFile type=\"PolyData\" version=\"0.1\" byte_order=\"LittleEndian\">\n"
-      << "  <PolyData>\n    <FieldData>\n      <DataArray type=\"Float64\" Name=\"TIME\" NumberOfTuples=\"1\" format=\"ascii\">"
-      << w.time() << "</DataArray>\n    </FieldData>\n"
-      << "    <Piece NumberOfPoints=\"" << n << "\" NumberOfVerts=\"" << n << "\">\n      <Points>\n";
-    data_array(o, "Float64", "Points", 3, n, [&](size_t i) {
-        std::ostringstream s;
-        s.precision(12);
-        s << w.positions()[i].x() << ' ' << w.positions()[i].y() << " 0";
-        return s.str();
-    });
-    o << "      </Points>\n      <PointData Scalars=\"radius\">\n";
-    data_array(o, "Float64", "radius", 1, n, [&](size_t i) { return w.radii()[i]; });
-    data_array(o, "Float64", "velocity", 3, n, [&](size_t i) {
-        std::ostringstream s;
-        s.precision(9);
-        s << w.velocities()[i].x() << ' ' << w.velocities()[i].y() << " 0";
-        return s.str();
-    });
-    data_array(o, "Float64", "speed", 1, n, [&](size_t i) { return w.velocities()[i].norm(); });
-    data_array(o, "Float64", "angle", 1, n, [&](size_t i) { return w.angles()[i]; });
-    data_array(o, "Float64", "omega", 1, n, [&](size_t i) { return w.omegas()[i]; });
-    data_array(o, "Int32", "layer", 1, n, [&](size_t i) { return i < layer_.size() ? layer_[i] : 0; });
-    data_array(o, "Int32", "grid", 1, n, [&](size_t i) { return i < grid_.size() ? grid_[i] : 0; });
-    data_array(o, "Int32", "id", 1, n, [&](size_t i) { return long(i); });
-    o << "      </PointData>\n      <Verts>\n";
-    data_array(o, "Int64", "connectivity", 1, n, [&](size_t i) { return long(i); });
-    data_array(o, "Int64", "offsets", 1, n, [&](size_t i) { return long(i + 1); });
-    o << "      </Verts>\n    </Piece>\n  </PolyData>\n</VTKFile>\n";
+    std::string o;
+    o.reserve(160 * n + 4096);
+    o += "<?xml version=\"1.0\"?>\n<VTKFile type=\"PolyData\" version=\"0.1\" byte_order=\"LittleEndian\">\n"
+         "  <PolyData>\n    <FieldData>\n      <DataArray type=\"Float64\" Name=\"TIME\" NumberOfTuples=\"1\" format=\"ascii\">";
+    put_g(o, w.time(), 9);
+    o += "</DataArray>\n    </FieldData>\n    <Piece NumberOfPoints=\"";
+    put_int(o, long(n));
+    o += "\" NumberOfVerts=\"";
+    put_int(o, long(n));
+    o += "\">\n      <Points>\n";
+    data_array(o, "Float64", "Points", 3, n, [&](std::string& s, size_t i) { put_xy0(s, w.positions()[i], 12); });
+    o += "      </Points>\n      <PointData Scalars=\"radius\">\n";
+    data_array(o, "Float64", "radius", 1, n, [&](std::string& s, size_t i) { put_g(s, w.radii()[i], 9); });
+    data_array(o, "Float64", "velocity", 3, n, [&](std::string& s, size_t i) { put_xy0(s, w.velocities()[i], 9); });
+    data_array(o, "Float64", "speed", 1, n, [&](std::string& s, size_t i) { put_g(s, w.velocities()[i].norm(), 9); });
+    data_array(o, "Float64", "angle", 1, n, [&](std::string& s, size_t i) { put_g(s, w.angles()[i], 9); });
+    data_array(o, "Float64", "omega", 1, n, [&](std::string& s, size_t i) { put_g(s, w.omegas()[i], 9); });
+    data_array(o, "Int32", "layer", 1, n, [&](std::string& s, size_t i) { put_int(s, i < layer_.size() ? layer_[i] : 0); });
+    data_array(o, "Int32", "grid", 1, n, [&](std::string& s, size_t i) { put_int(s, i < grid_.size() ? grid_[i] : 0); });
+    data_array(o, "Int32", "id", 1, n, [&](std::string& s, size_t i) { put_int(s, long(i)); });
+    o += "      </PointData>\n      <Verts>\n";
+    data_array(o, "Int64", "connectivity", 1, n, [&](std::string& s, size_t i) { put_int(s, long(i)); });
+    data_array(o, "Int64", "offsets", 1, n, [&](std::string& s, size_t i) { put_int(s, long(i + 1)); });
+    o += "      </Verts>\n    </Piece>\n  </PolyData>\n</VTKFile>\n";
     std::snprintf(name, sizeof name, "/discs_%05d.vtp", index);
-    write_file_atomic(dir_ + name, o.str());
+    write_file_atomic(dir_ + name, o);
 
     // walls as polylines (arcs in 48 pieces), only those present at this instant
     std::vector<Vec2> pts;
@@ -80,25 +106,22 @@ void SnapshotWriter::write(const World& w) {
         offsets.push_back(long(pts.size()));
         wall_id.push_back(k);
     }
-    std::ostringstream wo;
-    wo.precision(12);
-    wo << "<?xml version=\"1.0\"?>\n<VTKFile type=\"PolyData\" version=\"0.1\" byte_order=\"LittleEndian\">\n"
-       << "  <PolyData>\n    <Piece NumberOfPoints=\"" << pts.size() << "\" NumberOfLines=\"" << offsets.size()
-       << "\">\n      <Points>\n";
-    data_array(wo, "Float64", "Points", 3, pts.size(), [&](size_t i) {
-        std::ostringstream s;
-        s.precision(12);
-        s << pts[i].x() << ' ' << pts[i].y() << " 0";
-        return s.str();
-    });
-    wo << "      </Points>\n      <CellData>\n";
-    data_array(wo, "Int32", "wall", 1, wall_id.size(), [&](size_t i) { return wall_id[i]; });
-    wo << "      </CellData>\n      <Lines>\n";
-    data_array(wo, "Int64", "connectivity", 1, pts.size(), [&](size_t i) { return long(i); });
-    data_array(wo, "Int64", "offsets", 1, offsets.size(), [&](size_t i) { return offsets[i]; });
-    wo << "      </Lines>\n    </Piece>\n  </PolyData>\n</VTKFile>\n";
+    std::string wo;
+    wo += "<?xml version=\"1.0\"?>\n<VTKFile type=\"PolyData\" version=\"0.1\" byte_order=\"LittleEndian\">\n"
+          "  <PolyData>\n    <Piece NumberOfPoints=\"";
+    put_int(wo, long(pts.size()));
+    wo += "\" NumberOfLines=\"";
+    put_int(wo, long(offsets.size()));
+    wo += "\">\n      <Points>\n";
+    data_array(wo, "Float64", "Points", 3, pts.size(), [&](std::string& s, size_t i) { put_xy0(s, pts[i], 12); });
+    wo += "      </Points>\n      <CellData>\n";
+    data_array(wo, "Int32", "wall", 1, wall_id.size(), [&](std::string& s, size_t i) { put_int(s, wall_id[i]); });
+    wo += "      </CellData>\n      <Lines>\n";
+    data_array(wo, "Int64", "connectivity", 1, pts.size(), [&](std::string& s, size_t i) { put_int(s, long(i)); });
+    data_array(wo, "Int64", "offsets", 1, offsets.size(), [&](std::string& s, size_t i) { put_int(s, offsets[i]); });
+    wo += "      </Lines>\n    </Piece>\n  </PolyData>\n</VTKFile>\n";
     std::snprintf(name, sizeof name, "/walls_%05d.vtp", index);
-    write_file_atomic(dir_ + name, wo.str());
+    write_file_atomic(dir_ + name, wo);
     times_.push_back(w.time());
 }
 
