@@ -30,7 +30,7 @@ void validate(const WorldDef& d, const std::string& where) {
     require_non_negative(where + ".broadphase_margin", d.broadphase_margin, "m");
     require_finite(where + ".domain_lo", d.domain_lo, "m");  // the integrator's lost-disc test needs finite bounds
     require_finite(where + ".domain_hi", d.domain_hi, "m");
-    require_positive(where + ".wall_piece_length", d.wall_piece_length, "m");
+    require_non_negative(where + ".wall_piece_length", d.wall_piece_length, "m");
     require_non_negative(where + ".joint_tolerance", d.joint_tolerance, "m");
     require_range(where + ".max_overlap_ratio", d.max_overlap_ratio, 1e-6, 2.0, false, "(ratio)");
 }
@@ -238,7 +238,7 @@ void World::finalize() {
     load_.assign(n, DiscLoad{});
     discs_may_have_escaped_ = true;
 
-    broad_.init(margin_target(), def_.wall_piece_length, pos_, radius_, geom_, wall_active_);
+    broad_.init(margin_target(), wall_piece_target(), pos_, radius_, geom_, wall_active_);
     refresh_contacts();
     finalized_ = true;
 
@@ -257,6 +257,18 @@ double World::margin_target() const {
     if (def_.broadphase_margin > 0.0) return def_.broadphase_margin;
     if (radius_.empty()) return 0.001;
     return 0.5 * *std::min_element(radius_.begin(), radius_.end());
+}
+
+// A wall piece's box holds every disc within a margin of the piece, and on a slope the box is
+// as tall as the piece is long times the sine of the slope. Geometry A with 5 cm pieces (about
+// 16 disc diameters) had 1,041 disc-wall candidates a step for 191 touching; with 1 cm pieces,
+// 401. Every candidate costs the force pass a narrow-phase test and the caller's serial sum of
+// wall forces a visit (0.19 against 0.10 s to t = 0.15 s). Three diameters keep the pieces
+// few where the discs are large (a 100 m terrain profile under 5 cm discs: 333 pieces).
+double World::wall_piece_target() const {
+    if (def_.wall_piece_length > 0.0) return def_.wall_piece_length;
+    if (radius_.empty()) return 0.05;
+    return 6.0 * *std::max_element(radius_.begin(), radius_.end());
 }
 
 double World::contact_mass_disc(int i, int j) const { return effective_mass(mass_[size_t(i)], mass_[size_t(j)]); }

@@ -46,7 +46,8 @@ struct WorldDef {
     FrictionRule friction_rule_disc_disc = FrictionRule::Min;  // PFC default
     FrictionRule friction_rule_disc_wall = FrictionRule::Max;  // thesis, section 4.3.2
     double broadphase_margin = 0.0;        // m, pad of the fat boxes; 0 = half the smallest radius
-    double wall_piece_length = 0.05;       // m, walls are cut into pieces this long for the broad phase
+    double wall_piece_length = 0.0;        // m, walls are cut into pieces this long for the broad phase;
+                                           // 0 = six times the largest radius (three diameters)
     double joint_tolerance = 1.0e-3;       // m, wall ends closer than this are joined (snapped)
     double max_overlap_ratio = 0.5;        // -, an overlap beyond this fraction of the smaller radius stops the run
     Vec2 domain_lo{-1e30, -1e30};          // m, a disc centre leaving [lo, hi] stops the run
@@ -255,6 +256,7 @@ private:
     void join_wall_ends();
     double contact_mass_disc(int i, int j) const;
     double margin_target() const;  // m, the broad phase's pad (WorldDef::broadphase_margin)
+    double wall_piece_target() const;  // m, the broad phase's longest wall piece (WorldDef::wall_piece_length)
     // the automatic step (timestep.h): its constant factors, one disc's bound, the step
     DtFactors dt_factors() const;
     double critical_step_squared_of(size_t i, const DtFactors& f) const;

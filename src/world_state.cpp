@@ -213,7 +213,7 @@ void World::load_state(BinaryReader& in) {
     in.get(removed_walls_);
 
     // the broad phase from the restored positions, then the histories
-    broad_.init(margin_target(), def_.wall_piece_length, pos_, radius_, geom_, wall_active_);
+    broad_.init(margin_target(), wall_piece_target(), pos_, radius_, geom_, wall_active_);
     dd_.clear();
     dw_.clear();
     refresh_contacts();
