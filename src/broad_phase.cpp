@@ -162,7 +162,11 @@ void BroadPhase::init(double margin_target, double wall_piece_length, const std:
         escaped_list_.push_back(int32_t(i));
     }
     pieces_.clear();
+    wall_first_piece_.assign(walls.size() + 1, 0);
+    wall_in_tree_.assign(walls.size(), 0);
     for (size_t w = 0; w < walls.size(); ++w) {
+        wall_first_piece_[w] = pieces_.size();
+        wall_in_tree_[w] = wall_active[w];
         const int np = std::max(1, int(std::ceil(wall_length(walls[w]) / wall_piece_length)));
         for (int p = 0; p < np; ++p) {
             Piece pc{int32_t(w), double(p) / np, double(p + 1) / np, -1, Vec2::Zero(), Vec2::Zero()};
@@ -175,6 +179,7 @@ void BroadPhase::init(double margin_target, double wall_piece_length, const std:
             pieces_.push_back(pc);
         }
     }
+    wall_first_piece_[walls.size()] = pieces_.size();
     dd_.clear();
     dw_.clear();
     // every disc is escaped: the query part of update() finds every pair
@@ -291,21 +296,26 @@ bool BroadPhase::update(const std::vector<Vec2>& pos, const std::vector<double>&
     std::vector<uint8_t>& changed = wall_changed_;  // kept between steps: no allocation in the step
     changed.assign(walls.size(), 0);
     bool any_wall = false;
-    for (Piece& pc : pieces_) {
-        const int32_t w = pc.wall;
-        if (pc.proxy >= 0 && !wall_active[w]) {
-            trees_[0].tree.DestroyProxy(pc.proxy);
-            pc.proxy = -1;
-            changed[w] = 1;
-            any_wall = true;
-        } else if (pc.proxy >= 0 && wall_moving[w]) {
-            Vec2 lo, hi;
-            wall_piece_bounds(walls[w], pc.f0, pc.f1, lo, hi);
-            if (!contains(pc.fat_lo, pc.fat_hi, lo, hi)) {
+    // only the pieces of walls removed or moving (a flume has hundreds of pieces, all still)
+    for (size_t w = 0; w < walls.size(); ++w) {
+        if (!wall_in_tree_[w] || (wall_active[w] && !wall_moving[w])) continue;
+        for (size_t p = wall_first_piece_[w]; p < wall_first_piece_[w + 1]; ++p) {
+            Piece& pc = pieces_[p];
+            if (pc.proxy >= 0 && !wall_active[w]) {
+                trees_[0].tree.DestroyProxy(pc.proxy);
+                pc.proxy = -1;
                 changed[w] = 1;
                 any_wall = true;
+            } else if (pc.proxy >= 0 && wall_moving[w]) {
+                Vec2 lo, hi;
+                wall_piece_bounds(walls[w], pc.f0, pc.f1, lo, hi);
+                if (!contains(pc.fat_lo, pc.fat_hi, lo, hi)) {
+                    changed[w] = 1;
+                    any_wall = true;
+                }
             }
         }
+        if (!wall_active[w]) wall_in_tree_[w] = 0;
     }
 
     escaped_list_.clear();

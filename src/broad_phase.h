@@ -179,7 +179,9 @@ private:
     std::vector<double> box_radius_;  // the radius each disc's fat box was made for, m
     std::vector<double> half_pad_;    // half the pad each disc's fat box was made with, m
     double reach_length_ = 0.0;       // L of the speed rule, m
-    std::vector<Piece> pieces_;
+    std::vector<Piece> pieces_;                // the walls' pieces, wall by wall
+    std::vector<size_t> wall_first_piece_;     // wall w's pieces: [first[w], first[w + 1])
+    std::vector<uint8_t> wall_in_tree_;        // wall w's pieces are in the tree
     std::vector<uint64_t> dd_, dw_, scratch_dd_, scratch_dw_, merge_buffer_;
     std::vector<uint8_t> escaped_;
     std::vector<int32_t> escaped_list_, hits_;
