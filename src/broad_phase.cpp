@@ -329,15 +329,17 @@ bool BroadPhase::update(const std::vector<Vec2>& pos, const std::vector<double>&
                 escaped_list_.push_back(int32_t(i));
     if (escaped_list_.empty() && !any_wall) return false;
     // An update costs a pass over the candidate list whatever the number of escapes, so batch
-    // them: with the escaped discs also re-insert every disc that has used up more than half
-    // its pad. The next update then waits until a disc moves another half pad, instead of
-    // coming on the next step for the next-fastest disc.
+    // them: with the escaped discs also re-insert every disc that has used up more than
+    // kBatchPadUsed of its pad. The next update then waits until a disc moves the rest of its
+    // pad, instead of coming on the next step for the next-fastest disc.
     if (!escaped_list_.empty()) {
         // So is a disc whose pad is more than twice what its speed now asks for (it has slowed
         // down; its box would keep candidates that cost a pass each step).
         for (size_t i = 0; i < n; ++i) {
             const Vec2 rr(radius[i], radius[i]);
-            const Vec2 pad(half_pad_[i], half_pad_[i]);
+            // the fat box less the unused part of the pad a disc may keep: (1 - used) * pad
+            const double keep = 2.0 * (1.0 - kBatchPadUsed) * half_pad_[i];
+            const Vec2 pad(keep, keep);
             if (!contains(fat_lo_[i] + pad, fat_hi_[i] - pad, pos[i] - rr, pos[i] + rr) ||
                 half_pad_[i] > pad_for(vel ? (*vel)[i] : Vec2::Zero(), dt))
                 escaped_list_.push_back(int32_t(i));

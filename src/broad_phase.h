@@ -135,6 +135,12 @@ private:
     // the same float boxes, so the candidates are the same). A walk cost about 1.3 us, most of
     // it the descent through a tree of about a megabyte (docs/performance.md, session 10).
     static constexpr size_t kQueryGroup = 8;
+    // A list update also re-inserts every disc that has used more than this share of its
+    // pad. Measured (session 14; the candidates do not change, the bits neither): at 0.5,
+    // DB-9k made 100 updates with 305k re-insertions in 0.56-0.61 s on 1 thread, at 0.35 55
+    // updates with 363k in 0.48-0.50 s; geometry A to t = 0.3 s on 2 threads 3,984 updates in
+    // 2.31 s at 0.5, 3,752 in 1.85 / 1.78 / 1.91 / 1.98 s at 0.4 / 0.35 / 0.3 / 0.25.
+    static constexpr double kBatchPadUsed = 0.35;
     size_t query_group_ = kQueryGroup;
     static constexpr double kQueryGroupSpan = 4.0;
     void query_escaped(size_t begin, size_t end, QueryChunk& out) const;
