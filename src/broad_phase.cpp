@@ -163,10 +163,8 @@ void BroadPhase::init(double margin_target, double wall_piece_length, const std:
     }
     pieces_.clear();
     wall_first_piece_.assign(walls.size() + 1, 0);
-    wall_in_tree_.assign(walls.size(), 0);
     for (size_t w = 0; w < walls.size(); ++w) {
         wall_first_piece_[w] = pieces_.size();
-        wall_in_tree_[w] = wall_active[w];
         const int np = std::max(1, int(std::ceil(wall_length(walls[w]) / wall_piece_length)));
         for (int p = 0; p < np; ++p) {
             Piece pc{int32_t(w), double(p) / np, double(p + 1) / np, -1, Vec2::Zero(), Vec2::Zero()};
@@ -249,8 +247,8 @@ void BroadPhase::reinsert_escaped(size_t begin, size_t end, const std::vector<Ve
 }
 
 // escaped_list_ is in index order, so each tree's escaped discs are a stretch of it. Thread k
-// takes the trees from thread_first_tree_[k] on: a tree goes to the next thread once the
-// escaped discs before it reach that thread's share of them.
+// takes the trees from thread_first_tree_[k] on: the tree boundary nearest to k / threads of
+// the escaped discs.
 void BroadPhase::reinsert_all_escaped(const std::vector<Vec2>& pos, const std::vector<double>& radius,
                                       const std::vector<Vec2>* vel, double dt) {
     const size_t total = escaped_list_.size();
@@ -267,14 +265,15 @@ void BroadPhase::reinsert_all_escaped(const std::vector<Vec2>& pos, const std::v
                                   escaped_list_.begin());
     thread_first_tree_.assign(threads + 1, tree_count_);
     thread_first_tree_[0] = 0;
-    size_t t = 0;
+    size_t b = 0;
     for (size_t k = 1; k < threads; ++k) {
-        // the first tree whose escaped discs, with those before it, come nearer to k / threads
-        // of them if it goes to thread k than if thread k - 1 keeps it
         const size_t target = total * k / threads;
-        while (t < tree_count_ && tree_escapes_[t + 1] <= target) ++t;
-        if (t < tree_count_ && tree_escapes_[t + 1] - target < target - tree_escapes_[t]) ++t;
-        thread_first_tree_[k] = std::max(t, thread_first_tree_[k - 1]);
+        const auto off = [&](size_t tree) {
+            const size_t at = tree_escapes_[tree];
+            return at > target ? at - target : target - at;
+        };
+        while (b < tree_count_ && off(b + 1) <= off(b)) ++b;  // the boundaries' escapes only grow
+        thread_first_tree_[k] = b;
     }
     pool_->for_each_thread([&](int k) {
         const size_t first = thread_first_tree_[size_t(k)], last = thread_first_tree_[size_t(k) + 1];
@@ -296,9 +295,10 @@ bool BroadPhase::update(const std::vector<Vec2>& pos, const std::vector<double>&
     std::vector<uint8_t>& changed = wall_changed_;  // kept between steps: no allocation in the step
     changed.assign(walls.size(), 0);
     bool any_wall = false;
-    // only the pieces of walls removed or moving (a flume has hundreds of pieces, all still)
+    // only the pieces of walls removed or moving (a flume has hundreds of pieces, all still);
+    // a wall's pieces are all in the tree or none
     for (size_t w = 0; w < walls.size(); ++w) {
-        if (!wall_in_tree_[w] || (wall_active[w] && !wall_moving[w])) continue;
+        if (pieces_[wall_first_piece_[w]].proxy < 0 || (wall_active[w] && !wall_moving[w])) continue;
         for (size_t p = wall_first_piece_[w]; p < wall_first_piece_[w + 1]; ++p) {
             Piece& pc = pieces_[p];
             if (pc.proxy >= 0 && !wall_active[w]) {
@@ -315,7 +315,6 @@ bool BroadPhase::update(const std::vector<Vec2>& pos, const std::vector<double>&
                 }
             }
         }
-        if (!wall_active[w]) wall_in_tree_[w] = 0;
     }
 
     escaped_list_.clear();

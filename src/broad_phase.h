@@ -173,7 +173,7 @@ private:
     // re-inserts the escaped discs, the trees shared among the pool's threads
     void reinsert_all_escaped(const std::vector<Vec2>& pos, const std::vector<double>& radius,
                               const std::vector<Vec2>* vel, double dt);
-    std::vector<size_t> tree_escapes_;  // escaped_list_'s first disc of each tree, then its end
+    std::vector<size_t> tree_escapes_;  // where each tree's escaped discs begin in escaped_list_, then its end
     std::vector<size_t> thread_first_tree_;
     // re-inserts escaped_list_[begin, end) (discs of one tree)
     void reinsert_escaped(size_t begin, size_t end, const std::vector<Vec2>& pos, const std::vector<double>& radius,
@@ -186,8 +186,7 @@ private:
     std::vector<double> half_pad_;    // half the pad each disc's fat box was made with, m
     double reach_length_ = 0.0;       // L of the speed rule, m
     std::vector<Piece> pieces_;                // the walls' pieces, wall by wall
-    std::vector<size_t> wall_first_piece_;     // wall w's pieces: [first[w], first[w + 1])
-    std::vector<uint8_t> wall_in_tree_;        // wall w's pieces are in the tree
+    std::vector<size_t> wall_first_piece_;     // wall w's pieces: [first[w], first[w + 1]), at least one
     std::vector<uint64_t> dd_, dw_, scratch_dd_, scratch_dw_, merge_buffer_;
     std::vector<uint8_t> escaped_;
     std::vector<int32_t> escaped_list_, hits_;

@@ -158,7 +158,7 @@ TEST(BroadPhase, SeveralTreesGiveTheSameCandidateListsAsOne) {
 // The trees are shared out by their escaped discs, not by halves of the indices: when only
 // the last quarter of the discs move (a lattice without contacts or gravity, discs numbered
 // row by row), one thread must not re-insert them all. With two trees, one per half of the
-// indices, the second thread did all of them.
+// indices, the second thread did all of them; on 4 threads each must get about a quarter.
 TEST(BroadPhase, ReinsertionsAreSharedWhereTheDiscsEscape) {
     auto build = [](int threads) {
         WorldDef def;
@@ -176,15 +176,23 @@ TEST(BroadPhase, ReinsertionsAreSharedWhereTheDiscsEscape) {
         w->finalize();
         return w;
     };
-    auto one = build(1), two = build(2);
+    auto one = build(1), two = build(2), four = build(4);
     one->run(400);
     two->run(400);
+    four->run(400);
     const BroadPhaseStats& s = two->broad_phase_stats();
     EXPECT_EQ(s.disc_reinserts, one->broad_phase_stats().disc_reinserts);
     EXPECT_GT(s.shared_reinserts, 4 * long(BroadPhase::kMinSharedReinserts));
     EXPECT_LE(double(s.shared_reinserts_most), 0.6 * double(s.shared_reinserts));
     EXPECT_GE(s.shared_reinserts_most * 2, s.shared_reinserts);
     EXPECT_EQ(one->positions(), two->positions());
+    // 4 threads, 16 trees: the moving quarter is 4 trees, one for each thread
+    const BroadPhaseStats& s4 = four->broad_phase_stats();
+    EXPECT_EQ(s4.disc_reinserts, one->broad_phase_stats().disc_reinserts);
+    EXPECT_GT(s4.shared_reinserts, 4 * long(BroadPhase::kMinSharedReinserts));
+    EXPECT_LE(double(s4.shared_reinserts_most), 0.35 * double(s4.shared_reinserts));
+    EXPECT_GE(s4.shared_reinserts_most * 4, s4.shared_reinserts);
+    EXPECT_EQ(one->positions(), four->positions());
 }
 
 // Walls are cut into pieces for the tree; by default three disc diameters long. A layer of
