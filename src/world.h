@@ -307,6 +307,19 @@ private:
     std::vector<size_t> cross_start_;       // per range: its first cross contact in cross_
     std::vector<PairOut> cross_out_;        // their results, same order
     std::vector<int32_t> cross_in_start_, cross_in_;  // per range: the cross contacts whose j it owns (CSR)
+    // The cross contacts' own copies of their records and clearances, in cross_in_ order, and
+    // each one's place there (cross_pos_[m]): the range that computes them reads and writes
+    // only these, never a line of dd_ or clearance_ that the range owning their first disc
+    // works on (compute_forces says what that cost). That range copies a changed history
+    // back into dd_ when it adds the contact, so dd_ is whole after every pass. Copied from
+    // dd_ and clearance_ at the next pass after a cut or an edit of dd_ (cross_copies_stale_:
+    // cut_ranges, refresh_dashpots, forget_clearances, which load_state calls). A clearance
+    // left behind in clearance_ stays a valid bound (PairSkip), so none is copied back.
+    std::vector<DiscContact> cross_dd_;
+    std::vector<float> cross_clearance_;
+    std::vector<int32_t> cross_pos_;
+    std::vector<uint8_t> cross_todo_;  // per cross contact: 1 if this pass gave it results (cross_out_)
+    bool cross_copies_stale_ = true;
     int force_ranges_ = 1;
     bool avx2_ = false;                     // def_.simd and the CPU has AVX2
     bool avx512_ = false;                   // and def_.avx512 and the CPU has AVX-512
