@@ -301,18 +301,18 @@ bool BroadPhase::update(const std::vector<Vec2>& pos, const std::vector<double>&
         if (pieces_[wall_first_piece_[w]].proxy < 0 || (wall_active[w] && !wall_moving[w])) continue;
         for (size_t p = wall_first_piece_[w]; p < wall_first_piece_[w + 1]; ++p) {
             Piece& pc = pieces_[p];
-            if (pc.proxy >= 0 && !wall_active[w]) {
+            if (!wall_active[w]) {  // removed: out of the tree
                 trees_[0].tree.DestroyProxy(pc.proxy);
                 pc.proxy = -1;
                 changed[w] = 1;
                 any_wall = true;
-            } else if (pc.proxy >= 0 && wall_moving[w]) {
-                Vec2 lo, hi;
-                wall_piece_bounds(walls[w], pc.f0, pc.f1, lo, hi);
-                if (!contains(pc.fat_lo, pc.fat_hi, lo, hi)) {
-                    changed[w] = 1;
-                    any_wall = true;
-                }
+                continue;
+            }
+            Vec2 lo, hi;  // moving: a piece that left its fat box
+            wall_piece_bounds(walls[w], pc.f0, pc.f1, lo, hi);
+            if (!contains(pc.fat_lo, pc.fat_hi, lo, hi)) {
+                changed[w] = 1;
+                any_wall = true;
             }
         }
     }

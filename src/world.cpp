@@ -581,8 +581,8 @@ void World::compute_forces(bool then_integrate) {
     // skips the law and never reads its discs. It used to run the law on every cross
     // contact in place in dd_, among the owning range's contacts: every history it wrote
     // took a line of dd_ from the other core's cache and handed it back when that range
-    // came to it. Timers, 2 threads: DB-9k's 223 cross contacts a step took 44 ns each
-    // (27-31 ns with the copies); geometry A's late deposit, 456 a step, 29-92 ns each as
+    // came to it. Timers, 2 threads: DB-9k's 223 cross contacts a step took 22-44 ns each
+    // (14-31 ns with the copies); geometry A's late deposit, 456 a step, 29-92 ns each as
     // the machine wandered (26-47 ns), up to a fifth of the computing range's time. The
     // owning range copies a history back when it adds the contact, so dd_ is whole after
     // every pass (energy(), checkpoints and the lists' merge read it).
