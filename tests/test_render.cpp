@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <cstdlib>
+#include <cstring>
+#include <unistd.h>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -49,7 +51,73 @@ RenderStyle unit_view(int px) {
 }
 
 int colour_distance(const uint8_t* p, int r, int g, int b) { return std::abs(p[0] - r) + std::abs(p[1] - g) + std::abs(p[2] - b); }
+// A snapshot pair in the writer's layout, with the discs' arrays given as text.
+void write_vtp_pair(const fs::path& dir, const std::string& points, const std::string& radius, const std::string& layer) {
+    fs::create_directories(dir);
+    std::ofstream d(dir / "discs.vtp");
+    d << "<?xml version=\"1.0\"?>\n<VTKFile type=\"PolyData\">\n<PolyData>\n<FieldData>\n"
+         "<DataArray type=\"Float64\" Name=\"TIME\" NumberOfTuples=\"1\" format=\"ascii\">0.125</DataArray>\n</FieldData>\n"
+         "<Piece><Points>\n<DataArray type=\"Float64\" Name=\"Points\" NumberOfComponents=\"3\" format=\"ascii\">\n"
+      << points << "\n</DataArray>\n</Points>\n"
+      << "<DataArray type=\"Float64\" Name=\"radius\" format=\"ascii\">\n" << radius << "\n</DataArray>\n"
+      << "<DataArray type=\"Float64\" Name=\"angle\" format=\"ascii\">\n0 1.5\n</DataArray>\n"
+      << "<DataArray type=\"Float64\" Name=\"speed\" format=\"ascii\">\n2 0\n</DataArray>\n"
+      << "<DataArray type=\"Int32\" Name=\"layer\" format=\"ascii\">\n" << layer << "\n</DataArray>\n"
+      << "<DataArray type=\"Int32\" Name=\"grid\" format=\"ascii\">\n7 -3\n</DataArray>\n</Piece>\n</PolyData>\n</VTKFile>\n";
+    std::ofstream w(dir / "walls.vtp");
+    w << "<VTKFile><PolyData><Piece><Points>\n<DataArray type=\"Float64\" Name=\"Points\" format=\"ascii\">\n"
+         "0 0 0 1 0.5 0 2 0 0\n</DataArray>\n</Points>\n<CellData><DataArray type=\"Int32\" Name=\"wall\" format=\"ascii\">4</DataArray>"
+         "</CellData><Lines><DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">3</DataArray></Lines></Piece></PolyData></VTKFile>\n";
+}
 }  // namespace
+
+// The frame reader parses with std::from_chars (session 16): every value must be the double
+// strtod gives for its text, bit for bit, whatever the number of digits or the exponent.
+TEST(Frame, ReadsTheSnapshotsNumbersExactlyAsStrtod) {
+    const fs::path dir = fs::temp_directory_path() / ("demlab-frame-" + std::to_string(::getpid()));
+    const char* xs[] = {"0.1", "-2.5e-3", "1.23456789012", "-0", "4.9406564584124654e-324", "1e+300", "0.30000000000000004", "7"};
+    std::string points, radius;
+    for (int k = 0; k < 2; ++k) points += std::string(xs[4 * k]) + " " + xs[4 * k + 1] + " 0\n";
+    radius = std::string(xs[2]) + "\t" + xs[3] + "\r\n";
+    write_vtp_pair(dir, points, radius, "0 1");
+    const Frame f = read_frame((dir / "discs.vtp").string(), (dir / "walls.vtp").string());
+    ASSERT_EQ(f.pos.size(), 2u);
+    const auto same_bits = [](double a, const char* text) {
+        const double b = std::strtod(text, nullptr);
+        return std::memcmp(&a, &b, sizeof a) == 0;
+    };
+    EXPECT_TRUE(same_bits(f.pos[0].x(), xs[0]));
+    EXPECT_TRUE(same_bits(f.pos[0].y(), xs[1]));
+    EXPECT_TRUE(same_bits(f.pos[1].x(), xs[4]));
+    EXPECT_TRUE(same_bits(f.pos[1].y(), xs[5]));
+    EXPECT_TRUE(same_bits(f.radius[0], xs[2]));
+    EXPECT_TRUE(same_bits(f.radius[1], xs[3]));  // -0 keeps its sign
+    EXPECT_EQ(f.time, 0.125);
+    EXPECT_EQ(f.grid, (std::vector<int>{7, -3}));
+    EXPECT_EQ(f.angle[1], 1.5);
+    ASSERT_EQ(f.walls.size(), 1u);
+    ASSERT_EQ(f.walls[0].size(), 3u);
+    EXPECT_EQ(f.walls[0][1], Vec2(1, 0.5));
+    EXPECT_EQ(f.wall_id, (std::vector<int>{4}));
+
+    // a value that is not a number ends its array, which then has the wrong length: an error
+    // that names the file, not a frame drawn from half the discs
+    write_vtp_pair(dir, points, std::string(xs[2]) + " oops", "0 1");
+    try {
+        read_frame((dir / "discs.vtp").string(), (dir / "walls.vtp").string());
+        ADD_FAILURE() << "a malformed radius array was accepted";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("discs.vtp: arrays of different lengths"), std::string::npos) << e.what();
+    }
+    // a truncated file: the array never closes
+    {
+        const std::string text = read_file(dir / "discs.vtp");
+        std::ofstream((dir / "discs.vtp")) << text.substr(0, text.find("</DataArray>\n</Points>"));
+    }
+    EXPECT_THROW(read_frame((dir / "discs.vtp").string(), (dir / "walls.vtp").string()), InputError);
+    fs::remove_all(dir);
+}
+
 
 TEST(Renderer, KnownSceneHasTheRightColoursWhereExpected) {
     Renderer r(unit_view(400));  // 400 px per metre
