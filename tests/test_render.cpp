@@ -118,7 +118,6 @@ TEST(Frame, ReadsTheSnapshotsNumbersExactlyAsStrtod) {
     fs::remove_all(dir);
 }
 
-
 TEST(Renderer, KnownSceneHasTheRightColoursWhereExpected) {
     Renderer r(unit_view(400));  // 400 px per metre
     const Image img = r.render(known_scene());
