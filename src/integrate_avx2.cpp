@@ -107,6 +107,15 @@ DEMLAB_AVX2 LoadLanes load_loads(const DiscLoad* const rows[4]) {
     return o;
 }
 
+// local damping of a force or torque f against a velocity v (eq. 2.51), as the scalar loop:
+// v > 0 ? -alpha |f| : (v < 0 ? alpha |f| : 0); a NaN velocity gives 0 there too
+DEMLAB_AVX2 __m256d local_damping(__m256d v, __m256d f, __m256d alpha, __m256d minus_alpha) {
+    const __m256d abs_f = _mm256_andnot_pd(_mm256_set1_pd(-0.0), f);
+    const __m256d zero = _mm256_setzero_pd();
+    return blend(_mm256_cmp_pd(v, zero, _CMP_GT_OQ), _mm256_mul_pd(minus_alpha, abs_f),
+                 blend(_mm256_cmp_pd(v, zero, _CMP_LT_OQ), _mm256_mul_pd(alpha, abs_f), zero));
+}
+
 // lanes with n_disc > 0, and with n_wall > 0, as masks (the counts are never negative:
 // n_disc << 32 is positive iff n_disc is; n_wall 2^32 + n_disc exceeds 2^32 - 1 iff n_wall >= 1)
 DEMLAB_AVX2 __m256d touches_disc(__m256i counts) {
@@ -144,7 +153,10 @@ DEMLAB_AVX2 double lane_of(__m256d a, int l) {
     // The ledger's sums, disc by disc in order as the scalar loops add them (two chains of
     // additions that run beside the vector work; as passes of their own after the loop they
     // cost 3 % of DB-9k's step, docs/performance.md)
-    double sum_contacts = 0.0, sum_rotation = 0.0;
+    double sum_contacts = 0.0, sum_rotation = 0.0, sum_local = 0.0;
+    // local damping (eq. 2.51), as the scalar loop: F_d = -alpha |F| sign(v) per degree of freedom
+    const bool local = p.alpha > 0.0;
+    const __m256d alpha = _mm256_set1_pd(p.alpha), minus_alpha = _mm256_set1_pd(-p.alpha);
     // the kinetic energy, per lane (disc i in lane i % 4: the groups start at multiples of 4)
     // and added up at the block's end: no chain of additions for it (IntegrateKernel's
     // microbenchmark: the ledger's chains were a sixth of this loop's time)
@@ -218,14 +230,29 @@ DEMLAB_AVX2 double lane_of(__m256d a, int l) {
         }
 
         // translation: v += (F + m g) / m dt, x += v dt
-        const __m256d fx = _mm256_add_pd(ld.fx, _mm256_mul_pd(mass, gx));
-        const __m256d fy = _mm256_add_pd(ld.fy, _mm256_mul_pd(mass, gy));
+        __m256d fx = _mm256_add_pd(ld.fx, _mm256_mul_pd(mass, gx));
+        __m256d fy = _mm256_add_pd(ld.fy, _mm256_mul_pd(mass, gy));
         __m256d vx, vy, px, py;
         load_xy(vel_a, i0, n, vx, vy);
         load_xy(pos_a, i0, n, px, py);
+        const __m256d vx_old = vx, vy_old = vy;
+        __m256d fdx = zero, fdy = zero;
+        if (local) {
+            fdx = local_damping(vx_old, fx, alpha, minus_alpha);
+            fdy = local_damping(vy_old, fy, alpha, minus_alpha);
+            fx = _mm256_add_pd(fx, fdx);
+            fy = _mm256_add_pd(fy, fdy);
+        }
         const __m256d s = _mm256_mul_pd(inv_mass, dt);
         vx = _mm256_add_pd(vx, _mm256_mul_pd(fx, s));
         vy = _mm256_add_pd(vy, _mm256_mul_pd(fy, s));
+        // the local damping's centred work, as the scalar loop: 0.0 - 0.5 fd.(v_old + v_new) dt,
+        // less the rotation's below
+        __m256d diss_local = zero;
+        if (local) {
+            const __m256d dot = _mm256_add_pd(_mm256_mul_pd(fdx, _mm256_add_pd(vx_old, vx)), _mm256_mul_pd(fdy, _mm256_add_pd(vy_old, vy)));
+            diss_local = _mm256_sub_pd(zero, _mm256_mul_pd(_mm256_mul_pd(half, dot), dt));
+        }
         px = _mm256_add_pd(px, _mm256_mul_pd(vx, dt));
         py = _mm256_add_pd(py, _mm256_mul_pd(vy, dt));
         store_xy(vel_a, i0, n, vx, vy);
@@ -242,8 +269,15 @@ DEMLAB_AVX2 double lane_of(__m256d a, int l) {
         if (rotation_model != 1) {
             const __m256d tq = ld.torque;
             const __m256d w_old = load_lanes(omega_a, i0, n);
+            __m256d tq_damped = tq, td = zero;
+            if (local) {
+                td = local_damping(w_old, tq, alpha, minus_alpha);
+                tq_damped = _mm256_add_pd(tq, td);
+            }
             const __m256d w_free =
-                _mm256_add_pd(w_old, _mm256_mul_pd(_mm256_mul_pd(tq, load_lanes(inv_inertia_a, i0, n)), dt));
+                _mm256_add_pd(w_old, _mm256_mul_pd(_mm256_mul_pd(tq_damped, load_lanes(inv_inertia_a, i0, n)), dt));
+            if (local)
+                diss_local = _mm256_sub_pd(diss_local, _mm256_mul_pd(_mm256_mul_pd(_mm256_mul_pd(half, td), _mm256_add_pd(w_old, w_free)), dt));
             __m256d w = w_free;
             // Model 2/3: rolling resistance for a disc touching a wall (reduce_towards_zero)
             const __m256d rr = load_lanes(rr_factor_a, i0, n);
@@ -278,27 +312,35 @@ DEMLAB_AVX2 double lane_of(__m256d a, int l) {
             sum_rotation += lane_of(diss_rot, 2);
             sum_contacts += lane_of(ld.dissipated, 3);
             sum_rotation += lane_of(diss_rot, 3);
+            if (local) {
+                sum_local += lane_of(diss_local, 0);
+                sum_local += lane_of(diss_local, 1);
+                sum_local += lane_of(diss_local, 2);
+                sum_local += lane_of(diss_local, 3);
+            }
         } else {
             // (a block ends inside a group only at the range's end: the lanes after it are
             // beyond n, and add +0)
             const __m256d valid_l = _mm256_castsi256_pd(
                 _mm256_cmpgt_epi64(_mm256_set1_epi64x(int64_t(n)), _mm256_setr_epi64x(0, 1, 2, 3)));
             kinetic_lanes = _mm256_add_pd(kinetic_lanes, _mm256_and_pd(valid_l, kinetic));
-            alignas(32) double diss_terms[4], rot_terms[4];
+            alignas(32) double diss_terms[4], rot_terms[4], local_terms[4];
             _mm256_store_pd(diss_terms, ld.dissipated);
             _mm256_store_pd(rot_terms, diss_rot);
+            _mm256_store_pd(local_terms, diss_local);
             for (size_t l = 0; l < n; ++l) {
                 sum_contacts += diss_terms[l];
                 sum_rotation += rot_terms[l];
+                sum_local += local_terms[l];
                 if (i0 + l + 1 == block_end) {
                     LedgerBlock& b = blocks[block];
                     b.contacts = sum_contacts;
-                    b.local = 0.0;  // no local damping in this loop
+                    b.local = sum_local;
                     b.rotation = sum_rotation;
                     b.kinetic = (lane_of(kinetic_lanes, 0) + lane_of(kinetic_lanes, 1)) +
                                 (lane_of(kinetic_lanes, 2) + lane_of(kinetic_lanes, 3));
                     kinetic_lanes = _mm256_setzero_pd();
-                    sum_contacts = sum_rotation = 0.0;
+                    sum_contacts = sum_rotation = sum_local = 0.0;
                     ++block;
                     block_end = std::min(block_end + block_size, end);
                 }

@@ -120,6 +120,15 @@ DEMLAB_AVX512 LoadLanes load_loads(const DiscLoad* const rows[8]) {
     return o;
 }
 
+// local damping of a force or torque f against a velocity v (eq. 2.51), as the scalar loop:
+// v > 0 ? -alpha |f| : (v < 0 ? alpha |f| : 0); a NaN velocity gives 0 there too
+DEMLAB_AVX512 __m512d local_damping(__m512d v, __m512d f, __m512d alpha, __m512d minus_alpha) {
+    const __m512d abs_f = _mm512_andnot_pd(_mm512_set1_pd(-0.0), f);
+    const __m512d zero = _mm512_setzero_pd();
+    return blend(_mm512_cmp_pd_mask(v, zero, _CMP_GT_OQ), _mm512_mul_pd(minus_alpha, abs_f),
+                 blend(_mm512_cmp_pd_mask(v, zero, _CMP_LT_OQ), _mm512_mul_pd(alpha, abs_f), zero));
+}
+
 // lanes with n_disc > 0, and with n_wall > 0 (integrate_avx2.cpp)
 DEMLAB_AVX512 __mmask8 touches_disc(__m512i counts) {
     return _mm512_cmpgt_epi64_mask(_mm512_slli_epi64(counts, 32), _mm512_setzero_si512());
@@ -148,7 +157,10 @@ DEMLAB_AVX512 __mmask8 touches_wall(__m512i counts) {
     const __m512d sign = _mm512_set1_pd(-0.0);
     __m512d speed_l1 = zero, extent_l1 = zero;
     IntegrateOut out{INFINITY, SIZE_MAX, false, 0.0, 0.0, 0};
-    double sum_contacts = 0.0, sum_rotation = 0.0;
+    double sum_contacts = 0.0, sum_rotation = 0.0, sum_local = 0.0;
+    // local damping (eq. 2.51), as the scalar loop: F_d = -alpha |F| sign(v) per degree of freedom
+    const bool local = p.alpha > 0.0;
+    const __m512d alpha = _mm512_set1_pd(p.alpha), minus_alpha = _mm512_set1_pd(-p.alpha);
     // the kinetic energy in four lanes, disc i in lane i % 4, as the AVX2 loop has it: a
     // group's first four discs are added, then its last four (begin is a multiple of 4)
     __m256d kinetic_lanes = _mm256_setzero_pd();
@@ -209,14 +221,28 @@ DEMLAB_AVX512 __mmask8 touches_wall(__m512i counts) {
         }
 
         // translation: v += (F + m g) / m dt, x += v dt
-        const __m512d fx = _mm512_add_pd(ld.fx, _mm512_mul_pd(mass, gx));
-        const __m512d fy = _mm512_add_pd(ld.fy, _mm512_mul_pd(mass, gy));
+        __m512d fx = _mm512_add_pd(ld.fx, _mm512_mul_pd(mass, gx));
+        __m512d fy = _mm512_add_pd(ld.fy, _mm512_mul_pd(mass, gy));
         __m512d vx, vy, px, py;
         load_xy(vel_a, i0, n, vx, vy);
         load_xy(pos_a, i0, n, px, py);
+        const __m512d vx_old = vx, vy_old = vy;
+        __m512d fdx = zero, fdy = zero;
+        if (local) {
+            fdx = local_damping(vx_old, fx, alpha, minus_alpha);
+            fdy = local_damping(vy_old, fy, alpha, minus_alpha);
+            fx = _mm512_add_pd(fx, fdx);
+            fy = _mm512_add_pd(fy, fdy);
+        }
         const __m512d s = _mm512_mul_pd(inv_mass, dt);
         vx = _mm512_add_pd(vx, _mm512_mul_pd(fx, s));
         vy = _mm512_add_pd(vy, _mm512_mul_pd(fy, s));
+        // the local damping's centred work: 0.0 - 0.5 fd.(v_old + v_new) dt, and the rotation's below
+        __m512d diss_local = zero;
+        if (local) {
+            const __m512d dot = _mm512_add_pd(_mm512_mul_pd(fdx, _mm512_add_pd(vx_old, vx)), _mm512_mul_pd(fdy, _mm512_add_pd(vy_old, vy)));
+            diss_local = _mm512_sub_pd(zero, _mm512_mul_pd(_mm512_mul_pd(half, dot), dt));
+        }
         px = _mm512_add_pd(px, _mm512_mul_pd(vx, dt));
         py = _mm512_add_pd(py, _mm512_mul_pd(vy, dt));
         store_xy(vel_a, i0, n, vx, vy);
@@ -231,7 +257,15 @@ DEMLAB_AVX512 __mmask8 touches_wall(__m512i counts) {
         if (rotation_model != 1) {
             const __m512d tq = ld.torque;
             const __m512d w_old = load_lanes(omega_a, i0, n);
-            const __m512d w_free = _mm512_add_pd(w_old, _mm512_mul_pd(_mm512_mul_pd(tq, load_lanes(inv_inertia_a, i0, n)), dt));
+            __m512d tq_damped = tq, td = zero;
+            if (local) {
+                td = local_damping(w_old, tq, alpha, minus_alpha);
+                tq_damped = _mm512_add_pd(tq, td);
+            }
+            const __m512d w_free =
+                _mm512_add_pd(w_old, _mm512_mul_pd(_mm512_mul_pd(tq_damped, load_lanes(inv_inertia_a, i0, n)), dt));
+            if (local)
+                diss_local = _mm512_sub_pd(diss_local, _mm512_mul_pd(_mm512_mul_pd(_mm512_mul_pd(half, td), _mm512_add_pd(w_old, w_free)), dt));
             __m512d w = w_free;
             const __m512d rr = load_lanes(rr_factor_a, i0, n);
             const __mmask8 rolling = touches_wall(ld.counts) & _mm512_cmp_pd_mask(rr, zero, _CMP_GT_OQ);
@@ -256,9 +290,10 @@ DEMLAB_AVX512 __mmask8 touches_wall(__m512i counts) {
         // block's sums are written when its last disc is added. The kinetic energy: the
         // group's first four discs, then its last four, as two groups of the AVX2 loop (the
         // lanes beyond n add +0: the lanes hold +0 or more, so no bit changes)
-        alignas(64) double diss_terms[8], rot_terms[8];
+        alignas(64) double diss_terms[8], rot_terms[8], local_terms[8];
         _mm512_store_pd(diss_terms, ld.dissipated);
         _mm512_store_pd(rot_terms, diss_rot);
+        _mm512_store_pd(local_terms, diss_local);
         const __mmask8 valid = first_lanes(n);
         const __m512d kinetic_valid = _mm512_maskz_mov_pd(valid, kinetic);
         if (n == 8 && i0 + 8 < block_end) {
@@ -268,6 +303,8 @@ DEMLAB_AVX512 __mmask8 touches_wall(__m512i counts) {
                 sum_contacts += diss_terms[l];
                 sum_rotation += rot_terms[l];
             }
+            if (local)
+                for (size_t l = 0; l < 8; ++l) sum_local += local_terms[l];
         } else {
             for (size_t half_start = 0; half_start < n; half_start += 4) {
                 kinetic_lanes = _mm256_add_pd(kinetic_lanes, half_start == 0 ? _mm512_castpd512_pd256(kinetic_valid)
@@ -275,16 +312,17 @@ DEMLAB_AVX512 __mmask8 touches_wall(__m512i counts) {
                 for (size_t l = half_start; l < std::min(n, half_start + 4); ++l) {
                     sum_contacts += diss_terms[l];
                     sum_rotation += rot_terms[l];
+                    sum_local += local_terms[l];
                     if (i0 + l + 1 == block_end) {
                         LedgerBlock& b = blocks[block];
                         b.contacts = sum_contacts;
-                        b.local = 0.0;
+                        b.local = sum_local;
                         b.rotation = sum_rotation;
                         alignas(32) double k[4];
                         _mm256_store_pd(k, kinetic_lanes);
                         b.kinetic = (k[0] + k[1]) + (k[2] + k[3]);
                         kinetic_lanes = _mm256_setzero_pd();
-                        sum_contacts = sum_rotation = 0.0;
+                        sum_contacts = sum_rotation = sum_local = 0.0;
                         ++block;
                         block_end = std::min(block_end + block_size, end);
                     }

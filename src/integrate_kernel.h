@@ -1,8 +1,8 @@
 // The integration of a range of discs (PFC's central differences, World::integrate_discs), four
-// discs at a time with AVX2 or eight with AVX-512, for the runs that use no local damping
-// (alpha = 0: every flow run; the release's settling uses it) and the per-disc rotational
-// damping: the same operations in the same order, lane by lane, so the same bits as the scalar
-// loop (world.cpp).
+// discs at a time with AVX2 or eight with AVX-512, for the runs that use the per-disc
+// rotational damping (every run but those that ask for damping per contact), with or without
+// local damping (eq. 2.51: the release's settling uses it): the same operations in the same
+// order, lane by lane, so the same bits as the scalar loop (world.cpp).
 #pragma once
 #include <cstddef>
 #include <cstdint>
@@ -37,6 +37,7 @@ struct IntegrateArrays {
 struct IntegrateParams {
     double dt;                  // s
     Vec2 g;                     // m/s^2
+    double alpha;               // local damping (eq. 2.51), 0: none (every flow run)
     double g_abs;               // |g|, m/s^2
     int rotation_model;         // 1, 2 or 3
     bool rolling_literal;       // RollingForm::Literal: g_eff = |g|; else the wall's normal force / m
@@ -74,7 +75,7 @@ struct IntegrateOut {
 // Integrates discs [begin, end), and writes the ledger's sums for their blocks: block k holds
 // discs [k block_size, (k + 1) block_size) (begin and end at block ends, or the range's ends),
 // each sum taken in disc order: the contacts' share from the discs' loads, the energy the
-// rolling resistance and the rotational damping took out, 0 for local damping, and the
+// rolling resistance and the rotational damping took out, the local damping's, and the
 // discs' kinetic energy after the step. Only call
 // it when cpu_has_avx2().
 // begin is a multiple of 4 (the World's ranges and blocks are whole ledger blocks).

@@ -825,7 +825,7 @@ void World::compute_forces(bool then_integrate) {
             // the ledger's share of the block: the contacts' dissipation per ledger block of
             // discs (in disc order, as a serial pass would add them) and the touching pairs;
             // the AVX2 integration adds them up as it goes
-            if (!(integrate && avx2_integration(ic))) {
+            if (!(integrate && avx2_integration())) {
                 long touching = 0;
                 for (size_t l0 = b0; l0 < b1; l0 += kLedgerBlock) {
                     const size_t l1 = std::min(l0 + kLedgerBlock, b1);
@@ -945,21 +945,21 @@ World::IntegrateConsts World::integrate_prepare() {
     return {dt_, def_.gravity, def_.damping.local_alpha, def_.gravity.norm(), def_.timestep.automatic, dt_factors()};
 }
 
-bool World::avx2_integration(const IntegrateConsts& k) const {
-    return avx2_ && k.alpha == 0.0 && !(def_.rotation.model == 3 && def_.rotation.damping_per != RotDampingPer::Disc);
+bool World::avx2_integration() const {
+    return avx2_ && !(def_.rotation.model == 3 && def_.rotation.damping_per != RotDampingPer::Disc);
 }
 
 void World::integrate_discs(size_t begin, size_t end, int chunk, const IntegrateConsts& k) {
-    // four discs at a time where the AVX2 loop has every rule the run uses (no local damping:
-    // every flow; per-disc rotational damping), the same bits
-    if (avx2_integration(k)) {
+    // four (AVX2) or eight (AVX-512) discs at a time where those loops have every rule the run
+    // uses (per-disc rotational damping; local damping or none), the same bits
+    if (avx2_integration()) {
         const IntegrateArrays arrays{pos_.data(),      vel_.data(),          omega_.data(),       angle_.data(),
                                      mass_.data(),     inv_mass_.data(),     inertia_.data(),     inv_inertia_.data(),
                                      radius_.data(),   rr_factor_.data(),    material_.data(),    load_.data(),
                                      broad_.fat_lo_data(), broad_.fat_hi_data(), default_k_tran_.data(),
                                      default_k_rot_.data(), materials_.size()};
         const RotationDef& rot = def_.rotation;
-        const IntegrateParams params{k.dt,          k.g,          k.g_abs,         rot.model, rot.rolling_form == RollingForm::Literal,
+        const IntegrateParams params{k.dt,          k.g,          k.alpha,      k.g_abs,         rot.model, rot.rolling_form == RollingForm::Literal,
                                      rot.mu_br,     k.auto_dt,    k.dtf.rotation_free, k.dtf.phi_sq, k.dtf.phi_t_sq,
                                      def_.domain_lo, def_.domain_hi, chunk_note_[size_t(chunk)].dt_sq};
         const IntegrateOut out = avx512_ ? integrate_avx512(arrays, params, begin, end, ledger_blocks_.data(), kLedgerBlock)

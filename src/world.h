@@ -247,8 +247,8 @@ private:
     };
     IntegrateConsts integrate_prepare();
     void integrate_discs(size_t begin, size_t end, int chunk, const IntegrateConsts& k);
-    // does integrate_discs use the AVX2 loop? (no local damping; per-disc rotational damping)
-    bool avx2_integration(const IntegrateConsts& k) const;
+    // does integrate_discs use the AVX2 (or AVX-512) loop? (per-disc rotational damping)
+    bool avx2_integration() const;
     void integrate_note(int chunk, size_t fault, double best_sq, bool any_escaped, double speed_l1, double extent_l1);
     void integrate_finish();
     void move_walls();
