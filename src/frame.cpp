@@ -2,10 +2,12 @@
 
 #include <algorithm>
 #include <charconv>
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <map>
 #include <string_view>
+#include <type_traits>
 
 #include "error.h"
 
@@ -63,6 +65,10 @@ std::vector<T> numbers(const std::map<std::string, std::string_view>& a, const s
         T x{};
         const auto r = std::from_chars(p, end, x);
         if (r.ec != std::errc()) break;
+        // "nan" and "inf" end the array as operator>> did (it reads neither): a frame is not
+        // drawn from a state that is not finite
+        if constexpr (std::is_floating_point_v<T>)
+            if (!std::isfinite(x)) break;
         v.push_back(x);
         p = r.ptr;
     }

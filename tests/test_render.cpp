@@ -109,6 +109,11 @@ TEST(Frame, ReadsTheSnapshotsNumbersExactlyAsStrtod) {
     } catch (const InputError& e) {
         EXPECT_NE(std::string(e.what()).find("discs.vtp: arrays of different lengths"), std::string::npos) << e.what();
     }
+    // nor is a state that is not finite drawn
+    write_vtp_pair(dir, points, std::string(xs[2]) + " nan", "0 1");
+    EXPECT_THROW(read_frame((dir / "discs.vtp").string(), (dir / "walls.vtp").string()), InputError);
+    write_vtp_pair(dir, std::string("inf 0 0\n") + points.substr(points.find('\n') + 1), radius, "0 1");
+    EXPECT_THROW(read_frame((dir / "discs.vtp").string(), (dir / "walls.vtp").string()), InputError);
     // a truncated file: the array never closes
     {
         const std::string text = read_file(dir / "discs.vtp");
