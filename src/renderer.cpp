@@ -223,7 +223,8 @@ Image Renderer::render(const Frame& f) {
             case ColorMode::Speed: c = speed_colour(f.speed[i], style_.speed_max); break;
             case ColorMode::Rotation: c = kRotationFill; break;
         }
-        const int segments = std::clamp(int(f.radius[i] * px_per_m * 1.5), 12, kMaxSegments);
+        // clamped as a double, then cast: a radius from a hand-edited file cannot overflow the int
+        const int segments = int(std::clamp(f.radius[i] * px_per_m * 1.5, 12.0, double(kMaxSegments)));
         im.first.push_back(GLint(im.xy.size() / 2));
         const Vec2 p = f.pos[i];
         const double r = f.radius[i];
