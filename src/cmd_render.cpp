@@ -36,6 +36,9 @@ Command add_render_command(CLI::App& app) {
     sub->add_flag("--last", o->last_only, "Render only the final snapshot (the deposit)");
     sub->add_option("--strip", o->strip, "Also tile the frames into one PNG, three to a row");
     sub->add_flag("--video", o->video, "Also assemble the frames into video.mp4 with ffmpeg (when installed)");
+    sub->add_option("--threads", o->threads, "Frames rendered at once (0: one per core, at most 8); the same files for any count")
+        ->check(CLI::Range(0, 64))
+        ->capture_default_str();
     return [o] {
         render_run(*o);
         return kExitOk;

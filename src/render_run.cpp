@@ -2,11 +2,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <exception>
 #include <filesystem>
 #include <memory>
 #include <sstream>
+#include <thread>
 #include <vector>
 
 #include "error.h"
@@ -60,6 +63,7 @@ void parse_view(const std::string& v, const Frame& first, RenderStyle& st) {
 int render_run(const RenderRunOptions& o) {
     if (o.every < 0 || o.fps < 0) throw InputError("--every and --fps must be > 0");
     if (o.every > 0 && o.fps > 0) throw InputError("give --every or --fps, not both");
+    if (o.threads < 0 || o.threads > 64) throw InputError("--threads " + std::to_string(o.threads) + ": must be 0 to 64");
     const auto snaps = list_snapshots(o.run_dir);
     RenderStyle style = default_render_style(run_is_flume(o.run_dir));
     parse_size(o.size, style);
@@ -100,16 +104,41 @@ int render_run(const RenderRunOptions& o) {
         }
     }
     if (o.last_only && !chosen.empty()) chosen = {chosen.back()};
-    Renderer renderer(style);
-    std::vector<Image> tiles;
-    for (size_t f = 0; f < chosen.size(); ++f) {
-        const SnapshotEntry& e = snaps[chosen[f]];
-        char name[64];
-        std::snprintf(name, sizeof name, "/frame_%05zu.png", f);
-        Image img = renderer.render(read_frame(e.discs, e.walls));
-        write_png(out + name, img);
-        if (!o.strip.empty()) tiles.push_back(std::move(img));
-    }
+    // Frames are independent: each thread has its own renderer (an OSMesa context is current
+    // in one thread only) and takes every threads-th frame. A frame's bytes do not depend on
+    // which renderer drew it, so the files are the same for any thread count (test
+    // SmallRun.ReplayIsTheSameBytesForAnyThreadCount). Geometry A's 120 frames: 5.1 s on one
+    // thread, 3.0 s on two (docs/performance.md, session 16).
+    const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
+    const size_t threads = std::min(chosen.size(), size_t(o.threads > 0 ? unsigned(o.threads) : std::min(cores, 8u)));
+    std::vector<Image> tiles(o.strip.empty() ? 0 : chosen.size());
+    // each thread stops at its first failing frame; the lowest of those is reported, the
+    // error a single thread would have met first
+    std::vector<std::exception_ptr> failed(threads);
+    std::vector<size_t> failed_frame(threads, SIZE_MAX);
+    auto work = [&](size_t t) {
+        size_t f = t;
+        try {
+            Renderer renderer(style);
+            for (; f < chosen.size(); f += threads) {
+                const SnapshotEntry& e = snaps[chosen[f]];
+                char name[64];
+                std::snprintf(name, sizeof name, "/frame_%05zu.png", f);
+                Image img = renderer.render(read_frame(e.discs, e.walls));
+                write_png(out + name, img);
+                if (!tiles.empty()) tiles[f] = std::move(img);
+            }
+        } catch (...) {
+            failed[t] = std::current_exception();
+            failed_frame[t] = f;
+        }
+    };
+    std::vector<std::thread> pool;
+    for (size_t t = 1; t < threads; ++t) pool.emplace_back(work, t);
+    if (threads > 0) work(0);
+    for (std::thread& th : pool) th.join();
+    const size_t first_failed = size_t(std::min_element(failed_frame.begin(), failed_frame.end()) - failed_frame.begin());
+    if (threads > 0 && failed[first_failed]) std::rethrow_exception(failed[first_failed]);
     std::printf("rendered %zu frames (%dx%d, %s) into %s/\n", chosen.size(), style.width, style.height, o.color.c_str(),
                 out.c_str());
     const int frames = int(chosen.size());

@@ -20,6 +20,8 @@ struct RenderRunOptions {
     bool video = false;
     bool last_only = false;         // only the final snapshot
     std::string strip;              // also tile the frames into this one PNG (3 columns)
+    int threads = 0;                // renderers working at once, each on every threads-th frame;
+                                    // 0: one per core, at most 8 (the same bytes for any count)
 };
 
 // Renders the frames; returns the number written. Throws InputError on bad options.

@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <mutex>
 
 #include "error.h"
 
@@ -150,8 +151,12 @@ Renderer::Renderer(const RenderStyle& style) : style_(style), impl_(std::make_un
     if (FT_Init_FreeType(&impl_->ft) == 0)
         for (const char* path : kFonts)
             if (FT_New_Face(impl_->ft, path, 0, &impl_->face) == 0) break;
-    if (!impl_->face)
-        std::fprintf(stderr, "demlab: warning: no DejaVu font found (install fonts-dejavu-core); frames carry no text\n");
+    if (!impl_->face) {
+        static std::once_flag warned;  // once per process, however many renderers (render_run's threads)
+        std::call_once(warned, [] {
+            std::fprintf(stderr, "demlab: warning: no DejaVu font found (install fonts-dejavu-core); frames carry no text\n");
+        });
+    }
 }
 
 Renderer::~Renderer() {

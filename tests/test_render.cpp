@@ -233,6 +233,41 @@ TEST_F(SmallRun, ReplayEqualsTheFramesRenderedDuringTheRun) {
     }
 }
 
+// Replay renders frames on several threads, each with its own renderer: the files must be the
+// same bytes for any count (and the strip, tiled in frame order).
+TEST_F(SmallRun, ReplayIsTheSameBytesForAnyThreadCount) {
+    std::vector<std::string> outs;
+    for (int threads : {1, 3}) {
+        RenderRunOptions o;
+        o.run_dir = dir_->string();
+        o.threads = threads;
+        o.color = "speed";
+        o.out = (*dir_ / ("threads" + std::to_string(threads))).string();
+        o.strip = o.out + "-strip.png";
+        EXPECT_GE(render_run(o), 7);
+        outs.push_back(o.out);
+    }
+    size_t compared = 0;
+    for (const auto& entry : fs::directory_iterator(outs[0])) {
+        const std::string name = entry.path().filename().string();
+        EXPECT_EQ(read_file(entry.path()), read_file(fs::path(outs[1]) / name)) << name;
+        ++compared;
+    }
+    EXPECT_GE(compared, 7u);
+    EXPECT_EQ(read_file(outs[0] + "-strip.png"), read_file(outs[1] + "-strip.png"));
+    // and a bad count is refused with the option's name
+    RenderRunOptions bad;
+    bad.run_dir = dir_->string();
+    bad.out = (*dir_ / "bad").string();
+    bad.threads = -1;
+    try {
+        render_run(bad);
+        ADD_FAILURE() << "--threads -1 was accepted";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("--threads"), std::string::npos) << e.what();
+    }
+}
+
 TEST_F(SmallRun, FramesEveryStepOfSnapshotsOnlyAndNeverInterpolated) {
     RenderRunOptions o;
     o.run_dir = dir_->string();
