@@ -9,6 +9,7 @@
 #include <filesystem>
 #include <memory>
 #include <sstream>
+#include <system_error>
 #include <thread>
 #include <vector>
 
@@ -134,7 +135,12 @@ int render_run(const RenderRunOptions& o) {
         }
     };
     std::vector<std::thread> pool;
-    for (size_t t = 1; t < threads; ++t) pool.emplace_back(work, t);
+    try {
+        for (size_t t = 1; t < threads; ++t) pool.emplace_back(work, t);
+    } catch (const std::system_error& e) {  // no thread to be had: the frames it was to draw would be missing
+        for (std::thread& th : pool) th.join();
+        throw RunError(std::string("render: cannot start a thread (") + e.what() + "); try --threads 1");
+    }
     if (threads > 0) work(0);
     for (std::thread& th : pool) th.join();
     const size_t first_failed = size_t(std::min_element(failed_frame.begin(), failed_frame.end()) - failed_frame.begin());
