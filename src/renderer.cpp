@@ -228,8 +228,10 @@ Image Renderer::render(const Frame& f) {
             case ColorMode::Speed: c = speed_colour(f.speed[i], style_.speed_max); break;
             case ColorMode::Rotation: c = kRotationFill; break;
         }
-        // clamped as a double, then cast: a radius from a hand-edited file cannot overflow the int
-        const int segments = int(std::clamp(f.radius[i] * px_per_m * 1.5, 12.0, double(kMaxSegments)));
+        // 12 to kMaxSegments, decided on the double before any cast: a huge radius gives the
+        // most and a NaN one the fewest, never an int overflow (undefined behaviour)
+        const double want = f.radius[i] * px_per_m * 1.5;
+        const int segments = want >= kMaxSegments ? kMaxSegments : want > 12.0 ? int(want) : 12;
         im.first.push_back(GLint(im.xy.size() / 2));
         const Vec2 p = f.pos[i];
         const double r = f.radius[i];

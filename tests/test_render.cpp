@@ -2,6 +2,7 @@
 // to rendering during the run; plots from a run's CSVs.
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <cstdlib>
 #include <cstring>
 #include <unistd.h>
@@ -149,6 +150,24 @@ TEST(Renderer, DiscOfRadiusRSpansTwoRPixels) {
         covered += (255.0 - p[2]) / (255.0 - 61.0);  // blue channel: 255 background, 61 disc (partial at edges)
     }
     EXPECT_NEAR(covered, 2 * 0.1 * 400, 1.0);  // 80 px within one pixel
+}
+
+// A disc of any radius, however absurd (a hand-edited snapshot, a frame built by a program),
+// is drawn without an int overflow in its segment count; the sane discs as before. (The
+// sanitizer pass checks float-to-int casts: the count was once int(radius * px) first.)
+TEST(Renderer, AbsurdRadiiAreDrawnWithoutOverflow) {
+    Frame f = known_scene();
+    f.pos.push_back(Vec2(0.2, 0.8));
+    f.radius.push_back(1e300);
+    f.pos.push_back(Vec2(0.8, 0.3));
+    f.radius.push_back(std::nan(""));
+    for (std::vector<double>* v : {&f.angle, &f.speed}) v->resize(f.pos.size(), 0.0);
+    f.layer.resize(f.pos.size(), 0);
+    f.grid.resize(f.pos.size(), 0);
+    Renderer r(unit_view(100));
+    const Image img = r.render(f);
+    EXPECT_EQ(img.width, 100);
+    EXPECT_EQ(img.height, 100);
 }
 
 TEST(Renderer, WorksWithoutADisplay) {
