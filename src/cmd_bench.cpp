@@ -23,6 +23,7 @@ namespace {
 struct BenchOptions {
     std::string workload = "db9k";
     long steps = 20000;
+    int copies = 1;  // columns side by side (build_db9k)
     std::string file;
     bool peer = false;
     int threads = 1;
@@ -47,12 +48,12 @@ struct TimedRun {
 };
 // DB-9k's world on `threads` threads with the options' kernels, ready to step
 std::unique_ptr<World> db9k_world(const std::vector<XyrDisc>& discs, const BenchOptions& o, int threads) {
-    WorldDef def = db9k_world_def();
+    WorldDef def = db9k_world_def(o.copies);
     def.threads = threads;
     def.simd = !o.scalar;
     def.avx512 = !o.no_avx512;
     auto world = std::make_unique<World>(def);
-    build_db9k(*world, discs);
+    build_db9k(*world, discs, o.copies);
     world->finalize();
     return world;
 }
@@ -104,7 +105,7 @@ Ceiling measure_ceiling(const std::vector<XyrDisc>& discs, const BenchOptions& o
 }
 
 void print_ceiling(const std::vector<XyrDisc>& discs, const BenchOptions& o, double rate_shared) {
-    const double n = double(discs.size()) * double(o.steps);
+    const double n = double(discs.size()) * double(o.copies) * double(o.steps);
     const Ceiling c = measure_ceiling(discs, o, o.threads);
     const double rate_alone = n / c.alone.seconds;
     std::printf("ceiling: one 1-thread run alone %.3e particle-steps/s (%.1f ns); %d side by side:", rate_alone,
@@ -290,7 +291,8 @@ int jitter(const BenchOptions& o) {
 
 int bench(const BenchOptions& o) {
     if (o.workload == "jitter") {
-        if (o.peer || o.targets || o.ceiling || o.rounds > 0 || o.steps_given || o.scalar || o.no_avx512 || !o.file.empty())
+        if (o.peer || o.targets || o.ceiling || o.rounds > 0 || o.steps_given || o.scalar || o.no_avx512 || !o.file.empty() ||
+            o.copies != 1)
             throw InputError("bench jitter: takes only --seconds and --threads (the cores to probe); the other options are "
                              "DB-9k's");
         return jitter(o);
@@ -301,6 +303,9 @@ int bench(const BenchOptions& o) {
     if (o.ceiling && o.threads < 2)
         throw InputError("bench --ceiling with --threads = " + std::to_string(o.threads) +
                          ": needs --threads 2 or more (it runs that many 1-thread copies side by side)");
+    if (o.copies != 1 && (o.peer || o.targets))
+        throw InputError("bench --copies = " + std::to_string(o.copies) + " with " + (o.peer ? "--peer" : "--targets") +
+                         ": the peer's script runs one column; compare with LAMMPS on --copies 1");
     if (o.rounds > 0 && !o.targets) throw InputError("bench --rounds: only with --targets (the rounds of the targets' figures)");
     if (o.targets && (o.threads_given || o.ceiling))
         throw InputError(std::string("bench --targets with ") + (o.ceiling ? "--ceiling" : "--threads") +
@@ -321,7 +326,8 @@ int bench(const BenchOptions& o) {
     progress.finish();
     const double rate = double(world.disc_count()) * double(o.steps) / secs;
     const auto& bs = world.broad_phase_stats();
-    std::printf("DB-9k: N=%zu steps=%ld dt=%g s threads=%d, %s pair kernel\n", world.disc_count(), o.steps, world.dt(),
+    std::printf("DB-9k%s: N=%zu steps=%ld dt=%g s threads=%d, %s pair kernel\n",
+                o.copies > 1 ? strf(" (%d columns side by side)", o.copies).c_str() : "", world.disc_count(), o.steps, world.dt(),
                 o.threads, world.avx512_kernel() ? "AVX-512" : world.simd_kernel() ? "AVX2" : "scalar");
     std::printf("  wall time %.3f s, %.3e particle-steps/s, %.1f ns per particle-step\n", secs, rate,
                 1e9 * secs / (double(world.disc_count()) * double(o.steps)));
@@ -372,6 +378,10 @@ Command add_bench_command(CLI::App& app) {
         ->capture_default_str();
     CLI::Option* steps = sub->add_option("--steps", opts->steps, "Number of time steps (20000: the quick figure; 100000: the reference)")
         ->capture_default_str();
+    sub->add_option("--copies", opts->copies,
+                    "Columns side by side, each 2 m further along x with its own left wall: the speed at a larger "
+                    "N (16 copies: 146,240 discs, the flume's mass at the real sand size)")
+        ->capture_default_str()->check(CLI::Range(1, 64));
     sub->add_option("--file", opts->file, "Initial state 'id x y r' (default: the repository's bench/db9k/db9k_initial.xyr)");
     CLI::Option* threads = sub->add_option("--threads", opts->threads, "Worker threads (the final state is the same bits for any count); jitter: the cores to probe (default: all)")
         ->capture_default_str()->check(CLI::Range(1, 64));

@@ -4,6 +4,7 @@
 #include <cstring>
 #include <fstream>
 #include <sstream>
+#include <string>
 
 #include "error.h"
 
@@ -34,7 +35,7 @@ std::vector<XyrDisc> read_xyr(const std::string& path) {
     return out;
 }
 
-WorldDef db9k_world_def() {
+WorldDef db9k_world_def(int copies) {
     WorldDef def;
     def.gravity = Vec2(0.0, -9.81);
     def.damping.beta_n = 0.5;
@@ -47,22 +48,23 @@ WorldDef db9k_world_def() {
     def.friction_rule_disc_wall = FrictionRule::Max;
     def.broadphase_margin = 0.0;
     def.domain_lo = Vec2(-0.1, -0.1);
-    def.domain_hi = Vec2(3.0, 2.0);
+    def.domain_hi = Vec2(3.0 + kCopySpacing * (copies - 1), 2.0);
     return def;
 }
 
-void build_db9k(World& world, const std::vector<XyrDisc>& discs) {
+void build_db9k(World& world, const std::vector<XyrDisc>& discs, int copies) {
     MaterialDef sand;
     sand.density = 2672.0;
     sand.kn = 2.0e8;
     sand.ks = 2.0e8;
     sand.friction = 0.2773;
     const int m = world.add_material(sand);
-    for (const XyrDisc& d : discs) world.add_disc({Vec2(d.x, d.y), d.r, Vec2::Zero(), 0.0, 0.0, m});
+    for (int k = 0; k < copies; ++k)
+        for (const XyrDisc& d : discs) world.add_disc({Vec2(d.x + kCopySpacing * k, d.y), d.r, Vec2::Zero(), 0.0, 0.0, m});
     WallDef floor;
     floor.name = "floor";
     floor.p0 = Vec2(0.0, 0.0);
-    floor.p1 = Vec2(1.5, 0.0);
+    floor.p1 = Vec2(1.5 + kCopySpacing * (copies - 1), 0.0);
     floor.segment_solid = SegmentSolid::Right;  // free side up
     floor.kn = floor.ks = 2.0e8;
     floor.friction = 0.3979;
@@ -72,6 +74,13 @@ void build_db9k(World& world, const std::vector<XyrDisc>& discs) {
     left.p1 = Vec2(0.0, 0.0);  // walking down, the free side (+x) is on the left
     world.add_wall(floor);
     world.add_wall(left);
+    for (int k = 1; k < copies; ++k) {
+        WallDef next = left;
+        next.name = "left" + std::to_string(k);
+        next.p0.x() += kCopySpacing * k;
+        next.p1.x() += kCopySpacing * k;
+        world.add_wall(next);
+    }
 }
 
 uint64_t state_hash(const World& world) {

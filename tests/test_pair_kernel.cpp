@@ -501,6 +501,38 @@ TEST(Bench, CeilingRunsCopiesSideBySideAndNeedsTwoThreads) {
     EXPECT_EQ(demlab_exit_code("bench db9k --ceiling --steps 200"), 2);
 }
 
+// bench db9k --copies: the columns stand side by side, each with its own left wall, and do not
+// reach one another (every candidate pair stays within one copy, whose discs are numbered
+// together); the command prints the larger N, and LAMMPS' script runs only one column.
+TEST(Bench, CopiesStandSideBySideWithoutTouching) {
+    auto discs = read_xyr(default_db9k_path());
+    discs.resize(1500);  // the column's lowest rows
+    const size_t n = discs.size();
+    WorldDef def = db9k_world_def(3);
+    def.threads = 2;
+    World w(def);
+    build_db9k(w, discs, 3);
+    w.finalize();
+    w.run(400);
+    ASSERT_EQ(w.disc_count(), 3 * n);
+    EXPECT_EQ(w.wall_count(), 4u);  // one floor, three left walls
+    EXPECT_GT(w.disc_contacts().size(), 0u);
+    for (const DiscContact& c : w.disc_contacts()) ASSERT_EQ(size_t(c.i) / n, size_t(c.j) / n) << c.i << " " << c.j;
+    for (size_t i = 0; i < w.disc_count(); ++i) {
+        const double x0 = kCopySpacing * double(i / n);  // the copy's left wall
+        EXPECT_GT(w.positions()[i].x(), x0);
+        EXPECT_LT(w.positions()[i].x(), x0 + 0.5 * kCopySpacing);
+    }
+    const std::string out = demlab_output("bench db9k --copies 2 --steps 20");
+    EXPECT_NE(line_with(out, "(2 columns side by side): N=18280 "), "") << out;
+    // input errors (2) before any run; a count out of 1..64 is a usage error (1)
+    for (const char* args : {"bench db9k --copies 2 --peer --steps 10", "bench db9k --copies 2 --targets --steps 10",
+                             "bench jitter --copies 2 --seconds 0.05"})
+        EXPECT_EQ(demlab_exit_code(args), 2) << args;
+    for (const char* args : {"bench db9k --copies 0 --steps 10", "bench db9k --copies 65 --steps 10"})
+        EXPECT_EQ(demlab_exit_code(args), 1) << args;
+}
+
 // The figures in one invocation: rounds of 1 thread, 2 threads and the ceiling, a
 // table with medians and ranges, and the targets; every run ends in the same state.
 TEST(Bench, TargetsRunRoundsAndPrintTheTable) {
