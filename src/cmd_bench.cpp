@@ -24,6 +24,7 @@ struct BenchOptions {
     std::string workload = "db9k";
     long steps = 20000;
     int copies = 1;  // columns side by side (build_db9k)
+    std::string prefetch = "auto";  // WorldDef::prefetch: auto, on, off
     std::string file;
     bool peer = false;
     int threads = 1;
@@ -52,6 +53,7 @@ std::unique_ptr<World> db9k_world(const std::vector<XyrDisc>& discs, const Bench
     def.threads = threads;
     def.simd = !o.scalar;
     def.avx512 = !o.no_avx512;
+    def.prefetch = o.prefetch == "on" ? Prefetch::On : o.prefetch == "off" ? Prefetch::Off : Prefetch::Auto;
     auto world = std::make_unique<World>(def);
     build_db9k(*world, discs, o.copies);
     world->finalize();
@@ -292,7 +294,7 @@ int jitter(const BenchOptions& o) {
 int bench(const BenchOptions& o) {
     if (o.workload == "jitter") {
         if (o.peer || o.targets || o.ceiling || o.rounds > 0 || o.steps_given || o.scalar || o.no_avx512 || !o.file.empty() ||
-            o.copies != 1)
+            o.copies != 1 || o.prefetch != "auto")
             throw InputError("bench jitter: takes only --seconds and --threads (the cores to probe); the other options are "
                              "DB-9k's");
         return jitter(o);
@@ -336,6 +338,9 @@ int bench(const BenchOptions& o) {
                 world.broad_phase_margin(), bs.updates, world.list_update_seconds(),
                 100.0 * world.list_update_seconds() / secs, bs.disc_reinserts, bs.queries, bs.tree_walks,
                 world.touching_disc_pairs(), world.touching_wall_pairs());
+    std::printf("  software prefetch: %s (the step streams %.1f MB; auto: on above %.1f MB, half the last-level cache)\n",
+                world.prefetching() ? "on" : "off", double(world.step_bytes()) / (1 << 20),
+                double(prefetch_threshold_bytes()) / (1 << 20));
     std::printf("  force pass: %d disc range(s), %zu of %zu candidate pairs cross ranges; %.1f %% of the candidates "
                 "skipped as clear\n",
                 world.force_pass_ranges(), world.cross_contacts(), world.disc_contacts().size(),
@@ -382,6 +387,10 @@ Command add_bench_command(CLI::App& app) {
                     "Columns side by side, each 2 m further along x with its own left wall: the speed at a larger "
                     "N (16 copies: 146,240 discs, the flume's mass at the real sand size)")
         ->capture_default_str()->check(CLI::Range(1, 64));
+    sub->add_option("--prefetch", opts->prefetch,
+                    "Software prefetch in the force pass: auto (on when the step streams more than half the last-level "
+                    "cache), on, off (the same bits; for comparison)")
+        ->capture_default_str()->check(CLI::IsMember({"auto", "on", "off"}));
     sub->add_option("--file", opts->file, "Initial state 'id x y r' (default: the repository's bench/db9k/db9k_initial.xyr)");
     CLI::Option* threads = sub->add_option("--threads", opts->threads, "Worker threads (the final state is the same bits for any count); jitter: the cores to probe (default: all)")
         ->capture_default_str()->check(CLI::Range(1, 64));

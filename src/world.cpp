@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <sstream>
+#include <fstream>
 #include <thread>
 
 #include "error.h"
@@ -541,6 +542,68 @@ static std::string where_disc(long step, double t, int i, const Vec2& p) {
 // 2 % of the pairs cross, and the threads share no cache lines but those few slots; the
 // earlier design (every pair to a slot, then a per-disc gather) moved 64 bytes per pair
 // between the cores and gained 1.1-1.4x on 2 threads (docs/performance.md).
+// Software prefetch in the force pass (WorldDef::prefetch). Once the step's arrays outgrow
+// the last-level cache, every step brings them from memory, and the hardware prefetchers did
+// not keep up with the pass' 20-odd streams: DB-9k's columns side by side (`bench db9k
+// --copies`) took 27 ns per particle-step on 1 thread for 9,140 discs and 56-60 ns for
+// 146,240 (perf: the pass stalled on its first load of each batch's contact records), with
+// this machine's memory 150-165 ns away (a dependent-load chain over 64 MB). The pass now asks
+// for the lines it will need kPrefetchContacts contacts and kPrefetchDiscs discs ahead (every
+// disc a pair or the integration reads lies at or after the batch's first disc i, and its
+// partners j within a few hundred places in space order), into L2 (the T1 hint): 41-44 ns
+// for 146,240 discs, 20-23 ns on 2 threads (27-32 before). Into L1 (T0) it bought nothing:
+// the core's few L1 miss buffers filled and the prefetches stalled the loop. With the arrays
+// in the cache it costs 0-2 ns per particle-step, so Auto turns it on once the step streams
+// more than half the last-level cache (prefetch_threshold_bytes): here (32 MB) 36,560 discs
+// (11 MB) ran 0-8 % slower with it, 54,840 (17 MB) about as fast, 73,120 (22 MB) 8-33 %
+// faster. No prefetch changes a result.
+constexpr size_t kPrefetchContacts = 256, kPrefetchDiscs = 256;
+
+// Half of CPU 0's largest cache as Linux lists it (/sys/devices/system/cpu/cpu0/cache), or
+// 16 MB when it lists none. (glibc's sysconf(_SC_LEVEL3_CACHE_SIZE) said 320 MB on this
+// virtual machine, whose L3 is 32 MB.)
+size_t prefetch_threshold_bytes() {
+    static const size_t bytes = [] {
+        size_t largest = 0;
+        for (int index = 0; index < 8; ++index) {
+            std::ifstream in("/sys/devices/system/cpu/cpu0/cache/index" + std::to_string(index) + "/size");
+            size_t size = 0;
+            std::string unit;
+            if (!(in >> size)) continue;
+            in >> unit;  // "32768K"
+            if (unit == "K") size <<= 10;
+            else if (unit == "M") size <<= 20;
+            largest = std::max(largest, size);
+        }
+        return largest > 0 ? largest / 2 : size_t(16) << 20;
+    }();
+    return bytes;
+}
+
+// The bytes a step streams: per disc its state, constants, load record and fat box; per
+// disc-disc candidate its record and clearance.
+size_t World::step_bytes() const {
+    constexpr size_t kPerDisc = 2 * sizeof(Vec2) + 8 * sizeof(double) + sizeof(int32_t) + sizeof(DiscLoad) + 2 * sizeof(Vec2);
+    return pos_.size() * kPerDisc + dd_.size() * (sizeof(DiscContact) + sizeof(float));
+}
+
+bool World::prefetching() const {
+    switch (def_.prefetch) {
+        case Prefetch::On: return true;
+        case Prefetch::Off: return false;
+        case Prefetch::Auto: break;
+    }
+    return step_bytes() > prefetch_threshold_bytes();
+}
+
+// Asks for the cache lines of [from, to) into L2 (locality 2: T1), for reading or writing.
+template <bool kWrite>
+static inline void prefetch_lines(const void* from, const void* to) {
+    const uintptr_t end = reinterpret_cast<uintptr_t>(to);
+    for (uintptr_t a = reinterpret_cast<uintptr_t>(from) & ~uintptr_t(63); a < end; a += 64)
+        __builtin_prefetch(reinterpret_cast<const void*>(a), kWrite ? 1 : 0, 2);
+}
+
 void World::compute_forces(bool then_integrate) {
     const size_t nw = walls_.size();
     const DashpotMode mode = def_.damping.dp_mode;
@@ -567,6 +630,7 @@ void World::compute_forces(bool then_integrate) {
     };
 
     const IntegrateConsts ic = then_integrate ? integrate_prepare() : IntegrateConsts{};
+    const bool prefetch = prefetching();
 
     // The cross contacts (split_force_pass) are computed into their slots by the range that
     // owns their second disc, first thing, and it then raises its flag for this pass. The
@@ -716,6 +780,36 @@ void World::compute_forces(bool then_integrate) {
         PairSkip skip_base{nullptr, approach_lo, approach_hi};
         range_clock_[size_t(t)].touching_dd = 0;
         size_t k = contact_split_[size_t(t)], kw = wall_split_[size_t(t)], b0 = d0;
+        // software prefetch (kPrefetchContacts): the contacts and discs asked for so far
+        const size_t contact_end = contact_split_[size_t(t) + 1], disc_end = disc_split_[size_t(t) + 1];
+        size_t asked_k = k, asked_d = d0;
+        auto prefetch_ahead = [&](size_t at) {
+            const size_t k_to = std::min(contact_end, at + kPrefetchContacts);
+            if (k_to > asked_k) {
+                prefetch_lines<true>(dd_.data() + asked_k, dd_.data() + k_to);
+                prefetch_lines<true>(clearance + asked_k, clearance + k_to);
+                asked_k = k_to;
+            }
+            const size_t d_to = std::min(disc_end, size_t(dd_[at].i) + kPrefetchDiscs);
+            if (d_to > asked_d) {
+                const size_t a = asked_d;
+                prefetch_lines<true>(pos_.data() + a, pos_.data() + d_to);
+                prefetch_lines<true>(vel_.data() + a, vel_.data() + d_to);
+                prefetch_lines<true>(omega_.data() + a, omega_.data() + d_to);
+                prefetch_lines<true>(angle_.data() + a, angle_.data() + d_to);
+                prefetch_lines<true>(load + a, load + d_to);
+                prefetch_lines<false>(radius_.data() + a, radius_.data() + d_to);
+                prefetch_lines<false>(mass_.data() + a, mass_.data() + d_to);
+                prefetch_lines<false>(inv_mass_.data() + a, inv_mass_.data() + d_to);
+                prefetch_lines<false>(inertia_.data() + a, inertia_.data() + d_to);
+                prefetch_lines<false>(inv_inertia_.data() + a, inv_inertia_.data() + d_to);
+                prefetch_lines<false>(rr_factor_.data() + a, rr_factor_.data() + d_to);
+                prefetch_lines<false>(material_.data() + a, material_.data() + d_to);
+                prefetch_lines<false>(broad_.fat_lo_data() + a, broad_.fat_lo_data() + d_to);
+                prefetch_lines<false>(broad_.fat_hi_data() + a, broad_.fat_hi_data() + d_to);
+                asked_d = d_to;
+            }
+        };
         // Block by block (FuseBlock): the pairs whose first disc is in the block, then the
         // block's wall contacts; then the block's sums are complete (a disc's pairs with
         // earlier discs came in earlier blocks, its cross terms first) and no later pair reads
@@ -744,6 +838,7 @@ void World::compute_forces(bool then_integrate) {
                     // up to a batch of pairs before the next cross contact, four at a time, then
                     // added in list order (what the scalar kernel below does pair by pair)
                     const size_t n = std::min({fb.contact_end, next_k, k + PairBatch::kSize}) - k;
+                    if (prefetch) prefetch_ahead(k);
                     skip_base.clearance = clearance + k;
                     const size_t done = avx512_ ? disc_pairs_avx512(discs, pp, &c, n, *batch, &skip_base)
                                                 : disc_pairs_avx2(discs, pp, &c, n, *batch, &skip_base);

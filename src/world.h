@@ -38,6 +38,12 @@ struct TimeStepDef {
     bool damping_correction = true;        // shrink the rotational bound for the shear dashpot (timestep.h)
 };
 
+// Software prefetch in the force pass: Auto turns it on when the step's arrays outgrow the
+// cache (World::prefetching), On and Off force it (benchmarks, tests).
+enum class Prefetch { Auto, Off, On };
+// the bytes a step must stream (World::step_bytes) above which Auto prefetches
+size_t prefetch_threshold_bytes();
+
 struct WorldDef {
     Vec2 gravity{0.0, -9.81};              // m/s2
     DampingDef damping;
@@ -58,6 +64,8 @@ struct WorldDef {
     bool avx512 = true;                    // with simd: its law 8 pairs and its integration 8 discs at a time
                                            // when the CPU has AVX-512 (pair_kernel_avx512.cpp,
                                            // integrate_avx512.cpp); the same bits again
+    Prefetch prefetch = Prefetch::Auto;    // the force pass asks for its arrays' lines ahead of use
+                                           // (world.cpp, kPrefetchContacts); never changes a result
 };
 
 void validate(const WorldDef& d, const std::string& where);
@@ -157,6 +165,9 @@ public:
     int force_pass_ranges() const { return force_ranges_; }
     bool simd_kernel() const { return avx2_; }  // the AVX2 kernels are in use (pair forces, integration)
     bool avx512_kernel() const { return avx512_; }  // and the pair law and integration run eight at a time (AVX-512)
+    // whether the force pass prefetches (WorldDef::prefetch), and the bytes its step streams through
+    bool prefetching() const;
+    size_t step_bytes() const;
     size_t cross_contacts() const { return cross_.size(); }
     // disc-disc candidates the AVX2 pass skipped by the clearance test (PairSkip), summed over
     // the steps, and the approach bound now, m

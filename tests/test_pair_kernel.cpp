@@ -533,6 +533,34 @@ TEST(Bench, CopiesStandSideBySideWithoutTouching) {
         EXPECT_EQ(demlab_exit_code(args), 1) << args;
 }
 
+// Software prefetch (WorldDef::prefetch) asks for cache lines and nothing else: on, off and
+// auto end in the same bits, on 1 and 2 threads; auto stays off while the step's arrays fit in
+// half the last-level cache, and the bench says which it used.
+TEST(Prefetch, OnAndOffGiveTheSameBits) {
+    auto discs = read_xyr(default_db9k_path());
+    discs.resize(3000);
+    uint64_t first = 0;
+    for (Prefetch mode : {Prefetch::Off, Prefetch::On, Prefetch::Auto})
+        for (int threads : {1, 2}) {
+            WorldDef def = db9k_world_def(2);
+            def.threads = threads;
+            def.prefetch = mode;
+            World w(def);
+            build_db9k(w, discs, 2);
+            w.finalize();
+            w.run(300);
+            EXPECT_EQ(w.prefetching(), mode == Prefetch::On);  // 6,000 discs: well inside the cache
+            EXPECT_LT(w.step_bytes(), prefetch_threshold_bytes());
+            EXPECT_GT(w.step_bytes(), 6000u * 100u);
+            const uint64_t h = state_hash(w);
+            if (first == 0) first = h;
+            EXPECT_EQ(h, first) << int(mode) << " " << threads;
+        }
+    EXPECT_NE(line_with(demlab_output("bench db9k --steps 20 --prefetch on"), "software prefetch: on"), "");
+    EXPECT_NE(line_with(demlab_output("bench db9k --steps 20"), "software prefetch: off"), "");
+    EXPECT_EQ(demlab_exit_code("bench db9k --steps 20 --prefetch sometimes"), 1);
+}
+
 // The figures in one invocation: rounds of 1 thread, 2 threads and the ceiling, a
 // table with medians and ranges, and the targets; every run ends in the same state.
 TEST(Bench, TargetsRunRoundsAndPrintTheTable) {
