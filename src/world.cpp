@@ -3,8 +3,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <sstream>
 #include <fstream>
+#include <sstream>
 #include <thread>
 
 #include "error.h"
@@ -531,31 +531,20 @@ static std::string where_disc(long step, double t, int i, const Vec2& p) {
     return s.str();
 }
 
-// The force pass. Every disc sums its terms from zero in contact-list order: its disc-disc
-// contacts (sorted by (i, j)), then its wall contacts. Each thread owns a range of discs and
-// the contacts whose first disc lies in it (split_force_pass), so it adds most pairs straight
-// into both discs' sums. A cross contact (j in a later range) is computed before the ranges
-// start, into a slot: the range owning j adds it first, which is its place in j's order
-// (every cross contact of j has i in an earlier range, so it precedes j's own contacts in
-// the list); the range owning i adds it when its loop reaches it. So the bits are the same
-// for any number of threads. With the discs numbered in space order (order_in_space), under
-// 2 % of the pairs cross, and the threads share no cache lines but those few slots; the
-// earlier design (every pair to a slot, then a per-disc gather) moved 64 bytes per pair
-// between the cores and gained 1.1-1.4x on 2 threads (docs/performance.md).
 // Software prefetch in the force pass (WorldDef::prefetch). Once the step's arrays outgrow
 // the last-level cache, every step brings them from memory, and the hardware prefetchers did
 // not keep up with the pass' 20-odd streams: DB-9k's columns side by side (`bench db9k
-// --copies`) took 27 ns per particle-step on 1 thread for 9,140 discs and 56-60 ns for
+// --copies`) took 27 ns per particle-step on 1 thread for 9,140 discs and 52-61 ns for
 // 146,240 (perf: the pass stalled on its first load of each batch's contact records), with
 // this machine's memory 150-165 ns away (a dependent-load chain over 64 MB). The pass now asks
 // for the lines it will need kPrefetchContacts contacts and kPrefetchDiscs discs ahead (every
 // disc a pair or the integration reads lies at or after the batch's first disc i, and its
-// partners j within a few hundred places in space order), into L2 (the T1 hint): 41-44 ns
-// for 146,240 discs, 20-23 ns on 2 threads (27-32 before). Into L1 (T0) it bought nothing:
+// partners j within a few hundred places in space order), into L2 (the T1 hint): 37-44 ns
+// for 146,240 discs, 20-24 ns on 2 threads (26-36 before; docs/performance.md, session 17). Into L1 (T0) it bought nothing:
 // the core's few L1 miss buffers filled and the prefetches stalled the loop. With the arrays
-// in the cache it costs 0-2 ns per particle-step, so Auto turns it on once the step streams
+// in the cache it costs 1-2 ns per particle-step, so Auto turns it on once the step streams
 // more than half the last-level cache (prefetch_threshold_bytes): here (32 MB) 36,560 discs
-// (11 MB) ran 0-8 % slower with it, 54,840 (17 MB) about as fast, 73,120 (22 MB) 8-33 %
+// (11 MB) ran 3-8 % slower with it, 54,840 (17 MB) about as fast, 73,120 (22 MB) 8-33 %
 // faster. No prefetch changes a result.
 constexpr size_t kPrefetchContacts = 256, kPrefetchDiscs = 256;
 
@@ -604,6 +593,17 @@ static inline void prefetch_lines(const void* from, const void* to) {
         __builtin_prefetch(reinterpret_cast<const void*>(a), kWrite ? 1 : 0, 2);
 }
 
+// The force pass. Every disc sums its terms from zero in contact-list order: its disc-disc
+// contacts (sorted by (i, j)), then its wall contacts. Each thread owns a range of discs and
+// the contacts whose first disc lies in it (split_force_pass), so it adds most pairs straight
+// into both discs' sums. A cross contact (j in a later range) is computed before the ranges
+// start, into a slot: the range owning j adds it first, which is its place in j's order
+// (every cross contact of j has i in an earlier range, so it precedes j's own contacts in
+// the list); the range owning i adds it when its loop reaches it. So the bits are the same
+// for any number of threads. With the discs numbered in space order (order_in_space), under
+// 2 % of the pairs cross, and the threads share no cache lines but those few slots; the
+// earlier design (every pair to a slot, then a per-disc gather) moved 64 bytes per pair
+// between the cores and gained 1.1-1.4x on 2 threads (docs/performance.md).
 void World::compute_forces(bool then_integrate) {
     const size_t nw = walls_.size();
     const DashpotMode mode = def_.damping.dp_mode;
