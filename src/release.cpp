@@ -129,10 +129,24 @@ ReleaseMass generate_release(const Scenario& s) {
     for (double r : radius) solid += kPi * r * r;
     // place at an area fraction of 0.35, where random addition is quick, then expand
     const double s0 = std::min(1.0, std::sqrt(0.35 * m.box_area / solid));
-    const std::vector<Vec2> start = place_without_overlap(tri, radius, s0, rng);
+    std::vector<Vec2> start = place_without_overlap(tri, radius, s0, rng);
+    // Space order before settling (release.space_order). Discs placed at random get numbers
+    // at random, and the force pass then runs as one range: one thread, and at large N a
+    // pair's two discs far apart in memory. The numbering decides the order in which each
+    // disc sums its terms, so it changes the settled mass' bits: auto leaves the masses of
+    // up to kSpaceOrderDiscs discs (scales 4 and 20, the references) as they were.
+    if (rd.space_order == "on" || (rd.space_order == "auto" && n > kSpaceOrderDiscs)) {
+        ReleaseMass placed;
+        placed.pos = std::move(start);
+        placed.radius = std::move(radius);
+        order_in_space(placed, 4.0 * rd.r_max);
+        start = std::move(placed.pos);
+        radius = std::move(placed.radius);
+    }
 
     // --- radius expansion: frictionless, no gravity, heavily damped, rotation locked
     WorldDef gen;
+    gen.threads = s.world.threads;  // the same bits for any count
     gen.gravity = Vec2::Zero();
     gen.rotation.model = 1;
     gen.damping.beta_n = 0.5;

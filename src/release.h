@@ -35,6 +35,10 @@ long release_count(double area, double porosity, double r_min, double r_max);
 // Generates and settles the mass (deterministic for a seed). Progress on a terminal.
 ReleaseMass generate_release(const Scenario& s);
 
+// release.space_order = auto numbers the discs in space order before they settle above this
+// many discs (generate_release).
+constexpr long kSpaceOrderDiscs = 20000;
+
 // Renumbers the discs in space order: strips across x, `strip` metres wide, from left to
 // right, and up each strip. The engine gives each thread a range of disc numbers and works
 // through its contacts in number order, so numbers that follow space keep a thread's discs

@@ -46,6 +46,8 @@ struct ReleaseDef {
     double layer_height = 0.03;            // m, height of the colour bands (layers)
     double grid_cell = 0.05;               // m, size of the colour grid cells
     std::string from_file;                 // a settled mass saved by an earlier run (release.csv)
+    std::string space_order = "auto";      // number the discs in space order before settling: on, off,
+                                           // auto (on above kSpaceOrderDiscs discs; release.cpp)
 };
 
 struct StopDef {

@@ -51,6 +51,45 @@ FlumeRun run_geometry_a(const std::string& tag) {
 }
 }  // namespace
 
+// release.space_order: "on" numbers the placed discs in space order before they settle (so
+// that large masses settle on all threads); the mass is the same bits on 1 and 2 threads
+// either way. "off" and "on" settle the same discs into different masses, both settled and of
+// the same porosity; "auto" is "off" at this size (364 discs), as at scale 4.
+TEST(ReleaseMass, SpaceOrderSettlesTheSameBitsOnAnyThreadCount) {
+    auto generate = [](const std::string& order, int threads) {
+        Scenario s = load_scenario(std::string(DEMLAB_SOURCE_DIR) + "/scenarios/geometry-A.toml");
+        apply_override(s, "release.scale=20");
+        apply_override(s, "release.space_order=\"" + order + "\"");
+        s.world.threads = threads;
+        finish_scenario(s);
+        return generate_release(s);
+    };
+    const ReleaseMass off1 = generate("off", 1), off2 = generate("off", 2), on1 = generate("on", 1), on2 = generate("on", 2);
+    const ReleaseMass auto2 = generate("auto", 2);
+    EXPECT_EQ(off1.pos, off2.pos);
+    EXPECT_EQ(on1.pos, on2.pos);
+    EXPECT_EQ(auto2.pos, off1.pos);
+    EXPECT_EQ(on1.radius.size(), off1.radius.size());
+    EXPECT_NE(on1.pos, off1.pos);
+    std::vector<double> r_on = on1.radius, r_off = off1.radius;
+    std::sort(r_on.begin(), r_on.end());
+    std::sort(r_off.begin(), r_off.end());
+    EXPECT_EQ(r_on, r_off);  // the same discs, numbered otherwise
+    EXPECT_NE(on1.radius, off1.radius);
+    EXPECT_TRUE(on1.settled);
+    EXPECT_TRUE(off1.settled);
+    EXPECT_NEAR(on1.porosity_settled, off1.porosity_settled, 0.01);
+    // "on" numbered them up strips of 4 r_max (40 mm) across x before they settled: most
+    // consecutive discs are still near each other in x; numbered as placed, few are
+    auto near_share = [](const ReleaseMass& m) {
+        long near = 0;
+        for (size_t i = 1; i < m.pos.size(); ++i) near += std::abs(m.pos[i].x() - m.pos[i - 1].x()) < 0.05;
+        return double(near) / double(m.pos.size() - 1);
+    };
+    EXPECT_GT(near_share(on1), 0.8);
+    EXPECT_LT(near_share(off1), 0.5);
+}
+
 TEST(ReleaseMass, OrderInSpaceMovesEachDiscWithItsData) {
     // discs on a jittered 10 x 10 grid in a scrambled order; every field encodes the disc
     ReleaseMass m;
