@@ -36,6 +36,12 @@ struct CheckpointInfo {
 };
 CheckpointInfo read_checkpoint_info(const std::string& run_dir);
 
+// Whether a checkpoint's scenario (resolved by the build that wrote it) is the run's: the
+// same text, or the same once this build resolves it too, so that a key added since (with
+// its default) does not strand a checkpoint written before it. A key this build does not
+// read is a different scenario.
+bool same_scenario(const std::string& stored, const std::string& resolved_now);
+
 struct RunSummary {
     long n_discs = 0;
     double total_mass = 0;              // kg per metre of thickness

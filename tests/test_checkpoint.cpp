@@ -192,6 +192,33 @@ TEST(Checkpoint, EditedScenarioAndTruncatedCheckpointAreRefused) {
 // The executable, killed with SIGKILL (no chance to clean up) and stopped with SIGTERM:
 // only complete files under final names, exit code 4 for the signal, and `demlab resume`
 // finishes both to the bytes of an uninterrupted run.
+// A checkpoint written by an earlier build holds its resolved scenario without the keys
+// added since. Resolved again by this build (with their defaults) it is the same scenario and
+// resumes; an edited value, or a key this build does not read, is not.
+TEST(Checkpoint, ScenarioFromAnEarlierBuildIsTheSameScenario) {
+    const Scenario s = scenario();
+    const std::string now = resolved_toml(s);
+    EXPECT_TRUE(same_scenario(now, now));
+    // an earlier build's text: without release.space_order (added in session 17)
+    const std::string key = "space_order = \"auto\"\n";
+    const size_t at = now.find(key);
+    ASSERT_NE(at, std::string::npos) << now;
+    std::string earlier = now;
+    earlier.erase(at, key.size());
+    EXPECT_TRUE(same_scenario(earlier, now));
+    // the same key with another value, another friction, or an unknown key: not the same
+    std::string other = now;
+    other.replace(at, key.size(), "space_order = \"on\"\n");
+    EXPECT_FALSE(same_scenario(other, now));
+    Scenario edited = s;
+    apply_override(edited, "material.friction_disc_deg=20");
+    finish_scenario(edited);
+    EXPECT_FALSE(same_scenario(resolved_toml(edited), now));
+    std::string unknown = now;
+    unknown.insert(at, "no_such_key = 1\n");
+    EXPECT_FALSE(same_scenario(unknown, now));
+}
+
 TEST(Checkpoint, KilledAndSignalledProcessesResumeToTheSameBytes) {
     const fs::path ref = temp_dir("cli-ref"), killed = temp_dir("cli-killed"), stopped = temp_dir("cli-stopped");
     ASSERT_EQ(wait_for(spawn(run_args(ref))), 0);
