@@ -540,12 +540,12 @@ static std::string where_disc(long step, double t, int i, const Vec2& p) {
 // for the lines it will need kPrefetchContacts contacts and kPrefetchDiscs discs ahead (every
 // disc a pair or the integration reads lies at or after the batch's first disc i, and its
 // partners j within a few hundred places in space order), into L2 (the T1 hint): 37-44 ns
-// for 146,240 discs, 20-24 ns on 2 threads (26-36 before; docs/performance.md, session 17). Into L1 (T0) it bought nothing:
-// the core's few L1 miss buffers filled and the prefetches stalled the loop. With the arrays
-// in the cache it costs 1-2 ns per particle-step, so Auto turns it on once the step streams
-// more than half the last-level cache (prefetch_threshold_bytes): here (32 MB) 36,560 discs
-// (11 MB) ran 3-8 % slower with it, 54,840 (17 MB) about as fast, 73,120 (22 MB) 8-33 %
-// faster. No prefetch changes a result.
+// for 146,240 discs, 20-24 ns on 2 threads (26-36 before; docs/performance.md, session 17).
+// Into L1 (T0) it bought nothing: the core's few L1 miss buffers filled and the prefetches
+// stalled the loop. With the arrays in the cache it costs 1-2 ns per particle-step, so Auto
+// turns it on once the step streams more than half the last-level cache
+// (prefetch_threshold_bytes): here (32 MB) 36,560 discs (11 MB) ran 3-8 % slower with it,
+// 54,840 (17 MB) about as fast, 73,120 (22 MB) 8-33 % faster. No prefetch changes a result.
 constexpr size_t kPrefetchContacts = 256, kPrefetchDiscs = 256;
 
 // Half of CPU 0's largest cache as Linux lists it (/sys/devices/system/cpu/cpu0/cache), or
@@ -569,8 +569,10 @@ size_t prefetch_threshold_bytes() {
     return bytes;
 }
 
-// The bytes a step streams: per disc its state, constants, load record and fat box; per
-// disc-disc candidate its record and clearance.
+// The bytes a step streams, the arrays prefetch_ahead asks for: per disc its position and
+// velocity, eight doubles (radius, mass, inverse mass, inertia, inverse inertia, angle, spin,
+// rolling factor), material, load record and fat box; per disc-disc candidate its record and
+// clearance.
 size_t World::step_bytes() const {
     constexpr size_t kPerDisc = 2 * sizeof(Vec2) + 8 * sizeof(double) + sizeof(int32_t) + sizeof(DiscLoad) + 2 * sizeof(Vec2);
     return pos_.size() * kPerDisc + dd_.size() * (sizeof(DiscContact) + sizeof(float));
