@@ -189,9 +189,6 @@ TEST(Checkpoint, EditedScenarioAndTruncatedCheckpointAreRefused) {
     fs::remove_all(dir);
 }
 
-// The executable, killed with SIGKILL (no chance to clean up) and stopped with SIGTERM:
-// only complete files under final names, exit code 4 for the signal, and `demlab resume`
-// finishes both to the bytes of an uninterrupted run.
 // A checkpoint written by an earlier build holds its resolved scenario without the keys
 // added since. Resolved again by this build (with their defaults) it is the same scenario and
 // resumes; an edited value, or a key this build does not read, is not.
@@ -219,6 +216,9 @@ TEST(Checkpoint, ScenarioFromAnEarlierBuildIsTheSameScenario) {
     EXPECT_FALSE(same_scenario(unknown, now));
 }
 
+// The executable, killed with SIGKILL (no chance to clean up) and stopped with SIGTERM:
+// only complete files under final names, exit code 4 for the signal, and `demlab resume`
+// finishes both to the bytes of an uninterrupted run.
 TEST(Checkpoint, KilledAndSignalledProcessesResumeToTheSameBytes) {
     const fs::path ref = temp_dir("cli-ref"), killed = temp_dir("cli-killed"), stopped = temp_dir("cli-stopped");
     ASSERT_EQ(wait_for(spawn(run_args(ref))), 0);
