@@ -614,7 +614,8 @@ void World::compute_forces(bool then_integrate) {
     const double max_ratio = def_.max_overlap_ratio;
     const DiscArrays discs{pos_.data(), vel_.data(), radius_.data(), omega_.data(), material_.data()};
     const PairPassParams pp{mat_dd_.data(), materials_.size(), mode, dt, last_dt, max_ratio};
-    dw_out_.resize(dw_.size());
+    wall_sums_.resize(size_t(force_ranges_));
+    for (size_t t = 0; t < wall_sums_.size(); ++t) wall_sums_[t].resize(wall_split_[t + 1] - wall_split_[t]);
     // one fault record per chunk, kept between steps (no allocation in the step)
     dd_fault_.resize(size_t(pool_->size()));
     dw_fault_.resize(size_t(pool_->size()));
@@ -781,6 +782,8 @@ void World::compute_forces(bool then_integrate) {
         PairBatch* const batch = avx2_ ? &pair_batch_[size_t(t)] : nullptr;
         PairSkip skip_base{nullptr, approach_lo, approach_hi};
         range_clock_[size_t(t)].touching_dd = 0;
+        WallSum* const wall_sums = wall_sums_[size_t(t)].data();
+        size_t n_wall_sums = 0;
         size_t k = contact_split_[size_t(t)], kw = wall_split_[size_t(t)], b0 = d0;
         // software prefetch (kPrefetchContacts): the contacts and discs asked for so far
         const size_t contact_end = contact_split_[size_t(t) + 1], disc_end = disc_split_[size_t(t) + 1];
@@ -863,10 +866,7 @@ void World::compute_forces(bool then_integrate) {
             // disc-wall: n from the wall (A) to the disc (B)
             for (; kw < fb.wall_end; ++kw) {
                 WallContact& c = dw_[kw];
-                WallOut& out = dw_out_[kw];
                 const size_t i = size_t(c.disc), w = size_t(c.wall);
-                out.touching = false;
-                out.dissipated = 0.0;
                 WallHit hit;
                 if (!wall_active_[w] || !disc_wall_contact(geom_[w], pos_[i], radius_[i], hit)) {
                     if (c.damp_n != 0.0f || c.damp_s != 0.0f) {
@@ -875,7 +875,8 @@ void World::compute_forces(bool then_integrate) {
                         const Vec2 q = closest_point(geom_[w], pos_[i]);
                         const Vec2 nrm = (pos_[i] - q).normalized();
                         const double vs = vrel.dot(perp(nrm)) - omega_[i] * radius_[i];
-                        out.dissipated = -0.5 * last_dt * (c.damp_n * vrel.dot(nrm) + c.damp_s * vs);
+                        const double dissipated = -0.5 * last_dt * (c.damp_n * vrel.dot(nrm) + c.damp_s * vs);
+                        if (dissipated != 0.0) wall_sums[n_wall_sums++] = WallSum{0.0, 0.0, 0.0, dissipated, -1};
                     }
                     c.fs = 0.0;
                     c.damp_n = c.damp_s = 0.0f;
@@ -899,13 +900,14 @@ void World::compute_forces(bool then_integrate) {
                 const double vn = vrel.dot(nrm);
                 const double vs = vrel.dot(tan) - omega_[i] * rb;
                 const PairMaterial& pm = mat_dw_[size_t(material_[i]) * nw + w];
+                double dissipated = 0.0;
                 const LinearContactForce f =
-                    step_contact({pm.kn, pm.ks, pm.mu, c.cn, c.cs, mode, pm.inv_ks}, hit.overlap, vn, vs, dt, last_dt, c, out.dissipated);
-                out.f = f.fn * nrm + f.ft * tan;
-                out.point = pos_[i] - rb * nrm;
-                out.touching = true;
+                    step_contact({pm.kn, pm.ks, pm.mu, c.cn, c.cs, mode, pm.inv_ks}, hit.overlap, vn, vs, dt, last_dt, c, dissipated);
+                const Vec2 force = f.fn * nrm + f.ft * tan;
+                const Vec2 point = pos_[i] - rb * nrm;
+                wall_sums[n_wall_sums++] = WallSum{force.x(), force.y(), cross(point, force), dissipated, int32_t(w)};
                 DiscLoad& l = load[i];
-                l.force += out.f;
+                l.force += force;
                 l.torque += -rb * f.ft;
                 l.k_tran += pm.k_tran;
                 l.k_rot += pm.ks;
@@ -938,6 +940,7 @@ void World::compute_forces(bool then_integrate) {
             if (integrate) integrate_discs(b0, b1, t, ic);
             b0 = b1;
         }
+        range_clock_[size_t(t)].wall_sums = n_wall_sums;
         const double busy = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count() - waited;
         range_clock_[size_t(t)].seconds += busy;
         range_clock_[size_t(t)].last = busy;
@@ -977,14 +980,24 @@ void World::compute_forces(bool then_integrate) {
     touching = 0;
     std::fill(wall_force_.begin(), wall_force_.end(), Vec2::Zero());
     std::fill(wall_moment_.begin(), wall_moment_.end(), 0.0);
-    for (size_t k = 0; k < dw_.size(); ++k) {
-        const WallOut& o = dw_out_[k];
-        dissipated += o.dissipated;
-        if (!o.touching) continue;
-        ++touching;
-        const size_t w = size_t(dw_[k].wall);
-        wall_force_[w] -= o.f;
-        wall_moment_[w] -= cross(o.point, o.f);
+    // The records are the wall contacts in list order without those that add nothing: not
+    // touching and no dissipation. Leaving out their +0 or -0 keeps the bits: the sum starts
+    // at +0, and x + 0 = x for every x but -0, which a sum from +0 never reaches. Before, every
+    // range wrote a 48-byte record per wall contact and this loop read them all, with the
+    // contact itself for its wall: on slow stretches the worker then spent 5 times the main
+    // thread's time on its wall contacts, its stores waiting for the lines this loop had read
+    // (docs/performance.md, sessions 19 and 20).
+    for (size_t t = 0; t < wall_sums_.size(); ++t) {
+        const WallSum* const sums = wall_sums_[t].data();
+        for (size_t e = 0, n = range_clock_[t].wall_sums; e < n; ++e) {
+            const WallSum& o = sums[e];
+            dissipated += o.dissipated;
+            if (o.wall < 0) continue;
+            ++touching;
+            const size_t w = size_t(o.wall);
+            wall_force_[w] -= Vec2(o.fx, o.fy);
+            wall_moment_[w] -= o.moment;
+        }
     }
     touching_dw_ = touching;
     diss_contacts_ += dissipated;

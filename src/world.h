@@ -307,12 +307,17 @@ private:
     // contacts of its discs, and adds them straight into its discs' sums. A contact whose
     // second disc j belongs to a later range ("cross" contact) is computed first into a slot,
     // so that each disc still receives its terms in contact-list order (world.cpp).
-    struct WallOut {
-        Vec2 f, point;              // force on the disc, contact point
-        double dissipated;
-        bool touching;
+    // What the walls' loads and the energy ledger need of a wall contact that touches or
+    // dissipates, written by the range that owns it, in list order, into that range's own
+    // buffer; the calling thread adds the buffers up in range order after the pass
+    // (compute_forces). Contacts with nothing to add leave no record.
+    struct WallSum {
+        double fx, fy;      // N/m, the force on the disc
+        double moment;      // N, cross(contact point, force on the disc), about the origin
+        double dissipated;  // J/m, this step
+        int32_t wall;       // the wall; -1: not touching (a last dashpot half only)
     };
-    std::vector<WallOut> dw_out_;
+    std::vector<std::vector<WallSum>> wall_sums_;  // per range, sized to its wall contacts
     std::vector<size_t> disc_split_, contact_split_, wall_split_;  // per range: first disc, contact, wall contact
     std::vector<int32_t> cross_;            // cross contacts, in list order
     std::vector<size_t> cross_start_;       // per range: its first cross contact in cross_
@@ -380,6 +385,7 @@ private:
         double seconds = 0.0;  // s, in the force pass and integration since the last check
         double last = 0.0;     // s, the same in the last pass alone
         long touching_dd = 0;  // touching disc-disc contacts counted by its discs (each pair twice)
+        size_t wall_sums = 0;  // records in its wall_sums_ buffer this pass
     };
     // The energy ledger's per-step sums, per block of kLedgerBlock discs: the ranges are cut at
     // block ends, each range sums its blocks (LedgerBlock, integrate_kernel.h), and the blocks
