@@ -190,6 +190,8 @@ TEST(Determinism, ShuffledDiscsOnThreeThreadsGiveTheSameBits) {
     EnergyReport e[2];
     std::vector<DiscContact> contacts[2];
     long skipped[2];
+    long touching_walls[2];
+    std::vector<double> wall_loads[2];  // per wall: force x, y and moment
     for (int k = 0; k < 2; ++k) {
         WorldDef def = db9k_world_def();
         def.threads = k == 0 ? 1 : 3;
@@ -206,6 +208,9 @@ TEST(Determinism, ShuffledDiscsOnThreeThreadsGiveTheSameBits) {
         e[k] = w.energy();
         contacts[k] = w.disc_contacts();
         skipped[k] = w.pairs_skipped();
+        touching_walls[k] = w.touching_wall_pairs();
+        for (size_t n = 0; n < w.wall_count(); ++n)
+            wall_loads[k].insert(wall_loads[k].end(), {w.wall_force(int(n)).x(), w.wall_force(int(n)).y(), w.wall_moment(int(n))});
     }
     EXPECT_EQ(h[0], h[1]);
     EXPECT_EQ(cross[0], 0u);
@@ -215,6 +220,17 @@ TEST(Determinism, ShuffledDiscsOnThreeThreadsGiveTheSameBits) {
     EXPECT_EQ(e[0].dissipated_local, e[1].dissipated_local);
     EXPECT_EQ(e[0].dissipated_rotation, e[1].dissipated_rotation);
     EXPECT_EQ(e[0].elastic, e[1].elastic);
+    // The walls' loads: each range hands over its touching wall contacts in list order, and
+    // they are added range by range (World::WallSum): the 1-thread sums, bit for bit.
+    EXPECT_GT(touching_walls[0], 50);
+    EXPECT_EQ(touching_walls[0], touching_walls[1]);
+    ASSERT_EQ(wall_loads[0].size(), wall_loads[1].size());
+    size_t loaded = 0;
+    for (size_t n = 0; n < wall_loads[0].size(); ++n) {
+        loaded += wall_loads[0][n] != 0.0;
+        EXPECT_EQ(std::bit_cast<uint64_t>(wall_loads[0][n]), std::bit_cast<uint64_t>(wall_loads[1][n])) << "wall load " << n;
+    }
+    EXPECT_GE(loaded, 3u);  // the floor's force and moment at least
     // The ranges compute the cross contacts on copies (World::cross_dd_), and the range that
     // owns a contact's first disc copies its history back: after the passes every history in
     // the list is the 1-thread run's, bit for bit.
