@@ -307,6 +307,7 @@ private:
     // contacts of its discs, and adds them straight into its discs' sums. A contact whose
     // second disc j belongs to a later range ("cross" contact) is computed first into a slot,
     // so that each disc still receives its terms in contact-list order (world.cpp).
+
     // What the walls' loads and the energy ledger need of a wall contact that touches or
     // dissipates, written by the range that owns it, in list order, into that range's own
     // buffer; the calling thread adds the buffers up in range order after the pass
