@@ -15,6 +15,7 @@
 #include "db9k.h"
 #include "error.h"
 #include "jitter.h"
+#include "machine.h"
 #include "progress.h"
 
 namespace demlab {
@@ -180,6 +181,7 @@ int targets(const BenchOptions& o, const std::vector<XyrDisc>& discs) {
     std::printf("DB-9k targets: %d round(s) of %ld steps; each round demlab on 1 thread%s, demlab on 2 threads%s, "
                 "then two 1-thread copies side by side against one alone\n",
                 rounds, o.steps, o.peer ? ", LAMMPS on 1 rank" : "", o.peer ? ", LAMMPS on 2 ranks" : "");
+    std::printf("machine: %s\n", machine_summary(machine_info()).c_str());
     // per round
     std::vector<double> ns1, ns2, peer1, peer2, ratio1, ratio2, speedup, busy, cores, of_ceiling;
     bool peer = o.peer, same_bits = true;
@@ -331,6 +333,7 @@ int bench(const BenchOptions& o) {
     std::printf("DB-9k%s: N=%zu steps=%ld dt=%g s threads=%d, %s pair kernel\n",
                 o.copies > 1 ? strf(" (%d columns side by side)", o.copies).c_str() : "", world.disc_count(), o.steps, world.dt(),
                 o.threads, world.avx512_kernel() ? "AVX-512" : world.simd_kernel() ? "AVX2" : "scalar");
+    std::printf("  machine: %s\n", machine_summary(machine_info()).c_str());
     std::printf("  wall time %.3f s, %.3e particle-steps/s, %.1f ns per particle-step\n", secs, rate,
                 1e9 * secs / (double(world.disc_count()) * double(o.steps)));
     std::printf("  broad phase: margin %.3g m, %ld updates (%.3f s, %.1f %% of the wall time), %ld re-insertions, %ld "

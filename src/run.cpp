@@ -14,6 +14,7 @@
 #include "error.h"
 #include "fileio.h"
 #include "interrupt.h"
+#include "machine.h"
 #include "flume.h"
 #include "output_dir.h"
 #include "progress.h"
@@ -32,6 +33,25 @@ std::string json_number(double v) {
     o.precision(10);
     o << v;
     return o.str();
+}
+
+// a JSON string: quotes, backslashes and control characters escaped
+std::string json_string(const std::string& v) {
+    std::string o = "\"";
+    for (const char ch : v) {
+        const unsigned char u = static_cast<unsigned char>(ch);
+        if (ch == '"' || ch == '\\') {
+            o += '\\';
+            o += ch;
+        } else if (u < 0x20) {
+            char b[8];
+            std::snprintf(b, sizeof b, "\\u%04x", unsigned(u));
+            o += b;
+        } else {
+            o += ch;
+        }
+    }
+    return o + "\"";
 }
 
 // Checkpoint layout: header (magic, version, byte order, the resolved scenario, the options to
@@ -541,6 +561,7 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
       << "  \"stop_reason\": \"" << sum.stop_reason << "\",\n"
       << "  \"wall_seconds\": " << json_number(sum.wall_seconds) << ",\n"
       << "  \"particle_steps_per_second\": " << json_number(sum.particle_steps_per_second) << ",\n"
+      << "  \"machine\": " << json_string(machine_summary(machine_info())) << ",\n"
       << "  \"runout_s\": " << json_number(sum.runout_s) << ",\n"
       << "  \"runup_height\": " << json_number(sum.runup_height) << ",\n"
       << "  \"max_runup_height_during_run\": " << json_number(sum.max_runup_height_during_run) << ",\n"

@@ -3,12 +3,12 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
-#include <fstream>
 #include <sstream>
 #include <thread>
 
 #include "error.h"
 #include "integrate_kernel.h"
+#include "machine.h"
 #include "range_balance.h"
 #include "thread_pool.h"
 #include "timestep.h"
@@ -536,37 +536,28 @@ static std::string where_disc(long step, double t, int i, const Vec2& p) {
 // not keep up with the pass' 20-odd streams: DB-9k's columns side by side (`bench db9k
 // --copies`) took 27 ns per particle-step on 1 thread for 9,140 discs and 52-61 ns for
 // 146,240 (perf: the pass stalled on its first load of each batch's contact records), with
-// this machine's memory 150-165 ns away (a dependent-load chain over 64 MB). The pass now asks
-// for the lines it will need kPrefetchContacts contacts and kPrefetchDiscs discs ahead (every
-// disc a pair or the integration reads lies at or after the batch's first disc i, and its
-// partners j within a few hundred places in space order), into L2 (the T1 hint): 37-44 ns
-// for 146,240 discs, 20-24 ns on 2 threads (26-36 before; docs/performance.md, session 17).
+// the memory 150-165 ns away (a dependent-load chain over 64 MB; the EPYC of sessions 5-19).
+// The pass now asks for the lines it will need kPrefetchContacts contacts and kPrefetchDiscs
+// discs ahead (every disc a pair or the integration reads lies at or after the batch's first
+// disc i, and its partners j within a few hundred places in space order), into L2 (the T1
+// hint): 37-44 ns for 146,240 discs, 20-24 ns on 2 threads (26-36 before; docs/performance.md,
+// session 17).
 // Into L1 (T0) it bought nothing: the core's few L1 miss buffers filled and the prefetches
 // stalled the loop. With the arrays in the cache it costs 1-2 ns per particle-step, so Auto
 // turns it on once the step streams more than half the last-level cache
-// (prefetch_threshold_bytes): here (32 MB) 36,560 discs (11 MB) ran 3-8 % slower with it,
-// 54,840 (17 MB) about as fast, 73,120 (22 MB) 8-33 % faster. No prefetch changes a result.
+// (prefetch_threshold_bytes): on that EPYC (32 MB) 36,560 discs (11 MB) ran 3-8 % slower
+// with it, 54,840 (17 MB) about as fast, 73,120 (22 MB) 8-33 % faster. No prefetch changes a
+// result.
 constexpr size_t kPrefetchContacts = 256, kPrefetchDiscs = 256;
 
-// Half of CPU 0's largest cache as Linux lists it (/sys/devices/system/cpu/cpu0/cache), or
-// 16 MB when it lists none. (glibc's sysconf(_SC_LEVEL3_CACHE_SIZE) said 320 MB on this
-// virtual machine, whose L3 is 32 MB.)
+// Half of CPU 0's largest cache as Linux lists it (/sys/devices/system/cpu/cpu0/cache,
+// machine.h), or 16 MB when it lists none. (On the AMD EPYC of sessions 5-19 Linux listed
+// 32 MB, where glibc's sysconf(_SC_LEVEL3_CACHE_SIZE) said 320 MB; on the Intel Xeon of
+// sessions 20-21 it lists 300 MB, shared with the host's other guests, and the step of
+// 146,240 discs, 44.5 MB, ran no faster with prefetch: docs/performance.md, session 21.)
 size_t prefetch_threshold_bytes() {
-    static const size_t bytes = [] {
-        size_t largest = 0;
-        for (int index = 0; index < 8; ++index) {
-            std::ifstream in("/sys/devices/system/cpu/cpu0/cache/index" + std::to_string(index) + "/size");
-            size_t size = 0;
-            std::string unit;
-            if (!(in >> size)) continue;
-            in >> unit;  // "32768K"
-            if (unit == "K") size <<= 10;
-            else if (unit == "M") size <<= 20;
-            largest = std::max(largest, size);
-        }
-        return largest > 0 ? largest / 2 : size_t(16) << 20;
-    }();
-    return bytes;
+    const size_t largest = machine_info().largest_cache_bytes;
+    return largest > 0 ? largest / 2 : size_t(16) << 20;
 }
 
 // The bytes a step streams, the arrays prefetch_ahead asks for: per disc its position and

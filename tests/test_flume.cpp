@@ -9,6 +9,7 @@
 
 #include "error.h"
 #include "files.h"
+#include "machine.h"
 #include "release.h"
 #include "run.h"
 #include "scenario.h"
@@ -151,6 +152,8 @@ TEST(GeometryA20, GenerationToRestBalancesAndDeterminism) {
                                 "broadphase_mean_candidates", "broadphase_mean_touching", "broadphase_update_seconds",
                                 "force_pass_one_range_cuts", "force_pass_busy_share", "force_pass_busy_fallbacks"})
             EXPECT_NE(json.find(std::string("\"") + key + "\": "), std::string::npos) << key;
+        // and the machine its wall times were measured on
+        EXPECT_NE(json.find("\"machine\": \"" + machine_summary(machine_info()) + "\""), std::string::npos) << json;
     }
     {
         SCOPED_TRACE("the run numbers its discs in space order (strips 4 r_max wide, up each strip)");
