@@ -561,6 +561,7 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
       << "  \"stop_reason\": \"" << sum.stop_reason << "\",\n"
       << "  \"wall_seconds\": " << json_number(sum.wall_seconds) << ",\n"
       << "  \"particle_steps_per_second\": " << json_number(sum.particle_steps_per_second) << ",\n"
+      // the machine the timings above come from (a resumed run: the one that finished it)
       << "  \"machine\": " << json_string(machine_summary(machine_info())) << ",\n"
       << "  \"runout_s\": " << json_number(sum.runout_s) << ",\n"
       << "  \"runup_height\": " << json_number(sum.runup_height) << ",\n"
