@@ -61,4 +61,22 @@ void SeriesFile::close() {
     if (ec) throw RunError("cannot rename " + path_ + ".part: " + ec.message());
 }
 
+std::string json_string(const std::string& text) {
+    std::string o = "\"";
+    for (const char ch : text) {
+        const unsigned char u = static_cast<unsigned char>(ch);
+        if (ch == '"' || ch == '\\') {
+            o += '\\';
+            o += ch;
+        } else if (u < 0x20) {
+            char b[8];
+            std::snprintf(b, sizeof b, "\\u%04x", unsigned(u));
+            o += b;
+        } else {
+            o += ch;
+        }
+    }
+    return o + "\"";
+}
+
 }  // namespace demlab

@@ -9,6 +9,10 @@ namespace demlab {
 
 void write_file_atomic(const std::string& path, const std::string& content);
 
+// `text` as a JSON string literal, in quotes: quotes, backslashes and control characters
+// escaped (summary.json's free text, such as the machine's name).
+std::string json_string(const std::string& text);
+
 // A file written over time (a CSV series): it is written as PATH.part and renamed to PATH
 // by close(), so an unfinished series is never mistaken for a complete one.
 class SeriesFile {

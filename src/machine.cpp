@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cstdint>
 #include <cstdio>
 #include <fstream>
 #include <sstream>
@@ -32,7 +33,7 @@ std::string read_text(const std::string& path) {
     return s.str();
 }
 
-std::string mib(size_t bytes) {
+std::string size_text(size_t bytes) {
     char b[32];
     if (bytes >= (size_t(1) << 20) && bytes % (size_t(1) << 20) == 0) std::snprintf(b, sizeof b, "%zu MB", bytes >> 20);
     else std::snprintf(b, sizeof b, "%zu KB", bytes >> 10);
@@ -69,11 +70,9 @@ size_t parse_cache_size(const std::string& text) {
     if (digits == 0 || digits > 12) return 0;
     const size_t value = std::stoull(t.substr(0, digits));
     const std::string unit = t.substr(digits);
-    if (unit.empty()) return value;
-    if (unit == "K") return value << 10;
-    if (unit == "M") return value << 20;
-    if (unit == "G") return value << 30;
-    return 0;
+    const int shift = unit.empty() ? 0 : unit == "K" ? 10 : unit == "M" ? 20 : unit == "G" ? 30 : -1;
+    if (shift < 0 || value > (SIZE_MAX >> shift)) return 0;  // not a size, or beyond size_t
+    return value << shift;
 }
 
 const MachineInfo& machine_info() {
@@ -104,8 +103,8 @@ std::string machine_summary(const MachineInfo& m) {
         s += inner + ")";
     }
     if (m.cpus > 0) s += ", " + std::to_string(m.cpus) + (m.cpus == 1 ? " CPU" : " CPUs");
-    if (m.l2_bytes > 0) s += ", L2 " + mib(m.l2_bytes);
-    if (m.largest_cache_bytes > 0) s += ", largest cache " + mib(m.largest_cache_bytes);
+    if (m.l2_bytes > 0) s += ", L2 " + size_text(m.l2_bytes);
+    if (m.largest_cache_bytes > 0) s += ", largest cache " + size_text(m.largest_cache_bytes);
     return s;
 }
 

@@ -35,25 +35,6 @@ std::string json_number(double v) {
     return o.str();
 }
 
-// a JSON string: quotes, backslashes and control characters escaped
-std::string json_string(const std::string& v) {
-    std::string o = "\"";
-    for (const char ch : v) {
-        const unsigned char u = static_cast<unsigned char>(ch);
-        if (ch == '"' || ch == '\\') {
-            o += '\\';
-            o += ch;
-        } else if (u < 0x20) {
-            char b[8];
-            std::snprintf(b, sizeof b, "\\u%04x", unsigned(u));
-            o += b;
-        } else {
-            o += ch;
-        }
-    }
-    return o + "\"";
-}
-
 // Checkpoint layout: header (magic, version, byte order, the resolved scenario, the options to
 // resume with), the run's own state ("RUN "), then the world's (World::save_state).
 constexpr char kMagic[8] = {'D', 'E', 'M', 'L', 'A', 'B', 'C', 'K'};

@@ -1,6 +1,7 @@
 // The machine a figure was measured on (machine.h): what bench and summary.json print.
 #include <gtest/gtest.h>
 
+#include "fileio.h"
 #include "machine.h"
 
 using namespace demlab;
@@ -51,6 +52,10 @@ TEST(Machine, ReadsCacheSizesAsLinuxWritesThem) {
     EXPECT_EQ(parse_cache_size("32M"), size_t(32) << 20);
     EXPECT_EQ(parse_cache_size("4096"), size_t(4096));
     for (const char* bad : {"", "K", "12X", "-4K", "12 K", "9999999999999K"}) EXPECT_EQ(parse_cache_size(bad), 0u) << bad;
+    // a size beyond size_t is no size, not a wrapped-around one
+    EXPECT_EQ(parse_cache_size("999999999999G"), 0u);
+    EXPECT_EQ(parse_cache_size("99999999999G"), 0u);
+    EXPECT_EQ(parse_cache_size("999999999999M"), size_t(999999999999) << 20);  // still fits
 }
 
 TEST(Machine, SummaryNamesProcessorCpusAndCaches) {
@@ -70,4 +75,12 @@ TEST(Machine, ThisMachineHasACpu) {
     const MachineInfo& m = machine_info();
     EXPECT_GE(m.cpus, 1u);
     EXPECT_FALSE(machine_summary(m).empty());
+}
+
+TEST(Machine, SummaryGoesIntoJsonEscaped) {
+    // summary.json writes the line as a JSON string (json_string, fileio.h)
+    EXPECT_EQ(json_string("Intel(R) Xeon(R) Processor"), "\"Intel(R) Xeon(R) Processor\"");
+    EXPECT_EQ(json_string("a \"quoted\" C:\\cpu"), "\"a \\\"quoted\\\" C:\\\\cpu\"");
+    EXPECT_EQ(json_string(std::string("tab\tnl\n") + char(1)), "\"tab\\u0009nl\\u000a\\u0001\"");
+    EXPECT_EQ(json_string(""), "\"\"");
 }
