@@ -6,8 +6,8 @@
 #include <functional>
 #include <string>
 
-#include "error.h"
-#include "world.h"
+#include "core/error.h"
+#include "dem/world.h"
 
 namespace demlab::test {
 

@@ -1,8 +1,8 @@
 // Slow validation (label "slow", not in CI): the release mass at the thesis' scale 4.
 #include <gtest/gtest.h>
 
-#include "release.h"
-#include "scenario.h"
+#include "setups/release.h"
+#include "scenario/scenario.h"
 
 using namespace demlab;
 

@@ -7,10 +7,10 @@
 #include <fstream>
 #include <sstream>
 
-#include "calibration.h"
-#include "deposit.h"
-#include "error.h"
-#include "scenario.h"
+#include "calibration/calibration.h"
+#include "geometry/deposit.h"
+#include "core/error.h"
+#include "scenario/scenario.h"
 
 using namespace demlab;
 namespace fs = std::filesystem;

@@ -15,11 +15,11 @@
 #include <sstream>
 #include <thread>
 
-#include "error.h"
+#include "core/error.h"
 #include "files.h"
-#include "interrupt.h"
-#include "run.h"
-#include "scenario.h"
+#include "core/interrupt.h"
+#include "run/run.h"
+#include "scenario/scenario.h"
 
 extern char** environ;
 

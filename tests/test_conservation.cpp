@@ -9,9 +9,9 @@
 #include <random>
 #include <thread>
 
-#include "db9k.h"
-#include "error.h"
-#include "range_balance.h"
+#include "setups/db9k.h"
+#include "core/error.h"
+#include "dem/range_balance.h"
 #include "helpers.h"
 
 using namespace demlab;

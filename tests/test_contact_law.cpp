@@ -1,7 +1,7 @@
 // The linear contact law: closed forms of a normal impact, the Coulomb cap and PFC's dashpot modes.
 #include <gtest/gtest.h>
 
-#include "contact_law.h"
+#include "dem/laws/contact_law.h"
 #include "helpers.h"
 
 using namespace demlab;

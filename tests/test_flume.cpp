@@ -7,12 +7,12 @@
 #include <fstream>
 #include <sstream>
 
-#include "error.h"
+#include "core/error.h"
 #include "files.h"
-#include "machine.h"
-#include "release.h"
-#include "run.h"
-#include "scenario.h"
+#include "core/machine.h"
+#include "setups/release.h"
+#include "run/run.h"
+#include "scenario/scenario.h"
 
 using namespace demlab;
 using demlab::test::read_file;

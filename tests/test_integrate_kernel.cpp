@@ -6,9 +6,9 @@
 #include <bit>
 #include <random>
 
-#include "db9k.h"
+#include "setups/db9k.h"
 #include "helpers.h"
-#include "pair_kernel.h"
+#include "dem/laws/pair_kernel.h"
 
 using namespace demlab;
 using namespace demlab::test;

@@ -1,8 +1,8 @@
 // The machine a figure was measured on (machine.h): what bench and summary.json print.
 #include <gtest/gtest.h>
 
-#include "fileio.h"
-#include "machine.h"
+#include "core/fileio.h"
+#include "core/machine.h"
 
 using namespace demlab;
 

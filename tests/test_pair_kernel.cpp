@@ -15,10 +15,10 @@
 
 #include <sys/wait.h>
 
-#include "db9k.h"
-#include "jitter.h"
-#include "pair_kernel.h"
-#include "world.h"
+#include "setups/db9k.h"
+#include "core/jitter.h"
+#include "dem/laws/pair_kernel.h"
+#include "dem/world.h"
 
 using namespace demlab;
 

@@ -18,8 +18,8 @@
 #include <sstream>
 
 #include "files.h"
-#include "run.h"
-#include "scenario.h"
+#include "run/run.h"
+#include "scenario/scenario.h"
 
 using namespace demlab;
 using demlab::test::read_file;

@@ -10,15 +10,15 @@
 #include <fstream>
 #include <sstream>
 
-#include "error.h"
+#include "core/error.h"
 #include "files.h"
-#include "frame.h"
-#include "image.h"
-#include "plot.h"
-#include "render_run.h"
-#include "renderer.h"
-#include "run.h"
-#include "scenario.h"
+#include "output/frame.h"
+#include "output/image.h"
+#include "output/plot.h"
+#include "output/render_run.h"
+#include "output/renderer.h"
+#include "run/run.h"
+#include "scenario/scenario.h"
 
 using namespace demlab;
 using demlab::test::read_file;

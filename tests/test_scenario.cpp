@@ -5,10 +5,10 @@
 #include <filesystem>
 #include <functional>
 
-#include "error.h"
+#include "core/error.h"
 #include "helpers.h"
-#include "release.h"
-#include "scenario.h"
+#include "setups/release.h"
+#include "scenario/scenario.h"
 
 using namespace demlab;
 using demlab::test::expect_refused;

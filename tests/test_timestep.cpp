@@ -2,7 +2,7 @@
 #include <gtest/gtest.h>
 
 #include "helpers.h"
-#include "timestep.h"
+#include "dem/timestep.h"
 
 using namespace demlab;
 using namespace demlab::test;

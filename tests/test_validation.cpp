@@ -4,7 +4,7 @@
 #include <functional>
 #include <limits>
 
-#include "db9k.h"
+#include "setups/db9k.h"
 #include "helpers.h"
 
 using namespace demlab;

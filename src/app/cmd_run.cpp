@@ -1,0 +1,185 @@
+// demlab run SCENARIO: a flume (or any scenario) from its release to rest.
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "app/commands.h"
+#include "core/error.h"
+#include "core/interrupt.h"
+#include "run/run.h"
+#include "output/frame.h"
+#include "output/image.h"
+#include "output/plot.h"
+#include "output/render_run.h"
+#include "scenario/scenario.h"
+
+namespace demlab {
+
+namespace {
+struct RunCliOptions {
+    std::string scenario;
+    int model = 0;
+    std::string variant;
+    int scale = 0;
+    std::string out;
+    std::vector<std::string> set;
+    std::string release_from;
+    bool force = false;
+    bool frames = false;
+    int threads = 1;
+    bool scalar = false;
+    bool no_avx512 = false;
+    bool no_plots = false;
+    double checkpoint_every = 0.0;
+};
+
+// The lines a finished run prints, and its plots.
+int report(const Scenario& s, const RunSummary& r, const std::string& dir, bool plots) {
+    std::printf("%s: %ld discs, model %d, variant %s, %ld steps to t = %.3f s (%s), dt %.3g-%.3g s\n", s.name.c_str(),
+                r.n_discs, s.world.rotation.model, s.release.variant.c_str(), r.steps, r.t_end, r.stop_reason.c_str(),
+                r.dt_min, r.dt_max);
+    std::printf("  wall time %.1f s, %.3e particle-steps/s\n", r.wall_seconds, r.particle_steps_per_second);
+    if (s.flume.enabled) {
+        std::printf("  porosity %.3f; front at the barrier %.3f s; peak x-force on the barrier %.3f s; peak y-force on the arc %.3f s\n",
+                    r.porosity, r.t_front_at_barrier, r.t_peak_fx_barrier, r.t_peak_fy_arc);
+        std::printf("  run-out s = %.3f m; run-up %.3f m (max during run %.3f m)\n", r.runout_s, r.runup_height,
+                    r.max_runup_height_during_run);
+    }
+    std::printf("  energy ledger closes to %.2f %% of the dissipated energy\n", 100.0 * r.energy_balance_error);
+    std::printf("  wrote %s/\n", dir.c_str());
+    if (plots) {
+        if (gnuplot_available()) {
+            make_plots(dir);
+            std::printf("  plots in %s/plots/\n", dir.c_str());
+        } else {
+            std::printf("  no plots: gnuplot is not installed (apt-get install gnuplot-nox)\n");
+        }
+    }
+    return kExitOk;
+}
+
+int run_command(const RunCliOptions& o) {
+    Scenario s = load_scenario(o.scenario);
+    if (o.model) apply_override(s, "rotation.model=" + std::to_string(o.model));
+    if (!o.variant.empty()) apply_override(s, "release.variant=\"" + o.variant + "\"");
+    if (o.scale) apply_override(s, "release.scale=" + std::to_string(o.scale));
+    if (!o.release_from.empty()) s.release.from_file = o.release_from;
+    for (const std::string& a : o.set) apply_override(s, a);
+    finish_scenario(s);
+    s.world.threads = o.threads;
+    s.world.simd = !o.scalar;
+    s.world.avx512 = !o.no_avx512;
+    RunOptions ro;
+    ro.out_dir = o.out.empty() ? "runs/" + s.name : o.out;
+    ro.force = o.force;
+    ro.checkpoint_every = o.checkpoint_every;
+    ro.handle_signals = true;
+    ro.frames = o.frames;
+    ro.plots = !o.no_plots;
+    if (o.frames) attach_frame_hook(ro, s.flume.enabled);
+    const RunSummary r = run_scenario(s, ro);
+    return report(s, r, ro.out_dir, ro.plots);
+}
+}  // namespace
+
+Command add_run_command(CLI::App& app) {
+    auto o = std::make_shared<RunCliOptions>();
+    CLI::App* sub = app.add_subcommand("run", "Run a scenario (a flume geometry, or explicit walls and discs) to rest");
+    sub->add_option("scenario", o->scenario, "Scenario file (TOML), e.g. scenarios/geometry-A.toml")->required();
+    sub->add_option("--model", o->model, "Rotation model: 1 locked, 2 rolling resistance, 3 plus rotational damping")
+        ->check(CLI::Range(1, 3));
+    sub->add_option("--variant", o->variant, "Release: I deletes the gate at t = 0, II lifts it at 2.25 m/s")
+        ->check(CLI::IsMember({"I", "II"}));
+    sub->add_option("--scale", o->scale, "Upscaling of the sand (Table 14: 2, 4, 20): radii [0.25, 0.5] mm times this")
+        ->check(CLI::Range(1, 100));
+    sub->add_option("--out", o->out, "Output folder (default runs/<scenario name>); must not exist unless --force");
+    sub->add_option("--set", o->set, "Override a scenario key: --set key=value (repeatable), e.g. --set material.friction_disc_deg=16");
+    sub->add_option("--release-from", o->release_from, "Start from a settled release mass (release.csv of an earlier run)");
+    sub->add_flag("--force", o->force, "Replace the files of an existing output folder");
+    sub->add_option("--threads", o->threads, "Worker threads (results are the same bits for any count)")
+        ->capture_default_str()->check(CLI::Range(1, 64));
+    sub->add_flag("--scalar", o->scalar, "Use the scalar loops (pair forces, integration) even if the CPU has AVX2 (the same bits; for comparison)");
+    sub->add_flag("--no-avx512", o->no_avx512, "Run the pair law four pairs and the integration four discs at a time (AVX2) even if the CPU has AVX-512 (the same bits; for comparison)");
+    sub->add_flag("--frames", o->frames, "Render a PNG frame at every snapshot while running (RUN_DIR/frames)");
+    sub->add_flag("--no-plots", o->no_plots, "Do not make the plots (RUN_DIR/plots) at the end");
+    sub->add_option("--checkpoint-every", o->checkpoint_every,
+                    "Write RUN_DIR/checkpoint.bin every this many seconds of wall-clock time (0: only on SIGINT/SIGTERM)")
+        ->check(CLI::Range(0.0, 1.0e7));
+    return [o] { return run_command(*o); };
+}
+
+namespace {
+struct ResumeCliOptions {
+    std::string dir;
+    int threads = 1;
+    bool scalar = false;
+    bool no_avx512 = false;
+    double checkpoint_every = -1.0;
+};
+
+int resume_command(const ResumeCliOptions& o) {
+    namespace fs = std::filesystem;
+    const std::string dir = o.dir;
+    if (!fs::is_directory(dir)) throw InputError(dir + ": no such run folder");
+    const std::string scenario_file = dir + "/scenario.toml";
+    if (!fs::exists(scenario_file)) throw InputError(dir + ": not a run folder (no scenario.toml)");
+    const bool has_checkpoint = fs::exists(dir + "/" + kCheckpointFile);
+    if (!has_checkpoint && fs::exists(dir + "/summary.json"))
+        throw InputError(dir + ": the run has finished already (summary.json); there is nothing to resume");
+    Scenario s = load_scenario(scenario_file);
+    finish_scenario(s);
+    s.world.threads = o.threads;
+    s.world.simd = !o.scalar;
+    s.world.avx512 = !o.no_avx512;
+    RunOptions ro;
+    ro.out_dir = dir;
+    ro.handle_signals = true;
+    if (has_checkpoint) {
+        const CheckpointInfo info = read_checkpoint_info(dir);
+        ro.resume = true;
+        ro.checkpoint_every = o.checkpoint_every >= 0 ? o.checkpoint_every : info.checkpoint_every;
+        ro.frames = info.frames;
+        ro.plots = info.plots;
+        std::fprintf(stderr, "resuming %s at t = %.4f s of %.4f s (step %ld)\n", dir.c_str(), info.time, info.t_max,
+                     info.steps);
+    } else {
+        // stopped before its first checkpoint (or in the release generation): the same
+        // scenario and seed from the start give the same run
+        ro.force = true;
+        ro.checkpoint_every = std::max(0.0, o.checkpoint_every);
+        ro.frames = fs::exists(dir + "/frames");
+        std::fprintf(stderr, "%s has no checkpoint: running it again from the start (same scenario and seed)\n", dir.c_str());
+    }
+    if (ro.frames) attach_frame_hook(ro, s.flume.enabled);
+    const RunSummary r = run_scenario(s, ro);
+    return report(s, r, dir, ro.plots);
+}
+}  // namespace
+
+Command add_resume_command(CLI::App& app) {
+    auto o = std::make_shared<ResumeCliOptions>();
+    CLI::App* sub = app.add_subcommand(
+        "resume", "Continue an interrupted run from RUN_DIR/checkpoint.bin (outputs byte-identical to an uninterrupted run)");
+    sub->add_option("run_dir", o->dir, "The run folder (its scenario.toml and checkpoint.bin)")->required();
+    sub->add_option("--threads", o->threads, "Worker threads (results are the same bits for any count)")
+        ->capture_default_str()->check(CLI::Range(1, 64));
+    sub->add_flag("--scalar", o->scalar, "Use the scalar loops (pair forces, integration) even if the CPU has AVX2 (the same bits; for comparison)");
+    sub->add_flag("--no-avx512", o->no_avx512, "Run the pair law four pairs and the integration four discs at a time (AVX2) even if the CPU has AVX-512 (the same bits; for comparison)");
+    sub->add_option("--checkpoint-every", o->checkpoint_every,
+                    "Seconds of wall-clock time between checkpoints (default: as the run was started)")
+        ->check(CLI::Range(0.0, 1.0e7));
+    return [o] { return resume_command(*o); };
+}
+
+Command add_keys_command(CLI::App& app) {
+    CLI::App* sub = app.add_subcommand("keys", "Print the scenario reference: every key with its unit, default and range");
+    (void)sub;
+    return [] {
+        std::fputs(scenario_reference_markdown().c_str(), stdout);
+        return kExitOk;
+    };
+}
+
+}  // namespace demlab

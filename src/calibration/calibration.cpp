@@ -1,0 +1,455 @@
+#include "calibration/calibration.h"
+
+#include <toml++/toml.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <mutex>
+#include <sstream>
+#include <thread>
+
+#include "geometry/deposit.h"
+#include "core/error.h"
+#include "core/fileio.h"
+#include "output/frame.h"
+#include "output/image.h"
+#include "output/plot.h"
+#include "core/progress.h"
+#include "output/renderer.h"
+#include "run/run.h"
+#include "scenario/scenario.h"
+#include "core/validate.h"
+
+namespace demlab {
+
+namespace fs = std::filesystem;
+
+// ------------------------------------------------------------------ configuration
+
+CalibrationConfig load_calibration(const std::string& path) {
+    CalibrationConfig c;
+    c.source = path;
+    toml::table t;
+    try {
+        t = toml::parse_file(path);
+    } catch (const toml::parse_error& e) {
+        throw InputError(path + ":" + std::to_string(e.source().begin.line) + ": TOML syntax error: " +
+                         std::string(e.description()));
+    }
+    const auto where = [&](const toml::node& n, const std::string& key) {
+        return path + ":" + std::to_string(n.source().begin.line) + ": key '" + key + "'";
+    };
+    const std::vector<std::string> lab_keys = {"gamma_ges", "gamma_1", "gamma_2", "gamma_3", "gamma_4", "gamma_5"};
+    bool have_scenario = false;
+    for (const auto& [sec, node] : t) {
+        const std::string section(sec.str());
+        const toml::table* tab = node.as_table();
+        if (!tab || (section != "calibration" && section != "lab"))
+            throw InputError(where(node, section) + ": unknown table; accepted: [calibration], [lab]");
+        for (const auto& [k, v] : *tab) {
+            const std::string key = section + "." + std::string(k.str());
+            const std::string w = where(v, key);
+            auto number = [&](const toml::node& n, double lo, double hi, const char* unit) {
+                auto x = n.value<double>();
+                if (!x || !(n.is_number()) || !(*x >= lo && *x <= hi))
+                    throw InputError(w + ": must be a number in [" + format_number(lo) + ", " + format_number(hi) + "] " + unit);
+                return *x;
+            };
+            if (key == "calibration.scenario") {
+                auto s = v.value_exact<std::string>();
+                if (!s) throw InputError(w + ": must be the path of a scenario file");
+                c.scenario = *s;
+                have_scenario = true;
+            } else if (key == "calibration.angles") {
+                const toml::array* a = v.as_array();
+                if (!a || a->empty()) throw InputError(w + ": must be a non-empty array of angles in degrees");
+                c.angles.clear();
+                for (const auto& e : *a) c.angles.push_back(number(e, 0.0, 60.0, "deg"));
+            } else if (key == "calibration.seeds") {
+                c.seeds = int(number(v, 1, 100, "(count)"));
+            } else if (key == "calibration.sections") {
+                const toml::array* a = v.as_array();
+                if (!a || a->empty()) throw InputError(w + ": must be an array of section numbers 1 to 5");
+                c.sections.clear();
+                for (const auto& e : *a) c.sections.push_back(int(number(e, 1, 5, "(section)")));
+            } else if (key == "calibration.refine") {
+                auto b = v.value_exact<bool>();
+                if (!b) throw InputError(w + ": must be true or false");
+                c.refine = *b;
+            } else if (key == "calibration.tolerance") {
+                c.tolerance = number(v, 0.01, 5.0, "deg");
+            } else if (key == "calibration.wall_gap") {
+                c.wall_gap = number(v, 0.0, 0.05, "m");
+            } else if (key == "calibration.scale") {
+                c.scale = int(number(v, 0, 100, "(scale factor)"));
+            } else if (section == "lab") {
+                auto it = std::find(lab_keys.begin(), lab_keys.end(), std::string(k.str()));
+                if (it == lab_keys.end())
+                    throw InputError(w + ": unknown key; accepted: lab.gamma_ges, lab.gamma_1 ... lab.gamma_5");
+                c.lab[it - lab_keys.begin()] = number(v, -90, 90, "deg");
+            } else {
+                throw InputError(w + ": unknown key; accepted: scenario, angles, seeds, sections, refine, tolerance, scale, wall_gap");
+            }
+        }
+    }
+    if (!have_scenario) throw InputError(path + ": missing key 'calibration.scenario' (the dam-break scenario file)");
+    if (fs::path(c.scenario).is_relative()) c.scenario = (fs::path(path).parent_path() / c.scenario).lexically_normal().string();
+    std::sort(c.angles.begin(), c.angles.end());
+    c.angles.erase(std::unique(c.angles.begin(), c.angles.end()), c.angles.end());
+    return c;
+}
+
+// ------------------------------------------------------------------ runs
+
+namespace {
+
+std::map<std::string, double> read_summary(const std::string& path) {
+    std::ifstream in(path);
+    std::map<std::string, double> out;
+    std::string line;
+    while (std::getline(in, line)) {
+        const size_t q1 = line.find('"'), q2 = line.find('"', q1 + 1), colon = line.find(':', q2);
+        if (q1 == std::string::npos || q2 == std::string::npos || colon == std::string::npos) continue;
+        const std::string key = line.substr(q1 + 1, q2 - q1 - 1);
+        std::string value = line.substr(colon + 1);
+        if (value.find('"') != std::string::npos) continue;
+        try {
+            out[key] = value.find("null") != std::string::npos ? NAN : std::stod(value);
+        } catch (...) {
+        }
+    }
+    return out;
+}
+
+std::string angle_tag(double angle) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "phi%.2f", angle);
+    return buf;
+}
+
+double objective_of(const std::map<std::string, double>& r, const CalibrationConfig& c) {
+    double sum = 0;
+    for (int i : c.sections) {
+        auto it = r.find("gamma_" + std::to_string(i));
+        const double g = it == r.end() ? NAN : it->second;
+        if (std::isnan(g)) return INFINITY;  // the deposit did not reach that section
+        sum += std::abs(g - c.lab[i]);
+    }
+    return sum;
+}
+
+// the deposit with its envelope, the 10 cm sections, their fitted lines and angles
+void render_deposit(const std::string& run_dir, const std::map<std::string, double>& summary, double wall_gap) {
+    const auto snaps = list_snapshots(run_dir);
+    Frame f = read_frame(snaps.back().discs, snaps.back().walls);
+    const Envelope e = read_envelope_csv(run_dir + "/envelope.csv");
+    std::vector<Vec2> env;
+    for (size_t k = 0; k < e.y.size(); ++k)
+        if (!std::isnan(e.y[k])) env.emplace_back(e.x(k), e.y[k]);
+    if (env.empty()) return;
+    f.overlays.push_back({env, 0.85, 0.1, 0.1});
+    for (int i = 1; i <= 5; ++i) {
+        const double lo = (5 - i) * 0.1, hi = (6 - i) * 0.1;
+        f.overlays.push_back({{Vec2(lo, 0.0), Vec2(lo, 0.45)}, 0.5, 0.5, 0.5});
+        double slope = 0, icpt = 0;
+        if (!fit_line(e, std::max(lo, wall_gap), hi, slope, icpt)) continue;
+        f.overlays.push_back({{Vec2(lo, icpt + slope * lo), Vec2(hi, icpt + slope * hi)}, 0.1, 0.3, 0.9});
+        char buf[48];
+        auto it = summary.find("gamma_" + std::to_string(i));
+        std::snprintf(buf, sizeof buf, "g%d = %.1f", i, it == summary.end() ? NAN : it->second);
+        f.notes.emplace_back(Vec2(lo + 0.01, icpt + slope * (lo + 0.05) + 0.04), buf);
+    }
+    RenderStyle st;
+    st.width = 1000;
+    st.height = 450;
+    st.view_set = true;
+    st.view_lo = Vec2(-0.02, -0.02);
+    double top = 0.0;
+    for (const Vec2& p : env) top = std::max(top, p.y());
+    st.view_hi = Vec2(std::max(0.6, env.back().x() + 0.05), top + 0.06);
+    Renderer r(st);
+    write_png(run_dir + "/deposit.png", r.render(f));
+}
+
+}  // namespace
+
+double AngleResult::mean(const std::string& key) const {
+    double s = 0;
+    int n = 0;
+    for (const auto& r : runs) {
+        auto it = r.find(key);
+        if (it != r.end() && !std::isnan(it->second)) {
+            s += it->second;
+            ++n;
+        }
+    }
+    return n ? s / n : NAN;
+}
+
+CalibrationResult calibrate(const CalibrationConfig& c, const CalibrationOptions& o) {
+    const auto t0 = std::chrono::steady_clock::now();
+    // the folder: new, or one made for this same configuration (resume)
+    std::ostringstream cfg;
+    cfg << "scenario = " << c.scenario << "\nseeds = " << c.seeds << "\nscale = " << c.scale << "\n";
+    const std::string marker = o.out + "/calibration.id";
+    if (fs::exists(o.out)) {
+        std::ifstream in(marker);
+        std::stringstream have;
+        have << in.rdbuf();
+        if (have.str() != cfg.str() && !o.force)
+            throw InputError("output folder '" + o.out + "' exists and was not made by this calibration "
+                             "(scenario, seeds, scale); choose another --out or pass --force");
+    }
+    fs::create_directories(o.out + "/runs");
+    write_file_atomic(marker, cfg.str());
+
+    const int jobs = o.jobs > 0 ? o.jobs : std::max(1, int(std::thread::hardware_concurrency()));
+    CalibrationResult res;
+    std::mutex mu;
+    g_progress_muted = true;
+
+    // runs the dam break for each (angle, seed) not yet finished, `jobs` at a time
+    const auto evaluate = [&](const std::vector<double>& angles) {
+        struct Job {
+            double angle;
+            int seed;
+        };
+        std::vector<Job> todo;
+        for (double a : angles)
+            for (int k = 0; k < c.seeds; ++k) todo.push_back({a, k});
+        std::map<std::pair<double, int>, std::map<std::string, double>> done;
+        size_t next = 0;
+        std::string error;
+        const auto worker = [&] {
+            while (true) {
+                Job job;
+                {
+                    std::lock_guard<std::mutex> lock(mu);
+                    if (next >= todo.size() || !error.empty()) return;
+                    job = todo[next++];
+                }
+                const std::string dir = o.out + "/runs/" + angle_tag(job.angle) + "-seed" + std::to_string(job.seed + 1);
+                try {
+                    bool reused = fs::exists(dir + "/summary.json");
+                    if (!reused) {
+                        fs::remove_all(dir);  // an unfinished run of our own
+                        Scenario s = load_scenario(c.scenario);
+                        apply_override(s, "material.friction_disc_deg=" + format_number(job.angle));
+                        if (c.scale) apply_override(s, "release.scale=" + std::to_string(c.scale));
+                        apply_override(s, "scenario.seed=" + std::to_string(s.seed + unsigned(job.seed)));
+                        finish_scenario(s);
+                        if (!s.dam_break.enabled) throw InputError(c.scenario + ": not a [dam_break] scenario");
+                        RunOptions ro;
+                        ro.out_dir = dir;
+                        run_scenario(s, ro);
+                    }
+                    auto summary = read_summary(dir + "/summary.json");
+                    // the angles from the saved envelope with this configuration's sections:
+                    // changing them needs no rerun
+                    const SlopeAngles a = slope_angles(read_envelope_csv(dir + "/envelope.csv"), 0.1, c.wall_gap);
+                    summary["gamma_ges"] = a.gamma_ges;
+                    for (int i = 0; i < 5; ++i) summary["gamma_" + std::to_string(i + 1)] = a.gamma[i];
+                    if (!fs::exists(dir + "/deposit.png")) render_deposit(dir, summary, c.wall_gap);
+                    std::lock_guard<std::mutex> lock(mu);
+                    done[{job.angle, job.seed}] = summary;
+                    (reused ? res.runs_reused : res.runs_done) += 1;
+                    std::printf("  %s seed %d: objective %.2f deg%s\n", angle_tag(job.angle).c_str(), job.seed + 1,
+                                objective_of(summary, c), reused ? " (reused)" : "");
+                    std::fflush(stdout);
+                } catch (const std::exception& e) {
+                    std::lock_guard<std::mutex> lock(mu);
+                    error = dir + ": " + e.what();
+                }
+            }
+        };
+        std::vector<std::thread> pool;
+        for (int k = 0; k < std::min<int>(jobs, int(todo.size())); ++k) pool.emplace_back(worker);
+        for (auto& th : pool) th.join();
+        if (!error.empty()) throw RunError("calibration run failed: " + error);
+        std::vector<AngleResult> out;
+        for (double a : angles) {
+            AngleResult r;
+            r.angle = a;
+            std::vector<double> obj;
+            for (int k = 0; k < c.seeds; ++k) {
+                r.runs.push_back(done[{a, k}]);
+                obj.push_back(objective_of(done[{a, k}], c));
+            }
+            double sum = 0;
+            for (double v : obj) sum += v;
+            r.objective_mean = sum / double(obj.size());
+            r.objective_min = *std::min_element(obj.begin(), obj.end());
+            r.objective_max = *std::max_element(obj.begin(), obj.end());
+            out.push_back(r);
+        }
+        return out;
+    };
+
+    std::printf("grid: %zu angles x %d seed(s), %d job(s) at a time\n", c.angles.size(), c.seeds, jobs);
+    res.grid = evaluate(c.angles);
+    size_t best = 0;
+    for (size_t k = 1; k < res.grid.size(); ++k)
+        if (res.grid[k].objective_mean < res.grid[best].objective_mean) best = k;
+    res.best_angle = res.grid[best].angle;
+    res.best_objective = res.grid[best].objective_mean;
+
+    if (c.refine && res.grid.size() >= 2) {
+        // golden section on the bracket around the best grid angle
+        double lo = res.grid[best == 0 ? 0 : best - 1].angle;
+        double hi = res.grid[std::min(best + 1, res.grid.size() - 1)].angle;
+        const double g = 0.5 * (std::sqrt(5.0) - 1.0);
+        const auto eval = [&](double a) {
+            a = std::round(a * 100.0) / 100.0;
+            for (const AngleResult& r : res.refined)
+                if (r.angle == a) return r.objective_mean;
+            for (const AngleResult& r : res.grid)
+                if (r.angle == a) return r.objective_mean;
+            std::printf("refine: %.2f deg\n", a);
+            AngleResult r = evaluate({a}).front();
+            res.refined.push_back(r);
+            if (r.objective_mean < res.best_objective) {
+                res.best_objective = r.objective_mean;
+                res.best_angle = r.angle;
+            }
+            return r.objective_mean;
+        };
+        double x1 = hi - g * (hi - lo), x2 = lo + g * (hi - lo);
+        double f1 = eval(x1), f2 = eval(x2);
+        while (hi - lo > c.tolerance) {
+            if (f1 <= f2) {
+                hi = x2;
+                x2 = x1;
+                f2 = f1;
+                x1 = hi - g * (hi - lo);
+                f1 = eval(x1);
+            } else {
+                lo = x1;
+                x1 = x2;
+                f1 = f2;
+                x2 = lo + g * (hi - lo);
+                f2 = eval(x2);
+            }
+        }
+    }
+    g_progress_muted = false;
+    res.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+
+    // ---- the Table-7-like report
+    std::vector<AngleResult> all = res.grid;
+    all.insert(all.end(), res.refined.begin(), res.refined.end());
+    std::sort(all.begin(), all.end(), [](const AngleResult& a, const AngleResult& b) { return a.angle > b.angle; });
+    const char* rows[6] = {"gamma_ges", "gamma_1", "gamma_2", "gamma_3", "gamma_4", "gamma_5"};
+    std::ostringstream csv, md;
+    csv << "angle,lab";
+    md << "# Dam-break calibration (Table 7 layout)\n\nScenario `" << c.scenario << "`, " << c.seeds
+       << " seed(s) per angle (mean shown; the objective's spread in brackets), objective = sum over sections";
+    for (int i : c.sections) md << ' ' << i;
+    md << " of |gamma_i - gamma_i,lab|. Best angle in bold. Wall time " << format_number(std::round(res.wall_seconds))
+       << " s for " << res.runs_done << " new run(s), " << res.runs_reused << " reused.\n\n| angle (deg) | lab |";
+    for (const auto& a : all) {
+        csv << "," << angle_tag(a.angle);
+        md << (a.angle == res.best_angle ? " **" : " ") << format_number(a.angle) << (a.angle == res.best_angle ? "** |" : " |");
+    }
+    csv << "\n";
+    md << "\n|---|---|";
+    for (size_t k = 0; k < all.size(); ++k) md << "---|";
+    md << "\n";
+    for (int r = 0; r < 6; ++r) {
+        csv << rows[r] << "," << c.lab[r];
+        char lab[32];
+        std::snprintf(lab, sizeof lab, "%.2f", c.lab[r]);
+        md << "| " << rows[r] << " | " << lab << " |";
+        for (const auto& a : all) {
+            char v[32];
+            std::snprintf(v, sizeof v, "%.2f", a.mean(rows[r]));
+            csv << "," << v;
+            md << " " << v << " |";
+        }
+        csv << "\n";
+        md << "\n";
+    }
+    csv << "objective,0";
+    md << "| objective | 0 |";
+    for (const auto& a : all) {
+        char v[64];
+        std::snprintf(v, sizeof v, "%.2f", a.objective_mean);
+        csv << "," << v;
+        if (c.seeds > 1) std::snprintf(v, sizeof v, "%.2f [%.2f, %.2f]", a.objective_mean, a.objective_min, a.objective_max);
+        md << (a.angle == res.best_angle ? " **" : " ") << v << (a.angle == res.best_angle ? "** |" : " |");
+    }
+    csv << "\n";
+    md << "\n\nBest: " << format_number(res.best_angle) << " deg (objective " << format_number(std::round(res.best_objective * 1000) / 1000)
+       << " deg). The thesis (PFC2D): best 15.5 deg, objective 3.17 deg.\n\nDeposits with their envelope, sections and fitted "
+          "angles: `runs/<angle>-seed<k>/deposit.png`; all envelopes: `envelopes.png`.\n";
+    write_file_atomic(o.out + "/table.csv", csv.str());
+    write_file_atomic(o.out + "/table.md", md.str());
+
+    // envelopes.png: the lab profile (section angles integrated from the toe at 0.5 m) and each run's envelope
+    if (gnuplot_available()) {
+        std::ostringstream lab;
+        lab << "x,y\n";
+        double y = 0;
+        lab << 0.5 << ',' << 0 << '\n';
+        for (int i = 1; i <= 5; ++i) {
+            y += 0.1 * std::tan(c.lab[i] * kPi / 180.0);
+            lab << 0.5 - 0.1 * i << ',' << y << '\n';
+        }
+        write_file_atomic(o.out + "/lab_profile.csv", lab.str());
+        std::ostringstream gp;
+        gp << "set terminal pngcairo size 1100,600 font 'DejaVu Sans,11'\nset output '" << o.out << "/envelopes.png'\n"
+           << "set datafile separator ','\nset grid\nset key outside right top\nset xlabel 'x from the back wall (m)'\n"
+           << "set ylabel 'surface height (m)'\nset title 'Dam-break deposits: envelopes against the lab profile'\n"
+           << "plot '" << o.out << "/lab_profile.csv' skip 1 using 1:2 with linespoints lw 3 lc rgb 'black' title 'lab (angles of Table 7, toe at 0.5 m)'";
+        for (const auto& a : all)
+            gp << ", '" << o.out << "/runs/" << angle_tag(a.angle) << "-seed1/envelope.csv' skip 1 using 1:2 with lines title '"
+               << format_number(a.angle) << " deg'";
+        gp << "\n";
+        write_file_atomic(o.out + "/envelopes.gp", gp.str());
+        if (std::system(("gnuplot '" + o.out + "/envelopes.gp' 2>/dev/null").c_str()) != 0)
+            std::fprintf(stderr, "demlab: warning: gnuplot failed on envelopes.gp\n");
+    }
+    return res;
+}
+
+std::string apply_calibration(const std::string& scenario, double angle, bool force) {
+    std::ifstream in(scenario);
+    if (!in) throw InputError(scenario + ": cannot open the scenario to apply the calibration to");
+    std::vector<std::string> lines;
+    std::string line;
+    while (std::getline(in, line)) lines.push_back(line);
+    const std::string value = "friction_disc_deg = " + format_number(angle);
+    bool in_material = false, done = false;
+    for (size_t k = 0; k < lines.size() && !done; ++k) {
+        const std::string& l = lines[k];
+        if (!l.empty() && l[0] == '[') in_material = (l.rfind("[material]", 0) == 0);
+        if (in_material && l.rfind("friction_disc_deg", 0) == 0) {
+            lines[k] = value + "  # calibrated by demlab calibrate";
+            done = true;
+        }
+    }
+    if (!done) {
+        auto it = std::find(lines.begin(), lines.end(), std::string("[material]"));
+        if (it != lines.end()) lines.insert(it + 1, value + "  # calibrated by demlab calibrate");
+        else {
+            lines.push_back("");
+            lines.push_back("[material]");
+            lines.push_back(value + "  # calibrated by demlab calibrate");
+        }
+    }
+    fs::path p(scenario);
+    const std::string out = (p.parent_path() / (p.stem().string() + "-calibrated" + p.extension().string())).string();
+    if (fs::exists(out) && !force)
+        throw InputError(out + " exists already: pass --force to replace it (the original " + scenario + " is never changed)");
+    std::ostringstream text;
+    text << "# " << out << ": " << scenario << " with the disc-disc friction angle from demlab calibrate\n";
+    for (const auto& l : lines) text << l << "\n";
+    parse_scenario(text.str(), out);  // still a valid scenario
+    write_file_atomic(out, text.str());
+    return out;
+}
+
+}  // namespace demlab

@@ -1,0 +1,82 @@
+#include "core/fileio.h"
+
+#include <cstdio>
+#include <filesystem>
+
+#include "core/error.h"
+
+namespace demlab {
+
+void write_file_atomic(const std::string& path, const std::string& content) {
+    const std::string tmp = path + ".tmp";
+    {
+        std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+        if (!out) throw RunError("cannot write " + tmp);
+        out << content;
+        out.flush();
+        if (!out) throw RunError("cannot write " + tmp + " (disk full?)");
+    }
+    std::error_code ec;
+    std::filesystem::rename(tmp, path, ec);
+    if (ec) throw RunError("cannot rename " + tmp + " to " + path + ": " + ec.message());
+}
+
+void SeriesFile::open(const std::string& path) {
+    path_ = path;
+    out_.open(path + ".part", std::ios::trunc);
+    if (!out_) throw RunError("cannot write " + path + ".part");
+    out_.precision(10);
+}
+
+void SeriesFile::reopen(const std::string& path, uint64_t size) {
+    namespace fs = std::filesystem;
+    path_ = path;
+    const std::string part = path + ".part";
+    std::error_code ec;
+    const auto have = fs::file_size(part, ec);
+    if (ec || have < size)
+        throw RunError("cannot resume: " + part + " is missing or shorter than at the checkpoint (" +
+                       std::to_string(size) + " bytes)");
+    fs::resize_file(part, size, ec);
+    if (ec) throw RunError("cannot resume: cannot cut " + part + " back: " + ec.message());
+    // not ios::app: its position reads 0 until the first write, and flush() reports it
+    out_.open(part, std::ios::in | std::ios::out);
+    out_.seekp(0, std::ios::end);
+    if (!out_) throw RunError("cannot write " + part);
+    out_.precision(10);
+}
+
+uint64_t SeriesFile::flush() {
+    if (!out_.is_open()) return 0;
+    out_.flush();
+    if (!out_) throw RunError("cannot write " + path_ + ".part (disk full?)");
+    return uint64_t(out_.tellp());
+}
+
+void SeriesFile::close() {
+    if (!out_.is_open()) return;
+    out_.close();
+    std::error_code ec;
+    std::filesystem::rename(path_ + ".part", path_, ec);
+    if (ec) throw RunError("cannot rename " + path_ + ".part: " + ec.message());
+}
+
+std::string json_string(const std::string& text) {
+    std::string o = "\"";
+    for (const char ch : text) {
+        const unsigned char u = static_cast<unsigned char>(ch);
+        if (ch == '"' || ch == '\\') {
+            o += '\\';
+            o += ch;
+        } else if (u < 0x20) {
+            char b[8];
+            std::snprintf(b, sizeof b, "\\u%04x", unsigned(u));
+            o += b;
+        } else {
+            o += ch;
+        }
+    }
+    return o + "\"";
+}
+
+}  // namespace demlab

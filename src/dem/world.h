@@ -1,0 +1,446 @@
+// The simulated world: discs (structure of arrays), walls, the contact lists and the time
+// loop. One step (PFC's cycle, thesis Fig. 8): broad phase, contact forces (linear law),
+// time step, central-difference motion with the chosen rotation model, wall motion.
+#pragma once
+#include <atomic>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "dem/broad_phase.h"
+#include "dem/integrate_kernel.h"
+#include "dem/laws/contact_law.h"
+#include "dem/material.h"
+#include "dem/laws/pair_kernel.h"
+#include "dem/range_balance.h"
+#include "dem/rotation.h"
+#include "core/vec2.h"
+#include "geometry/wall.h"
+
+namespace demlab {
+
+class ThreadPool;
+class BinaryWriter;
+class BinaryReader;
+
+struct DampingDef {
+    double beta_n = 0.5;                   // -, normal critical damping ratio in [0, 1) (Table 15)
+    double beta_s = 0.5;                   // -, shear critical damping ratio in [0, 1)
+    DashpotMode dp_mode = DashpotMode::Full;
+    double local_alpha = 0.0;              // -, PFC local damping (eq. 2.51) in [0, 1); settling only
+};
+
+struct TimeStepDef {
+    bool automatic = true;                 // PFC rule (timestep.h); false: the fixed step below
+    double safety = 0.8;                   // -, safety factor of the automatic step, (0, 1]
+    double fixed = 1.0e-6;                 // s, used when automatic = false
+    bool damping_correction = true;        // shrink the rotational bound for the shear dashpot (timestep.h)
+};
+
+// Software prefetch in the force pass: Auto turns it on when the step's arrays outgrow the
+// cache (World::prefetching), On and Off force it (benchmarks, tests).
+enum class Prefetch { Auto, Off, On };
+// the bytes a step must stream (World::step_bytes) above which Auto prefetches
+size_t prefetch_threshold_bytes();
+
+struct WorldDef {
+    Vec2 gravity{0.0, -9.81};              // m/s2
+    DampingDef damping;
+    TimeStepDef timestep;
+    RotationDef rotation;
+    FrictionRule friction_rule_disc_disc = FrictionRule::Min;  // PFC default
+    FrictionRule friction_rule_disc_wall = FrictionRule::Max;  // thesis, section 4.3.2
+    double broadphase_margin = 0.0;        // m, pad of the fat boxes; 0 = half the smallest radius
+    double wall_piece_length = 0.0;        // m, walls are cut into pieces this long for the broad phase;
+                                           // 0 = six times the largest radius (three diameters)
+    double joint_tolerance = 1.0e-3;       // m, wall ends closer than this are joined (snapped)
+    double max_overlap_ratio = 0.5;        // -, an overlap beyond this fraction of the smaller radius stops the run
+    Vec2 domain_lo{-1e30, -1e30};          // m, a disc centre leaving [lo, hi] stops the run
+    Vec2 domain_hi{1e30, 1e30};
+    int threads = 1;                       // worker threads; results are the same bits for any count
+    bool simd = true;                      // the disc-disc kernel 4 pairs at a time when the CPU has AVX2
+                                           // (pair_kernel_avx2.cpp); the same bits as the scalar kernel
+    bool avx512 = true;                    // with simd: its law 8 pairs and its integration 8 discs at a time
+                                           // when the CPU has AVX-512 (pair_kernel_avx512.cpp,
+                                           // integrate_avx512.cpp); the same bits again
+    Prefetch prefetch = Prefetch::Auto;    // the force pass asks for its arrays' lines ahead of use
+                                           // (world.cpp, kPrefetchContacts); never changes a result
+};
+
+void validate(const WorldDef& d, const std::string& where);
+
+struct DiscDef {
+    Vec2 pos{0.0, 0.0};                    // m
+    double radius = 0.0;                   // m, > 0
+    Vec2 vel{0.0, 0.0};                    // m/s
+    double omega = 0.0;                    // rad/s, counter-clockwise
+    double angle = 0.0;                    // rad
+    int material = 0;                      // index returned by add_material
+};
+
+// A disc-wall contact candidate and its history.
+struct WallContact {
+    int32_t disc, wall;
+    double fs, cn, cs;
+    float damp_n, damp_s;
+};
+
+// Energies of the current state and what was dissipated so far, J per metre of thickness.
+// Central differences keep velocities at half steps, so the ledger is centred too: kinetic
+// energy from v(t - dt/2), potential energy at t - dt/2 (mean of the last two positions), and
+// a dashpot's work as its force times the mean of the relative velocities before and after
+// the step (the displacement (x(t+dt) - x(t-dt)) / 2 it acts over).
+struct EnergyReport {
+    double kinetic_translation = 0, kinetic_rotation = 0, potential = 0, elastic = 0;
+    double dissipated_contacts = 0;   // dashpots and sliding
+    double dissipated_local = 0;      // local damping
+    double dissipated_rotation = 0;   // rolling resistance and rotational damping
+    double work_by_walls = 0;         // work done on the discs by moving walls
+    double removed_with_walls = 0;    // elastic energy of contacts lost when a wall was removed
+    // Balance: kinetic + potential + elastic + dissipated - work_by_walls should stay constant.
+    double balance() const {
+        return kinetic_translation + kinetic_rotation + potential + elastic + dissipated_contacts +
+               dissipated_local + dissipated_rotation + removed_with_walls - work_by_walls;
+    }
+};
+
+class World {
+public:
+    explicit World(const WorldDef& def = WorldDef{});
+    ~World();
+    World(World&&) noexcept;
+
+    int add_material(const MaterialDef& m);
+    int add_disc(const DiscDef& d);
+    int add_wall(const WallDef& w);
+    // Checks the whole set-up, joins wall ends, builds the broad phase and the first time step.
+    void finalize();
+
+    void step();
+    void run(long steps);
+
+    // --- state (read-only views) ---
+    size_t disc_count() const { return pos_.size(); }
+    size_t wall_count() const { return walls_.size(); }
+    double time() const { return time_; }
+    double dt() const { return dt_; }
+    long step_count() const { return steps_; }
+    const WorldDef& def() const { return def_; }
+
+    const std::vector<Vec2>& positions() const { return pos_; }
+    const std::vector<Vec2>& velocities() const { return vel_; }
+    const std::vector<double>& radii() const { return radius_; }
+    const std::vector<double>& masses() const { return mass_; }
+    const std::vector<double>& angles() const { return angle_; }
+    const std::vector<double>& omegas() const { return omega_; }
+    Vec2 force(size_t i) const { return load_[i].force; }      // contact force of the last step, N/m
+    double torque(size_t i) const { return load_[i].torque; }  // contact torque of the last step, N m/m
+    const std::vector<DiscContact>& disc_contacts() const { return dd_; }
+    const std::vector<WallContact>& wall_contacts() const { return dw_; }
+    const WallDef& wall_def(int w) const { return walls_[size_t(w)]; }
+    const WallGeom& wall_geom(int w) const { return geom_[size_t(w)]; }
+    bool wall_active(int w) const { return wall_active_[size_t(w)] != 0; }
+
+    // Force (N per metre of thickness) and moment about the origin (N m / m) that the discs
+    // exert on wall w, summed over its contacts in the last step.
+    Vec2 wall_force(int w) const { return wall_force_[size_t(w)]; }
+    double wall_moment(int w) const { return wall_moment_[size_t(w)]; }
+    // Time integral of wall_force since the start, N s / m.
+    Vec2 wall_impulse(int w) const { return wall_impulse_[size_t(w)]; }
+
+    // Number of disc-disc and disc-wall contacts with overlap in the last step.
+    long touching_disc_pairs() const { return touching_dd_; }
+    long touching_wall_pairs() const { return touching_dw_; }
+
+    EnergyReport energy() const;
+    // The discs' kinetic energy after the last step, J/m: sum of 0.5 m |v|^2 + 0.5 I omega^2
+    // (no rotation term when rotation is locked), added up by the integration per block of
+    // discs and the blocks in order, so the same bits for any thread count, at no serial
+    // cost (the run's rest and blow-up watch reads it every 10 steps). Not updated by the
+    // direct edits below; 0 before the first step.
+    double kinetic_energy() const { return kinetic_; }
+    // The force pass's split (world.cpp): disc ranges (one per thread when shared out) and how
+    // many candidate pairs cross from one range to another (computed into slots first).
+    int force_pass_ranges() const { return force_ranges_; }
+    bool simd_kernel() const { return avx2_; }  // the AVX2 kernels are in use (pair forces, integration)
+    bool avx512_kernel() const { return avx512_; }  // and the pair law and integration run eight at a time (AVX-512)
+    // whether the force pass prefetches (WorldDef::prefetch), and the bytes its step streams through
+    bool prefetching() const;
+    size_t step_bytes() const;
+    size_t cross_contacts() const { return cross_.size(); }
+    // disc-disc candidates the AVX2 pass skipped by the clearance test (PairSkip), summed over
+    // the steps, and the approach bound now, m
+    long pairs_skipped() const { return pairs_skipped_; }
+    long candidate_passes() const { return candidate_passes_; }  // disc-disc candidates, summed over the force passes
+    double approach() const { return approach_; }
+    // per range: its share of the work model (discs + owned contacts) after the measured
+    // balancing, and how often the ranges were re-cut to balance their times
+    const std::vector<double>& force_pass_shares() const { return range_share_; }
+    long force_pass_rebalances() const { return rebalances_; }
+    // Wall-clock seconds in the steps' candidate-list updates (broad phase and contact lists),
+    // summed: mostly the calling thread's alone (docs/performance.md).
+    double list_update_seconds() const { return list_seconds_; }
+    // How often the pass ran as one range although the pool has more threads, because more
+    // than the limit's share of the disc-disc candidates crossed between ranges (discs not
+    // in space order; split_force_pass). The limit can be set for tests and experiments, from
+    // 0 to 1 (1: never one range); no bit depends on it.
+    long force_pass_one_range_cuts() const { return one_range_cuts_; }
+    // Wall-clock seconds of the force passes that ran as more than one range, summed, and the
+    // share of the threads' time in them that the ranges spent working (1 - the share they
+    // waited: at the join for the slowest range, for another range's cross contacts, and for
+    // the hand-over). 1 when no pass was shared out. The step-to-step balance on a machine
+    // whose cores' speeds vary (docs/performance.md, session 12).
+    double force_pass_shared_seconds() const { return shared_pass_seconds_; }
+    double force_pass_busy_share() const;
+    void set_cross_share_limit(double share);
+    // Re-cuts the ranges in these shares of the work model (one per range, summing to 1; the
+    // measured balancing continues from them). For tests and experiments: no bit depends on it.
+    void cut_force_pass(const std::vector<double>& shares);
+    // Runs the force pass as one range for the next `steps` steps, then cuts it for the pool
+    // again. The step does this itself when the ranges worked less than 1 / ranges of the
+    // threads' time in BusyWatch::kWindows balancing windows in a row (another process on a core:
+    // one_range_would_be_faster, range_balance.h), for kOneRangeSteps; callable for tests and
+    // experiments. No bit depends on it.
+    void run_as_one_range_for(long steps);
+    // Whether the step may fall back so (on by default); off for tests that check the ranges.
+    void set_busy_fallback(bool on) { busy_fallback_ = on; }
+    // how often the step fell back to one range for a busy machine, and the steps it ran so
+    long force_pass_busy_fallbacks() const { return busy_fallbacks_; }
+    long force_pass_one_range_steps() const { return one_range_steps_; }
+    const BroadPhaseStats& broad_phase_stats() const { return broad_.stats(); }
+    double broad_phase_margin() const { return broad_.margin(); }
+
+    // The automatic step for the current contacts (timestep rule, see timestep.h).
+    double automatic_dt() const;
+
+    // --- direct edits (tests, generation); call between steps ---
+    void set_velocity(int i, const Vec2& v) { vel_[size_t(i)] = v; }
+    void set_omega(int i, double w) { omega_[size_t(i)] = w; }
+    void set_position(int i, const Vec2& p) {
+        pos_[size_t(i)] = p;
+        discs_may_have_escaped_ = true;
+        forget_clearances();
+    }
+    void set_dt(double dt);  // switches to a fixed step
+    // Changes a disc's radius (mass and inertia follow); call refresh_dashpots() after a batch.
+    void set_radius(int i, double r);
+    void refresh_dashpots();
+    // Mean |net force| (contact + gravity) over mean |contact force| of the last step: PFC's
+    // equilibrium ratio (0 when nothing touches).
+    double unbalanced_force_ratio() const;
+    void set_local_damping(double alpha);
+    void set_gravity(const Vec2& g) { def_.gravity = g; }
+
+    // --- checkpoints (world_state.cpp) ---
+    // Writes the dynamic state: disc motion, time and step, the walls' positions, activity
+    // and loads, every contact's history and the energy ledger. load_state() restores it
+    // into a world built from the same set-up (same discs, walls and materials; finalized);
+    // the continued run then gives the same bits as one never stopped (the candidate lists
+    // are rebuilt: see world_state.cpp for why that changes nothing).
+    void save_state(BinaryWriter& out) const;
+    void load_state(BinaryReader& in);
+
+private:
+    // The force pass; with then_integrate (a step), each range's discs are integrated as soon
+    // as their sums are complete, and integrate_finish() must follow.
+    void compute_forces(bool then_integrate = false);
+    struct DtFactors {
+        bool rotation_free;
+        double phi_sq, phi_t_sq;
+    };
+    struct IntegrateConsts {
+        double dt = 0.0;
+        Vec2 g{0.0, 0.0};
+        double alpha = 0.0, g_abs = 0.0;
+        bool auto_dt = false;
+        DtFactors dtf{};
+    };
+    IntegrateConsts integrate_prepare();
+    void integrate_discs(size_t begin, size_t end, int chunk, const IntegrateConsts& k);
+    // does integrate_discs use the AVX2 (or AVX-512) loop? (per-disc rotational damping)
+    bool avx2_integration() const;
+    void integrate_note(int chunk, size_t fault, double best_sq, bool any_escaped, double speed_l1, double extent_l1);
+    void integrate_finish();
+    void move_walls();
+    void refresh_contacts();
+    void join_wall_ends();
+    double contact_mass_disc(int i, int j) const;
+    double margin_target() const;  // m, the broad phase's pad (WorldDef::broadphase_margin)
+    double wall_piece_target() const;  // m, the broad phase's longest wall piece (WorldDef::wall_piece_length)
+    // the automatic step (timestep.h): its constant factors, one disc's bound, the step
+    DtFactors dt_factors() const;
+    double critical_step_squared_of(size_t i, const DtFactors& f) const;
+    static constexpr long kPadCheckSteps = 128;  // see step()
+    static double critical_step_squared_at(const DiscLoad& l, const MaterialDef& m, double mass, double inertia,
+                                           double radius, const DtFactors& f);
+    double step_from_critical_squared(double best_sq) const;
+
+    WorldDef def_;
+    bool finalized_ = false;
+    double time_ = 0.0, dt_ = 0.0;
+    long steps_ = 0;
+
+    std::vector<MaterialDef> materials_;
+    std::vector<PairMaterial> mat_dd_;   // [mi * nm + mj]
+    std::vector<PairMaterial> mat_dw_;   // [mi * nw + w]
+
+    // discs, structure of arrays
+    std::vector<Vec2> pos_, vel_;
+    std::vector<double> radius_, mass_, inv_mass_, inertia_, inv_inertia_, angle_, omega_;
+    std::vector<int32_t> material_;
+    std::vector<double> rr_factor_;     // Preh-Poisel factor per disc, 1/m (0 without rolling resistance)
+    // what each disc's contacts add up to in a step (DiscLoad, pair_kernel.h)
+    std::vector<DiscLoad> load_;
+
+    // walls
+    std::vector<WallDef> walls_;
+    std::vector<WallGeom> geom_;
+    std::vector<uint8_t> wall_active_, wall_moving_;
+    std::vector<Vec2> wall_force_, wall_impulse_;
+    std::vector<double> wall_moment_;
+
+    BroadPhase broad_;
+    std::unique_ptr<ThreadPool> pool_;
+    // The force pass (compute_forces) splits the discs into one index range per thread; a
+    // thread owns the disc-disc contacts whose first disc i is in its range and the wall
+    // contacts of its discs, and adds them straight into its discs' sums. A contact whose
+    // second disc j belongs to a later range ("cross" contact) is computed first into a slot,
+    // so that each disc still receives its terms in contact-list order (world.cpp).
+
+    // What the walls' loads and the energy ledger need of a wall contact that touches or
+    // dissipates, written by the range that owns it, in list order, into that range's own
+    // buffer; the calling thread adds the buffers up in range order after the pass
+    // (compute_forces). Contacts with nothing to add leave no record.
+    struct WallSum {
+        double fx, fy;      // N/m, the force on the disc
+        double moment;      // N, cross(contact point, force on the disc), about the origin
+        double dissipated;  // J/m, this step
+        int32_t wall;       // the wall; -1: not touching (a last dashpot half only)
+    };
+    std::vector<std::vector<WallSum>> wall_sums_;  // per range, sized to its wall contacts
+    std::vector<size_t> disc_split_, contact_split_, wall_split_;  // per range: first disc, contact, wall contact
+    std::vector<int32_t> cross_;            // cross contacts, in list order
+    std::vector<size_t> cross_start_;       // per range: its first cross contact in cross_
+    std::vector<PairOut> cross_out_;        // their results, same order
+    std::vector<int32_t> cross_in_start_, cross_in_;  // per range: the cross contacts whose j it owns (CSR)
+    // The cross contacts' own copies of their records and clearances, in cross_in_ order, and
+    // each one's place there (cross_pos_[m]): the range that computes them reads and writes
+    // only these, never a line of dd_ or clearance_ that the range owning their first disc
+    // works on (compute_forces says what that cost). That range copies a changed history
+    // back into dd_ when it adds the contact, so dd_ is whole after every pass. Copied from
+    // dd_ and clearance_ at the next pass after a cut or an edit of dd_ (cross_copies_stale_:
+    // cut_ranges, refresh_dashpots, forget_clearances, which load_state calls). A clearance
+    // left behind in clearance_ stays a valid bound (PairSkip), so none is copied back.
+    std::vector<DiscContact> cross_dd_;
+    std::vector<float> cross_clearance_;
+    std::vector<int32_t> cross_pos_;
+    std::vector<uint8_t> cross_todo_;  // per cross contact: 1 if this pass gave it results (cross_out_)
+    bool cross_copies_stale_ = true;
+    int force_ranges_ = 1;
+    bool avx2_ = false;                     // def_.simd and the CPU has AVX2
+    bool avx512_ = false;                   // and def_.avx512 and the CPU has AVX-512
+    std::vector<PairBatch> pair_batch_;     // per range: the AVX2 kernel's results before they are added
+    std::vector<double> default_k_tran_, default_k_rot_;  // per material, N/m (integrate_prepare)
+    void split_force_pass();
+    void cut_ranges(size_t r);
+    double max_cross_share_ = 0.10;  // of the disc-disc candidates (split_force_pass)
+    long one_range_cuts_ = 0;
+    double list_seconds_ = 0.0;
+    // one range for a busy machine (run_as_one_range_for): steps left, fallbacks, steps run so
+    static constexpr long kOneRangeSteps = 4096;
+    BusyWatch busy_watch_;
+    bool busy_fallback_ = true;
+    long one_range_left_ = 0;
+    long busy_fallbacks_ = 0;
+    long one_range_steps_ = 0;
+    double window_pass_seconds_ = 0.0;  // s, the shared passes' wall time in this balancing window
+    // passes shared out: their wall time and the ranges' working time, s
+    double shared_pass_seconds_ = 0.0, shared_pass_busy_seconds_ = 0.0;
+    // The range pass goes block by block, a block being kFuseBlock discs (whole ledger
+    // blocks) and the contacts whose first disc is in it; each block is integrated as soon as
+    // its pairs and wall contacts are done (compute_forces). Measured on the flume and DB-9k:
+    // docs/performance.md, session 10.
+    static constexpr size_t kFuseBlock = 256;
+    struct FuseBlock {
+        size_t disc_end;     // its discs end here (they start where the last block ended)
+        size_t contact_end;  // its disc-disc contacts end here (dd_ index)
+        size_t wall_end;     // its wall contacts end here (dw_ index)
+        size_t reach;        // the loads of discs below this are zeroed before its pairs: one
+                             // more than the largest disc of the range its pairs add to
+    };
+    std::vector<FuseBlock> fuse_blocks_;
+    std::vector<size_t> fuse_start_;      // per range: its first block (ranges + 1 entries)
+    std::vector<size_t> cross_in_reach_;  // per range: the cross contacts into it add below this disc
+    // per range: the last force pass whose cross contacts into it are computed (compute_forces)
+    struct alignas(64) CrossDone {
+        std::atomic<uint64_t> pass{0};
+    };
+    std::unique_ptr<CrossDone[]> cross_done_;
+    size_t cross_done_size_ = 0;
+    uint64_t cross_pass_ = 0;
+    // measured balance of the ranges (balance_force_pass)
+    static constexpr int kBalanceWindow = 64;          // steps between checks
+    static constexpr double kBalanceTolerance = 0.03;  // longest range over the mean, - 1
+    struct alignas(64) RangeClock {
+        double seconds = 0.0;  // s, in the force pass and integration since the last check
+        double last = 0.0;     // s, the same in the last pass alone
+        long touching_dd = 0;  // touching disc-disc contacts counted by its discs (each pair twice)
+        size_t wall_sums = 0;  // records in its wall_sums_ buffer this pass
+    };
+    // The energy ledger's per-step sums, per block of kLedgerBlock discs: the ranges are cut at
+    // block ends, each range sums its blocks (LedgerBlock, integrate_kernel.h), and the blocks
+    // are added in order.
+    static constexpr size_t kLedgerBlock = 64;
+    std::vector<LedgerBlock> ledger_blocks_;
+    std::vector<RangeClock> range_clock_;
+    std::vector<double> range_share_;  // per range: target share of the work model
+    int balance_steps_ = 0;
+    long rebalances_ = 0;
+    void balance_force_pass();
+    void restart_balance_window();
+    // the first fault each chunk met in the last pass (reported in index order, so the
+    // message does not depend on the thread count)
+    struct Fault {
+        size_t index = SIZE_MAX;
+        std::string message;
+    };
+    std::vector<Fault> dd_fault_, dw_fault_;
+    // What each chunk's integration found in this step (integrate_note), a cache line per
+    // chunk: the threads write theirs after every block. (It replaced five vectors whose
+    // shared lines both threads wrote; no measurable speed-up, docs/performance.md session 12,
+    // but one record and one reset.)
+    struct alignas(64) ChunkNote {
+        size_t fault = SIZE_MAX;    // the first disc that left the domain or went non-finite
+        double dt_sq = INFINITY;    // s^2, the smallest critical step squared
+        double speed = 0.0;         // m/s, the largest |vx| + |vy| (the clearance test's approach)
+        double extent = 0.0;        // m, the largest |x| + |y|
+        bool escaped = false;       // a disc left its fat box
+    };
+    std::vector<ChunkNote> chunk_note_;
+    bool discs_may_have_escaped_ = true;  // false when integrate_discs() saw every disc inside its fat box
+    std::vector<DiscContact> dd_, dd_scratch_;
+    // The AVX2 pass' clearance test (PairSkip, pair_kernel.h): per disc-disc contact, the
+    // approach below which it is known to be open with a zero history (carried with the
+    // contact when the lists are rebuilt); the approach since the last reset, m.
+    std::vector<float> clearance_, clearance_scratch_;
+    double approach_ = 0.0;
+    long pairs_skipped_ = 0;  // summed over the steps (the ranges' PairBatch::skipped)
+    long candidate_passes_ = 0;
+    bool clearances_stale_ = false;  // forget_clearances() was called: reset at the next force pass
+    void forget_clearances();
+    std::vector<WallContact> dw_, dw_scratch_;
+    long touching_dd_ = 0, touching_dw_ = 0;
+
+    // energy ledger
+    double diss_contacts_ = 0, diss_local_ = 0, diss_rotation_ = 0, work_walls_ = 0, removed_walls_ = 0, last_dt_ = 0;
+    double kinetic_ = 0;
+    // energy()'s partial sums per block (kept between calls: no allocation in the run)
+    static constexpr size_t kEnergyBlock = 2048;
+    struct EnergyBlock {
+        double kinetic_translation = 0, kinetic_rotation = 0, potential = 0, elastic = 0;
+    };
+    mutable std::vector<EnergyBlock> energy_blocks_;
+};
+
+}  // namespace demlab

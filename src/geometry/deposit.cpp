@@ -1,0 +1,128 @@
+#include "geometry/deposit.h"
+
+#include <cmath>
+#include <fstream>
+
+#include "core/error.h"
+#include <unordered_map>
+
+namespace demlab {
+
+std::vector<uint8_t> connected_discs(const std::vector<Vec2>& p, const std::vector<double>& radius, double gap) {
+    const size_t n = p.size();
+    std::vector<uint8_t> ok(n, 0);
+    if (n == 0) return ok;
+    double r_max = 0;
+    for (double r : radius) r_max = std::max(r_max, r);
+    const double cell = 2.0 * r_max + gap;
+    std::unordered_map<long long, std::vector<int>> grid;
+    grid.reserve(n);
+    auto key = [](long long ix, long long iy) { return ix * 2000003LL + iy; };
+    for (size_t i = 0; i < n; ++i)
+        grid[key((long long)std::floor(p[i].x() / cell), (long long)std::floor(p[i].y() / cell))].push_back(int(i));
+    for (size_t i = 0; i < n; ++i) {
+        if (ok[i]) continue;
+        const long long ix = (long long)std::floor(p[i].x() / cell), iy = (long long)std::floor(p[i].y() / cell);
+        for (long long dx = -1; dx <= 1 && !ok[i]; ++dx)
+            for (long long dy = -1; dy <= 1 && !ok[i]; ++dy) {
+                auto it = grid.find(key(ix + dx, iy + dy));
+                if (it == grid.end()) continue;
+                for (int j : it->second) {
+                    if (size_t(j) == i) continue;
+                    const double reach = radius[i] + radius[size_t(j)] + gap;
+                    if ((p[size_t(j)] - p[i]).squaredNorm() <= reach * reach) {
+                        ok[i] = 1;
+                        ok[size_t(j)] = 1;
+                        break;
+                    }
+                }
+            }
+    }
+    return ok;
+}
+
+Envelope upper_envelope(const std::vector<Vec2>& pos, const std::vector<double>& radius,
+                        const std::vector<uint8_t>& use, double x_from, double x_to, double dx) {
+    Envelope e;
+    e.x0 = x_from;
+    e.dx = dx;
+    const size_t m = size_t(std::floor((x_to - x_from) / dx)) + 1;
+    e.y.assign(m, NAN);
+    for (size_t i = 0; i < pos.size(); ++i) {
+        if (!use.empty() && !use[i]) continue;
+        const double r = radius[i], xc = pos[i].x();
+        const long k0 = std::max(0L, long(std::ceil((xc - r - x_from) / dx)));
+        const long k1 = std::min(long(m) - 1, long(std::floor((xc + r - x_from) / dx)));
+        for (long k = k0; k <= k1; ++k) {
+            const double u = e.x(size_t(k)) - xc;
+            const double top = pos[i].y() + std::sqrt(std::max(0.0, r * r - u * u));
+            if (std::isnan(e.y[size_t(k)]) || top > e.y[size_t(k)]) e.y[size_t(k)] = top;
+        }
+    }
+    return e;
+}
+
+bool fit_line(const Envelope& e, double lo, double hi, double& slope, double& intercept) {
+    double sx = 0, sy = 0, sxx = 0, sxy = 0;
+    long n = 0;
+    for (size_t k = 0; k < e.y.size(); ++k) {
+        const double x = e.x(k);
+        if (x < lo || x > hi || std::isnan(e.y[k])) continue;
+        sx += x;
+        sy += e.y[k];
+        sxx += x * x;
+        sxy += x * e.y[k];
+        ++n;
+    }
+    const double den = double(n) * sxx - sx * sx;
+    if (n < 3 || !(den > 0)) return false;
+    slope = (double(n) * sxy - sx * sy) / den;
+    intercept = (sy - slope * sx) / double(n);
+    return true;
+}
+
+SlopeAngles slope_angles(const Envelope& e, double w, double wall_gap) {
+    SlopeAngles a;
+    for (int i = 1; i <= 5; ++i) {
+        double slope = 0, intercept = 0;
+        const double lo = std::max((5 - i) * w, wall_gap);
+        a.gamma[i - 1] = fit_line(e, lo, (6 - i) * w, slope, intercept) ? std::atan(-slope) * 180.0 / kPi : NAN;
+    }
+    a.toe_x = NAN;
+    a.h_wall = NAN;
+    for (size_t k = 0; k < e.y.size(); ++k)
+        if (!std::isnan(e.y[k])) {
+            if (std::isnan(a.h_wall) && e.x(k) >= e.x0 + wall_gap) a.h_wall = e.y[k];
+            a.toe_x = e.x(k);
+        }
+    a.gamma_ges = std::isnan(a.toe_x) ? NAN : std::atan(a.h_wall / std::max(a.toe_x - e.x0 - wall_gap, 1e-9)) * 180.0 / kPi;
+    return a;
+}
+
+Envelope read_envelope_csv(const std::string& path) {
+    std::ifstream in(path);
+    if (!in) throw InputError(path + ": cannot open the envelope");
+    std::string line;
+    std::getline(in, line);
+    std::vector<Vec2> pts;
+    while (std::getline(in, line)) {
+        const size_t comma = line.find(',');
+        try {
+            pts.emplace_back(std::stod(line.substr(0, comma)), std::stod(line.substr(comma + 1)));
+        } catch (...) {
+            throw InputError(path + ": malformed row '" + line + "' (expected x_m,surface_m)");
+        }
+    }
+    Envelope e;
+    e.dx = 0.001;
+    if (pts.empty()) return e;
+    e.x0 = 0.0;  // the run samples from the back wall, x = 0, every 1 mm
+    e.y.assign(size_t(std::lround(pts.back().x() / e.dx)) + 1, NAN);
+    for (const Vec2& p : pts) {
+        const long k = std::lround(p.x() / e.dx);
+        if (k >= 0 && size_t(k) < e.y.size()) e.y[size_t(k)] = p.y();
+    }
+    return e;
+}
+
+}  // namespace demlab

@@ -1,0 +1,66 @@
+#include "output/image.h"
+
+#include <png.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <memory>
+
+#include "core/error.h"
+
+namespace demlab {
+
+void write_png(const std::string& path, const Image& img) {
+    const std::string tmp = path + ".tmp";
+    std::unique_ptr<FILE, int (*)(FILE*)> fp(std::fopen(tmp.c_str(), "wb"), std::fclose);
+    if (!fp) throw RunError("cannot write " + tmp);
+    png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
+    png_infop info = png_create_info_struct(png);
+    if (setjmp(png_jmpbuf(png))) {
+        png_destroy_write_struct(&png, &info);
+        throw RunError("libpng failed writing " + tmp);
+    }
+    png_init_io(png, fp.get());
+    png_set_IHDR(png, info, png_uint_32(img.width), png_uint_32(img.height), 8, PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE,
+                 PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
+    // No row filter: the frames are flat colours, which deflate finds as runs of equal bytes;
+    // libpng's default tried all five filters on every row, and the differences they make
+    // compress worse. Measured on geometry A's 120 frames: 2 s less to write them, and 5.1
+    // instead of 9.1 MB (docs/performance.md, session 16).
+    png_set_filter(png, PNG_FILTER_TYPE_BASE, PNG_FILTER_NONE);
+    png_write_info(png, info);
+    for (int y = 0; y < img.height; ++y) png_write_row(png, const_cast<png_bytep>(img.at(0, y)));
+    png_write_end(png, nullptr);
+    png_destroy_write_struct(&png, &info);
+    fp.reset();
+    std::error_code ec;
+    std::filesystem::rename(tmp, path, ec);
+    if (ec) throw RunError("cannot rename " + tmp + ": " + ec.message());
+}
+
+Image read_png(const std::string& path) {
+    std::unique_ptr<FILE, int (*)(FILE*)> fp(std::fopen(path.c_str(), "rb"), std::fclose);
+    if (!fp) throw InputError(path + ": cannot open");
+    png_structp png = png_create_read_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
+    png_infop info = png_create_info_struct(png);
+    if (setjmp(png_jmpbuf(png))) {
+        png_destroy_read_struct(&png, &info, nullptr);
+        throw InputError(path + ": not a valid PNG");
+    }
+    png_init_io(png, fp.get());
+    png_read_info(png, info);
+    png_set_strip_16(png);
+    png_set_strip_alpha(png);
+    png_set_palette_to_rgb(png);
+    png_set_gray_to_rgb(png);
+    png_read_update_info(png, info);
+    Image img;
+    img.width = int(png_get_image_width(png, info));
+    img.height = int(png_get_image_height(png, info));
+    img.rgb.resize(size_t(img.width) * size_t(img.height) * 3);
+    for (int y = 0; y < img.height; ++y) png_read_row(png, img.at(0, y), nullptr);
+    png_destroy_read_struct(&png, &info, nullptr);
+    return img;
+}
+
+}  // namespace demlab

@@ -1,0 +1,79 @@
+// `demlab run`: builds the world of a scenario (a flume with its release mass, or explicit
+// walls and discs), runs it to rest or t_max and writes the run folder:
+//   scenario.toml (resolved), release.csv, forces.csv, front.csv, energy.csv, track.csv,
+//   deposit.csv, summary.json, snapshots/ (VTK).
+// With checkpoints it can be stopped (a signal, or killed) and resumed to the same bytes.
+#pragma once
+#include <functional>
+#include <string>
+
+#include "scenario/scenario.h"
+
+namespace demlab {
+
+struct RunOptions {
+    std::string out_dir;
+    bool force = false;     // replace the files of an existing folder
+    // called after each snapshot is written, with the two files and the snapshot's index
+    std::function<void(const std::string& discs_vtp, const std::string& walls_vtp, int index)> on_snapshot;
+    // Checkpoints (RUN_DIR/checkpoint.bin, replaced atomically; removed when the run ends):
+    double checkpoint_every = 0.0;  // s of wall-clock time between checkpoints; 0: none on a timer
+    bool handle_signals = false;    // SIGINT/SIGTERM: a final checkpoint, then Interrupted (interrupt.h)
+    bool resume = false;            // continue out_dir from its checkpoint (the scenario must be its scenario.toml)
+    // recorded in the checkpoint for `demlab resume` (the caller acts on them)
+    bool frames = false, plots = true;
+};
+
+// The checkpoint's file name inside a run folder.
+inline constexpr const char* kCheckpointFile = "checkpoint.bin";
+
+// What `demlab resume` needs to know before it restores a checkpoint.
+struct CheckpointInfo {
+    double time = 0, t_max = 0;     // s, simulated
+    long steps = 0;
+    double checkpoint_every = 0;    // s, wall-clock, as the run was started
+    bool frames = false, plots = true;
+};
+CheckpointInfo read_checkpoint_info(const std::string& run_dir);
+
+// Whether a checkpoint's scenario (resolved by the build that wrote it) is the run's: the
+// same text, or the same once this build resolves it too, so that a key added since (with
+// its default) does not strand a checkpoint written before it. A key this build does not
+// read is a different scenario.
+bool same_scenario(const std::string& stored, const std::string& resolved_now);
+
+struct RunSummary {
+    long n_discs = 0;
+    double total_mass = 0;              // kg per metre of thickness
+    double porosity = 0;                // of the release mass (settled), -1 for explicit discs
+    double dt = 0;                      // s, the last step (automatic steps vary)
+    double dt_min = 0, dt_max = 0;
+    long steps = 0;
+    double t_end = 0;
+    std::string stop_reason;            // "rest" or "t_max"
+    double wall_seconds = 0;            // of the run after the release mass was ready
+    double particle_steps_per_second = 0;
+    double runout_s = 0;                // m along the path: the deposit's front
+    double runup_height = 0;            // m: highest point of the deposit on the barrier above its foot
+    double max_runup_height_during_run = 0;
+    double t_front_at_barrier = -1;     // s, -1 if never
+    double t_peak_fx_barrier = -1;
+    double t_peak_fy_arc = -1;
+    double energy_balance_error = 0;    // |balance drift| / energy dissipated
+    // The broad phase, of this session like wall_seconds (a resumed run counts from the resume,
+    // and rebuilds its candidate lists there), sampled every 10 steps: the force pass tests
+    // every candidate, so candidates per touching pair is what the margin costs
+    double broadphase_margin = 0;       // m, the fat boxes' pad
+    long broadphase_updates = 0;        // candidate-list rebuilds
+    long broadphase_reinserts = 0;      // discs re-inserted into the tree
+    double broadphase_mean_candidates = 0;    // disc-disc candidate pairs per step
+    double broadphase_mean_touching = 0;      // of which touching
+    double broadphase_update_seconds = 0;     // s, wall-clock in the candidate-list updates (mostly serial)
+    long force_pass_one_range_cuts = 0;       // list updates whose force pass ran as one range (discs out of space order)
+    double force_pass_busy_share = 1;         // of the threads' time in the shared force passes, the share the ranges worked (World)
+    long force_pass_busy_fallbacks = 0;       // times the pass fell back to one range for a busy machine (World)
+};
+
+RunSummary run_scenario(const Scenario& s, const RunOptions& o);
+
+}  // namespace demlab

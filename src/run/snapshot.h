@@ -1,0 +1,34 @@
+// Snapshots of a run as VTK XML PolyData (.vtp), one file for the discs and one for the
+// walls per instant, indexed by ParaView collections (discs.pvd, walls.pvd). Discs are points
+// with radius, velocity, angle, omega, speed, layer, grid and id; open them in ParaView with
+// "Point Gaussian" scaled by radius. The same files are what `demlab render` replays.
+#pragma once
+#include <string>
+#include <vector>
+
+#include "dem/world.h"
+
+namespace demlab {
+
+class SnapshotWriter {
+public:
+    // dir is created; layer and grid are per-disc colour tags (may be empty).
+    SnapshotWriter(std::string dir, std::vector<int> layer, std::vector<int> grid);
+    void write(const World& w);
+    // Writes the .pvd collections (call at the end; also safe to call repeatedly).
+    void finish();
+    int count() const { return int(times_.size()); }
+    // the instants written so far (checkpoints) and their restoration
+    const std::vector<double>& times() const { return times_; }
+    void restore_times(std::vector<double> t) { times_ = std::move(t); }
+    // the files of the last snapshot written
+    std::string last_discs() const;
+    std::string last_walls() const;
+
+private:
+    std::string dir_;
+    std::vector<int> layer_, grid_;
+    std::vector<double> times_;
+};
+
+}  // namespace demlab

@@ -1,0 +1,628 @@
+#include "scenario/scenario.h"
+
+#include <toml++/toml.h>
+
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <functional>
+#include <sstream>
+
+#include "core/error.h"
+#include "core/validate.h"
+
+namespace demlab {
+
+namespace {
+
+// ---------------------------------------------------------------- the key registry
+
+struct Key {
+    std::string name;      // dotted path, e.g. "material.density"
+    std::string unit;      // "kg/m3", "-", "deg", ...
+    std::string accepted;  // human-readable range
+    std::string doc;
+    std::function<void(Scenario&, const toml::node&, const std::string&)> set;
+    std::function<std::string(const Scenario&)> get;  // TOML literal
+};
+
+std::string where_of(const std::string& file, const toml::node& n, const std::string& key) {
+    const auto line = n.source().begin.line;
+    return file + (line > 0 ? ":" + std::to_string(line) : std::string()) + ": key '" + key + "'";
+}
+
+std::string toml_number(double v) {
+    if (std::isinf(v)) return v > 0 ? "inf" : "-inf";
+    std::string s = format_number(v);
+    if (s.find_first_of(".eEn") == std::string::npos) s += ".0";
+    return s;
+}
+
+std::string toml_string(const std::string& s) {
+    std::string out = "\"";
+    for (char c : s) {
+        if (c == '"' || c == '\\') out += '\\';
+        out += c;
+    }
+    return out + "\"";
+}
+
+std::string node_text(const toml::node& n) {
+    std::ostringstream o;
+    if (auto v = n.as_string()) return toml_string(v->get());
+    n.visit([&](auto&& x) { o << x; });
+    return o.str();
+}
+
+double read_number(const toml::node& n, const std::string& where, const std::string& unit) {
+    if (auto v = n.value<double>(); v && (n.is_floating_point() || n.is_integer())) return *v;
+    throw InputError(where + " = " + node_text(n) + ": must be a number (" + unit + ")");
+}
+
+using DRef = double& (*)(Scenario&);
+using IRef = int& (*)(Scenario&);
+using BRef = bool& (*)(Scenario&);
+using SRef = std::string& (*)(Scenario&);
+using VRef = Vec2& (*)(Scenario&);
+
+// a real number in [lo, hi] (open ends when lo_open / hi_open)
+Key real(std::string name, std::string unit, std::string doc, DRef ref, double lo, double hi, bool lo_open = false,
+         bool hi_open = false) {
+    std::ostringstream acc;
+    acc << (lo_open ? "(" : "[") << toml_number(lo) << ", " << toml_number(hi) << (hi_open ? ")" : "]");
+    Key k{name, unit, acc.str(), std::move(doc), nullptr, nullptr};
+    const std::string accepted = k.accepted;
+    k.set = [=](Scenario& s, const toml::node& n, const std::string& where) {
+        const double v = read_number(n, where, unit);
+        const bool ok = !std::isnan(v) && (lo_open ? v > lo : v >= lo) && (hi_open ? v < hi : v <= hi);
+        if (!ok) throw InputError(where + " = " + format_number(v) + " " + unit + ": must be in " + accepted);
+        ref(s) = v;
+    };
+    k.get = [=](const Scenario& s) { return toml_number(ref(const_cast<Scenario&>(s))); };
+    return k;
+}
+
+Key integer(std::string name, std::string unit, std::string doc, IRef ref, long lo, long hi) {
+    Key k{name, unit, "integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]", std::move(doc), nullptr,
+          nullptr};
+    const std::string accepted = k.accepted;
+    k.set = [=](Scenario& s, const toml::node& n, const std::string& where) {
+        auto v = n.value_exact<int64_t>();
+        if (!v) throw InputError(where + " = " + node_text(n) + ": must be an " + accepted);
+        if (*v < lo || *v > hi) throw InputError(where + " = " + std::to_string(*v) + ": must be an " + accepted);
+        ref(s) = int(*v);
+    };
+    k.get = [=](const Scenario& s) { return std::to_string(ref(const_cast<Scenario&>(s))); };
+    return k;
+}
+
+Key boolean(std::string name, std::string doc, BRef ref) {
+    Key k{name, "-", "true or false", std::move(doc), nullptr, nullptr};
+    k.set = [=](Scenario& s, const toml::node& n, const std::string& where) {
+        auto v = n.value_exact<bool>();
+        if (!v) throw InputError(where + " = " + node_text(n) + ": must be true or false");
+        ref(s) = *v;
+    };
+    k.get = [=](const Scenario& s) { return std::string(ref(const_cast<Scenario&>(s)) ? "true" : "false"); };
+    return k;
+}
+
+Key text(std::string name, std::string doc, SRef ref, std::vector<std::string> choices = {}) {
+    std::string acc = "any text";
+    if (!choices.empty()) {
+        acc = "one of";
+        for (auto& c : choices) acc += " \"" + c + "\"";
+    }
+    Key k{name, "-", acc, std::move(doc), nullptr, nullptr};
+    k.set = [=](Scenario& s, const toml::node& n, const std::string& where) {
+        auto v = n.value_exact<std::string>();
+        if (!v) throw InputError(where + " = " + node_text(n) + ": must be a string (" + acc + ")");
+        if (!choices.empty() && std::find(choices.begin(), choices.end(), *v) == choices.end())
+            throw InputError(where + " = \"" + *v + "\": must be " + acc);
+        ref(s) = *v;
+    };
+    k.get = [=](const Scenario& s) { return toml_string(ref(const_cast<Scenario&>(s))); };
+    return k;
+}
+
+Vec2 read_vec2(const toml::node& n, const std::string& where, const std::string& unit) {
+    const toml::array* a = n.as_array();
+    if (!a || a->size() != 2) throw InputError(where + " = " + node_text(n) + ": must be [x, y] (" + unit + ")");
+    Vec2 v(read_number(*a->get(0), where, unit), read_number(*a->get(1), where, unit));
+    if (!std::isfinite(v.x()) || !std::isfinite(v.y())) throw InputError(where + ": must be finite (" + unit + ")");
+    return v;
+}
+
+Key vec2(std::string name, std::string unit, std::string doc, VRef ref) {
+    Key k{name, unit, "[x, y], finite", std::move(doc), nullptr, nullptr};
+    k.set = [=](Scenario& s, const toml::node& n, const std::string& where) { ref(s) = read_vec2(n, where, unit); };
+    k.get = [=](const Scenario& s) {
+        const Vec2& v = ref(const_cast<Scenario&>(s));
+        return "[" + toml_number(v.x()) + ", " + toml_number(v.y()) + "]";
+    };
+    return k;
+}
+
+// enum-valued keys stored in non-string fields
+template <typename E>
+Key choice(std::string name, std::string doc, E& (*ref)(Scenario&), std::vector<std::pair<std::string, E>> map) {
+    std::string acc = "one of";
+    for (auto& [t, e] : map) acc += " \"" + t + "\"";
+    Key k{name, "-", acc, std::move(doc), nullptr, nullptr};
+    k.set = [=](Scenario& s, const toml::node& n, const std::string& where) {
+        std::string v;
+        if (auto str = n.value_exact<std::string>()) v = *str;
+        else if (auto i = n.value_exact<int64_t>()) v = std::to_string(*i);
+        else throw InputError(where + " = " + node_text(n) + ": must be " + acc);
+        for (auto& [t, e] : map)
+            if (t == v) {
+                ref(s) = e;
+                return;
+            }
+        throw InputError(where + " = \"" + v + "\": must be " + acc);
+    };
+    k.get = [=](const Scenario& s) {
+        for (auto& [t, e] : map)
+            if (e == ref(const_cast<Scenario&>(s))) return toml_string(t);
+        return std::string("\"?\"");
+    };
+    return k;
+}
+
+constexpr double kInf = INFINITY;
+
+const std::vector<Key>& registry() {
+    static const std::vector<Key> keys = [] {
+        std::vector<Key> k;
+        // scenario
+        k.push_back(text("scenario.name", "name of the scenario, used in outputs", [](Scenario& s) -> std::string& { return s.name; }));
+        k.push_back(text("scenario.description", "free text", [](Scenario& s) -> std::string& { return s.description; }));
+        {
+            Key seed{"scenario.seed", "-", "integer in [0, 2^63)", "seed of every random draw (release mass radii and positions)", nullptr, nullptr};
+            seed.set = [](Scenario& s, const toml::node& n, const std::string& where) {
+                auto v = n.value_exact<int64_t>();
+                if (!v || *v < 0) throw InputError(where + " = " + node_text(n) + ": must be an integer >= 0");
+                s.seed = static_cast<unsigned long long>(*v);
+            };
+            seed.get = [](const Scenario& s) { return std::to_string(s.seed); };
+            k.push_back(seed);
+        }
+        // material
+        k.push_back(real("material.density", "kg/m3", "disc density (Table 15: quartz sand)", [](Scenario& s) -> double& { return s.disc.density; }, 0, 1e6, true));
+        k.push_back(real("material.kn", "N/m", "disc normal stiffness, in series with the partner's (Table 15: 1e8)", [](Scenario& s) -> double& { return s.disc.kn; }, 0, 1e15, true));
+        k.push_back(real("material.ks", "N/m", "disc shear stiffness (Table 15: 1e8)", [](Scenario& s) -> double& { return s.disc.ks; }, 0, 1e15, true));
+        k.push_back(real("material.friction_disc_deg", "deg", "disc-disc friction angle (calibrated on the dam break: 15.5)", [](Scenario& s) -> double& { return s.disc_friction_deg; }, 0, 89));
+        k.push_back(real("material.friction_wall_deg", "deg", "disc-wall friction angle (basal angle on the zinc-coated sheet: 21.7)", [](Scenario& s) -> double& { return s.wall_friction_deg; }, 0, 89));
+        k.push_back(real("material.wall_kn", "N/m", "wall normal stiffness (same as discs unless set)", [](Scenario& s) -> double& { return s.wall_kn; }, 0, 1e15, true));
+        k.push_back(real("material.wall_ks", "N/m", "wall shear stiffness", [](Scenario& s) -> double& { return s.wall_ks; }, 0, 1e15, true));
+        k.push_back(choice<FrictionRule>("material.friction_rule_disc_disc", "which coefficient a disc-disc contact takes (PFC: min)", [](Scenario& s) -> FrictionRule& { return s.world.friction_rule_disc_disc; }, {{"min", FrictionRule::Min}, {"max", FrictionRule::Max}}));
+        k.push_back(choice<FrictionRule>("material.friction_rule_disc_wall", "which coefficient a disc-wall contact takes (thesis 4.3.2: max)", [](Scenario& s) -> FrictionRule& { return s.world.friction_rule_disc_wall; }, {{"min", FrictionRule::Min}, {"max", FrictionRule::Max}}));
+        // damping
+        k.push_back(real("damping.beta_n", "-", "normal critical damping ratio (Table 15: 0.5)", [](Scenario& s) -> double& { return s.world.damping.beta_n; }, 0, 1, false, true));
+        k.push_back(real("damping.beta_s", "-", "shear critical damping ratio (Table 15: 0.5)", [](Scenario& s) -> double& { return s.world.damping.beta_s; }, 0, 1, false, true));
+        k.push_back(choice<DashpotMode>("damping.dp_mode", "PFC dashpot mode: 0 both always; 1 no tensile normal force; 2 no shear dashpot while sliding; 3 both", [](Scenario& s) -> DashpotMode& { return s.world.damping.dp_mode; }, {{"0", DashpotMode::Full}, {"1", DashpotMode::NoTension}, {"2", DashpotMode::NoShearWhileSliding}, {"3", DashpotMode::NoTensionNoShearWhileSliding}}));
+        // rotation
+        k.push_back(integer("rotation.model", "-", "1: rotation locked; 2: free rotation with Preh-Poisel rolling resistance at walls; 3: 2 plus rotational damping at disc-disc contacts", [](Scenario& s) -> int& { return s.world.rotation.model; }, 1, 3));
+        k.push_back(real("rotation.u_rr", "m", "penetration depth of the rolling resistance, models 2 and 3 (Table 15: 0.00015); < 0.6 r_min", [](Scenario& s) -> double& { return s.world.rotation.u_rr; }, 0, 1));
+        k.push_back(choice<RollingForm>("rotation.rolling_form", "g in eq. 2.71: gravity (literal) or the actual wall normal force per mass", [](Scenario& s) -> RollingForm& { return s.world.rotation.rolling_form; }, {{"literal", RollingForm::Literal}, {"normal_force", RollingForm::NormalForce}}));
+        k.push_back(real("rotation.mu_br", "-", "rotational damping factor per step at disc-disc contacts, model 3 (Table 15: 0.5)", [](Scenario& s) -> double& { return s.world.rotation.mu_br; }, 0, 1, true, false));
+        k.push_back(choice<RotDampingPer>("rotation.damping_per", "mu_Br once per disc touching discs, or once per contact", [](Scenario& s) -> RotDampingPer& { return s.world.rotation.damping_per; }, {{"disc", RotDampingPer::Disc}, {"contact", RotDampingPer::Contact}}));
+        // time step
+        k.push_back(boolean("timestep.automatic", "PFC's automatic step (docs/engine.md) or the fixed one", [](Scenario& s) -> bool& { return s.world.timestep.automatic; }));
+        k.push_back(real("timestep.safety", "-", "safety factor of the automatic step (PFC: 0.8)", [](Scenario& s) -> double& { return s.world.timestep.safety; }, 0, 1, true, false));
+        k.push_back(real("timestep.fixed", "s", "the step when automatic = false", [](Scenario& s) -> double& { return s.world.timestep.fixed; }, 0, 1, true));
+        k.push_back(boolean("timestep.damping_correction", "shrink the rotational bound for the shear dashpot (stability, docs/engine.md)", [](Scenario& s) -> bool& { return s.world.timestep.damping_correction; }));
+        // world
+        k.push_back(vec2("world.gravity", "m/s2", "gravity vector", [](Scenario& s) -> Vec2& { return s.world.gravity; }));
+        k.push_back(real("world.broadphase_margin", "m", "smallest pad of the broad phase's fat boxes (moving discs get wider ones); 0 = half the smallest radius", [](Scenario& s) -> double& { return s.world.broadphase_margin; }, 0, 1));
+        k.push_back(real("world.joint_tolerance", "m", "wall ends closer than this are joined", [](Scenario& s) -> double& { return s.world.joint_tolerance; }, 0, 0.1));
+        k.push_back(real("world.max_overlap_ratio", "-", "an overlap beyond this fraction of the smaller radius stops the run (blow-up)", [](Scenario& s) -> double& { return s.world.max_overlap_ratio; }, 0, 2, true));
+        // flume
+        k.push_back(vec2("flume.w1_start", "m", "slope W1, upper end (Table 2)", [](Scenario& s) -> Vec2& { return s.flume.w1_p0; }));
+        k.push_back(vec2("flume.w1_end", "m", "slope W1, lower end", [](Scenario& s) -> Vec2& { return s.flume.w1_p1; }));
+        k.push_back(vec2("flume.arc_centre", "m", "transition arc W2, centre", [](Scenario& s) -> Vec2& { return s.flume.arc_centre; }));
+        k.push_back(real("flume.arc_radius", "m", "transition arc W2, radius", [](Scenario& s) -> double& { return s.flume.arc_radius; }, 0, 100, true));
+        k.push_back(real("flume.arc_start_deg", "deg", "transition arc W2, start angle (counter-clockwise from +x)", [](Scenario& s) -> double& { return s.flume.arc_start_deg; }, -360, 720));
+        k.push_back(real("flume.arc_end_deg", "deg", "transition arc W2, end angle", [](Scenario& s) -> double& { return s.flume.arc_end_deg; }, -360, 720));
+        k.push_back(vec2("flume.w3_start", "m", "barrier W3, lower end", [](Scenario& s) -> Vec2& { return s.flume.w3_p0; }));
+        k.push_back(vec2("flume.w3_end", "m", "barrier W3, upper end", [](Scenario& s) -> Vec2& { return s.flume.w3_p1; }));
+        k.push_back(vec2("flume.gate_start", "m", "gate W4, lower end (on W1) (Table 3)", [](Scenario& s) -> Vec2& { return s.flume.gate_p0; }));
+        k.push_back(vec2("flume.gate_end", "m", "gate W4, upper end", [](Scenario& s) -> Vec2& { return s.flume.gate_p1; }));
+        k.push_back(vec2("flume.lid_start", "m", "lid W5, end at the gate", [](Scenario& s) -> Vec2& { return s.flume.lid_p0; }));
+        k.push_back(vec2("flume.lid_end", "m", "lid W5, end at W1's upper end", [](Scenario& s) -> Vec2& { return s.flume.lid_p1; }));
+        // dam break
+        k.push_back(real("dam_break.width", "m", "column width: back wall at x = 0, gate at x = width (assumed: 0.20)", [](Scenario& s) -> double& { return s.dam_break.width; }, 0, 10, true));
+        k.push_back(real("dam_break.height", "m", "column height (assumed: 0.40; 0.08 m2 holds the thesis' 9,439 discs)", [](Scenario& s) -> double& { return s.dam_break.height; }, 0, 10, true));
+        k.push_back(real("dam_break.floor_length", "m", "length of the floor from the back wall", [](Scenario& s) -> double& { return s.dam_break.floor_length; }, 0, 100, true));
+        // release
+        k.push_back(integer("release.scale", "-", "upscaling of the sand (Table 14): radii [0.25, 0.5] mm times this (2: 36,403 discs; 4: 9,099; 20: 364)", [](Scenario& s) -> int& { return s.release.scale; }, 1, 100));
+        k.push_back(real("release.r_min", "m", "smallest radius before the reduction; 0 = from the scale", [](Scenario& s) -> double& { return s.release.r_min; }, 0, 1));
+        k.push_back(real("release.r_max", "m", "largest radius before the reduction; 0 = from the scale", [](Scenario& s) -> double& { return s.release.r_max; }, 0, 1));
+        k.push_back(real("release.porosity", "-", "target 2D porosity of the generated mass (Table 5: 0.166)", [](Scenario& s) -> double& { return s.release.porosity; }, 0.05, 0.9));
+        k.push_back(real("release.radius_reduction", "-", "fraction all radii shrink by after generation (thesis: 0.03)", [](Scenario& s) -> double& { return s.release.radius_reduction; }, 0, 0.5));
+        k.push_back(text("release.variant", "I: the gate is deleted at t = 0; II: the gate is lifted at gate_speed", [](Scenario& s) -> std::string& { return s.release.variant; }, {"I", "II"}));
+        k.push_back(real("release.gate_speed", "m/s", "lifting speed of the gate, Variant II (lab: 2.25)", [](Scenario& s) -> double& { return s.release.gate_speed; }, 0, 100, true));
+        k.push_back(real("release.settle_alpha", "-", "local damping while the mass compacts without friction (the frictional phase settles on the dashpots alone)", [](Scenario& s) -> double& { return s.release.settle_alpha; }, 0, 1, false, true));
+        k.push_back(real("release.settle_ratio", "-", "settled when mean |unbalanced force| / mean |contact force| falls below this", [](Scenario& s) -> double& { return s.release.settle_ratio; }, 0, 1, true));
+        k.push_back(real("release.settle_max_time", "s", "simulated settling time at most (the run refuses a mass that did not settle)", [](Scenario& s) -> double& { return s.release.settle_max_time; }, 0, 100, true));
+        k.push_back(real("release.layer_height", "m", "height of the horizontal colour bands (layers)", [](Scenario& s) -> double& { return s.release.layer_height; }, 0, 10, true));
+        k.push_back(real("release.grid_cell", "m", "size of the colour grid's cells", [](Scenario& s) -> double& { return s.release.grid_cell; }, 0, 10, true));
+        k.push_back(text("release.space_order", "number the generated discs in space order before they settle, so that the settling runs on all threads: on, off, or auto (on above 20,000 discs). A different numbering settles into a different, equally valid mass", [](Scenario& s) -> std::string& { return s.release.space_order; }, {"auto", "on", "off"}));
+        k.push_back(text("release.from_file", "a settled mass (release.csv of an earlier run) to start from instead of generating one", [](Scenario& s) -> std::string& { return s.release.from_file; }));
+        // stop
+        k.push_back(real("stop.t_max", "s", "simulated time after the release at most", [](Scenario& s) -> double& { return s.stop.t_max; }, 0, 1e4, true));
+        k.push_back(real("stop.rest_ke_fraction", "-", "at rest when the kinetic energy stays below this fraction of its peak ...", [](Scenario& s) -> double& { return s.stop.rest_ke_fraction; }, 0, 1, true));
+        k.push_back(real("stop.rest_duration", "s", "... for this long", [](Scenario& s) -> double& { return s.stop.rest_duration; }, 0, 100));
+        k.push_back(real("stop.max_energy_gain", "-", "blow-up watch: the run stops when the energy balance (kinetic + potential + elastic + dissipated - work of moving walls) has risen by more than this multiple of the energy turned over (peak kinetic + peak elastic + dissipated): the numerics are creating energy", [](Scenario& s) -> double& { return s.stop.max_energy_gain; }, 0, 10, true));
+        // output
+        k.push_back(real("output.series_interval", "s", "time between rows of forces.csv, front.csv, energy.csv, track.csv", [](Scenario& s) -> double& { return s.output.series_interval; }, 0, 100, true));
+        k.push_back(real("output.snapshot_interval", "s", "time between snapshots (VTK .vtp with a .pvd series); 0 = none", [](Scenario& s) -> double& { return s.output.snapshot_interval; }, 0, 100));
+        k.push_back(real("output.deposit_bin", "m", "spacing of deposit.csv along the flume path", [](Scenario& s) -> double& { return s.output.deposit_bin; }, 0, 10, true));
+        k.push_back(real("output.front_neighbour_gap", "m", "a disc counts for the front only with a neighbour within this gap; 0 = r_max", [](Scenario& s) -> double& { return s.output.front_neighbour_gap; }, 0, 10));
+        {
+            Key track{"output.track", "-", "array of disc ids >= 0", "disc ids written to track.csv (tracer discs)", nullptr, nullptr};
+            track.set = [](Scenario& s, const toml::node& n, const std::string& where) {
+                const toml::array* a = n.as_array();
+                if (!a) throw InputError(where + " = " + node_text(n) + ": must be an array of disc ids, e.g. [0, 17]");
+                s.output.track.clear();
+                for (const auto& e : *a) {
+                    auto v = e.value_exact<int64_t>();
+                    if (!v || *v < 0) throw InputError(where + ": entry " + node_text(e) + " must be a disc id >= 0");
+                    s.output.track.push_back(long(*v));
+                }
+            };
+            track.get = [](const Scenario& s) {
+                std::string out = "[";
+                for (size_t i = 0; i < s.output.track.size(); ++i) out += (i ? ", " : "") + std::to_string(s.output.track[i]);
+                return out + "]";
+            };
+            k.push_back(track);
+        }
+        return k;
+    }();
+    return keys;
+}
+
+size_t edit_distance(const std::string& a, const std::string& b) {
+    std::vector<size_t> prev(b.size() + 1), cur(b.size() + 1);
+    for (size_t j = 0; j <= b.size(); ++j) prev[j] = j;
+    for (size_t i = 1; i <= a.size(); ++i) {
+        cur[0] = i;
+        for (size_t j = 1; j <= b.size(); ++j)
+            cur[j] = std::min({prev[j] + 1, cur[j - 1] + 1, prev[j - 1] + (a[i - 1] == b[j - 1] ? 0 : 1)});
+        std::swap(prev, cur);
+    }
+    return prev[b.size()];
+}
+
+std::string nearest(const std::string& key, const std::vector<std::string>& names) {
+    std::string best;
+    size_t best_d = 1000;
+    for (const auto& n : names) {
+        const size_t d = edit_distance(key, n);
+        if (d < best_d) {
+            best_d = d;
+            best = n;
+        }
+    }
+    return best_d <= std::max<size_t>(3, key.size() / 3) ? best : std::string();
+}
+
+const Key* find_key(const std::string& name) {
+    for (const Key& k : registry())
+        if (k.name == name) return &k;
+    return nullptr;
+}
+
+std::vector<std::string> key_names() {
+    std::vector<std::string> names;
+    for (const Key& k : registry()) names.push_back(k.name);
+    return names;
+}
+
+[[noreturn]] void unknown_key(const std::string& where, const std::string& key, const std::vector<std::string>& names) {
+    const std::string near = nearest(key, names);
+    throw InputError(where + ": unknown key" + (near.empty() ? std::string() : "; did you mean '" + near + "'?") +
+                     " (docs/scenario-reference.md lists every key)");
+}
+
+// ---------------------------------------------------------------- [[walls]] and [[discs]]
+
+WallDef read_wall(const toml::table& t, const std::string& file, size_t index) {
+    WallDef w;
+    w.name = "walls[" + std::to_string(index) + "]";
+    const std::vector<std::string> names = {"name", "type", "start", "end", "solid", "centre", "radius", "start_deg",
+                                            "end_deg", "kn", "ks", "friction_deg", "velocity", "move_from",
+                                            "move_until", "remove_at", "cap_start", "cap_end"};
+    std::string type = "segment", solid;
+    double friction_deg = 21.7;
+    for (const auto& entry : t) {  // not a structured binding: the lambdas below capture node
+        const toml::node& node = entry.second;
+        const std::string key(entry.first.str());
+        const std::string where = where_of(file, node, "walls[" + std::to_string(index) + "]." + key);
+        auto str = [&](std::vector<std::string> choices) {
+            auto v = node.value_exact<std::string>();
+            std::string acc;
+            for (auto& c : choices) acc += " \"" + c + "\"";
+            if (!v || std::find(choices.begin(), choices.end(), *v) == choices.end())
+                throw InputError(where + " = " + node_text(node) + ": must be one of" + acc);
+            return *v;
+        };
+        auto num = [&](const char* unit, double lo, double hi, bool lo_open) {
+            const double v = read_number(node, where, unit);
+            if (!(lo_open ? v > lo : v >= lo) || !(v <= hi))
+                throw InputError(where + " = " + format_number(v) + ": must be in " + (lo_open ? "(" : "[") +
+                                 toml_number(lo) + ", " + toml_number(hi) + "] " + unit);
+            return v;
+        };
+        if (key == "name") {
+            auto v = node.value_exact<std::string>();
+            if (!v) throw InputError(where + ": must be a string");
+            w.name = *v;
+        } else if (key == "type") type = str({"segment", "arc"});
+        else if (key == "start") w.p0 = read_vec2(node, where, "m");
+        else if (key == "end") w.p1 = read_vec2(node, where, "m");
+        else if (key == "solid") solid = str({"both", "left", "right", "outside", "inside"});
+        else if (key == "centre") w.centre = read_vec2(node, where, "m");
+        else if (key == "radius") w.radius = num("m", 0, 1e3, true);
+        else if (key == "start_deg") w.angle_start_deg = num("deg", -360, 720, false);
+        else if (key == "end_deg") w.angle_end_deg = num("deg", -360, 720, false);
+        else if (key == "kn") w.kn = num("N/m", 0, 1e15, true);
+        else if (key == "ks") w.ks = num("N/m", 0, 1e15, true);
+        else if (key == "friction_deg") friction_deg = num("deg", 0, 89, false);
+        else if (key == "velocity") w.velocity = read_vec2(node, where, "m/s");
+        else if (key == "move_from") w.move_from = num("s", 0, 1e9, false);
+        else if (key == "move_until") w.move_until = num("s", 0, kInf, false);
+        else if (key == "remove_at") w.remove_at = num("s", 0, kInf, false);
+        else if (key == "cap_start" || key == "cap_end") {
+            const std::string v = str({"auto", "capped", "open"});
+            const EndCap c = v == "auto" ? EndCap::Auto : (v == "capped" ? EndCap::Capped : EndCap::Open);
+            (key == "cap_start" ? w.cap_start : w.cap_end) = c;
+        } else unknown_key(where, key, names);
+    }
+    w.shape = type == "arc" ? WallShape::Arc : WallShape::Segment;
+    w.friction = std::tan(deg_to_rad(friction_deg));
+    const std::string where = file + ": walls[" + std::to_string(index) + "]";
+    if (w.shape == WallShape::Segment) {
+        if (solid == "outside" || solid == "inside") throw InputError(where + ".solid: a segment takes both, left or right");
+        w.segment_solid = solid == "left" ? SegmentSolid::Left : (solid == "right" ? SegmentSolid::Right : SegmentSolid::Both);
+    } else {
+        if (solid == "left" || solid == "right" || solid == "both") throw InputError(where + ".solid: an arc takes outside or inside");
+        w.arc_solid = solid == "inside" ? ArcSolid::Inside : ArcSolid::Outside;
+    }
+    validate(w, where);
+    return w;
+}
+
+DiscDef read_disc(const toml::table& t, const std::string& file, size_t index) {
+    DiscDef d;
+    bool has_pos = false, has_r = false;
+    const std::vector<std::string> names = {"position", "radius", "velocity", "omega", "angle"};
+    for (const auto& [k, node] : t) {
+        const std::string key(k.str());
+        const std::string where = where_of(file, node, "discs[" + std::to_string(index) + "]." + key);
+        if (key == "position") {
+            d.pos = read_vec2(node, where, "m");
+            has_pos = true;
+        } else if (key == "radius") {
+            d.radius = read_number(node, where, "m");
+            if (!(d.radius > 0) || !std::isfinite(d.radius)) throw InputError(where + " = " + format_number(d.radius) + ": must be > 0 m");
+            has_r = true;
+        } else if (key == "velocity") d.vel = read_vec2(node, where, "m/s");
+        else if (key == "omega") d.omega = read_number(node, where, "rad/s");
+        else if (key == "angle") d.angle = read_number(node, where, "rad");
+        else unknown_key(where, key, names);
+    }
+    const std::string where = file + ": discs[" + std::to_string(index) + "]";
+    if (!has_pos) throw InputError(where + ": missing key 'position' ([x, y] in m)");
+    if (!has_r) throw InputError(where + ": missing key 'radius' (m, > 0)");
+    require_finite(where + ".omega", d.omega, "rad/s");
+    return d;
+}
+
+void read_table(Scenario& s, const toml::table& t, const std::string& prefix, const std::string& file) {
+    for (const auto& [k, node] : t) {
+        const std::string key = prefix.empty() ? std::string(k.str()) : prefix + "." + std::string(k.str());
+        if (prefix.empty() && (key == "walls" || key == "discs")) {
+            const toml::array* arr = node.as_array();
+            if (!arr || !arr->is_array_of_tables())
+                throw InputError(where_of(file, node, key) + ": must be an array of tables ([[" + key + "]])");
+            size_t i = 0;
+            for (const auto& e : *arr) {
+                if (key == "walls") s.walls.push_back(read_wall(*e.as_table(), file, i++));
+                else s.discs.push_back(read_disc(*e.as_table(), file, i++));
+            }
+            continue;
+        }
+        if (key == "flume") s.flume.enabled = true;
+        if (key == "dam_break") s.dam_break.enabled = true;
+        if (const toml::table* sub = node.as_table()) {
+            read_table(s, *sub, key, file);
+            continue;
+        }
+        const Key* spec = find_key(key);
+        if (!spec) unknown_key(where_of(file, node, key), key, key_names());
+        spec->set(s, node, where_of(file, node, key));
+    }
+}
+
+}  // namespace
+
+Scenario parse_scenario(const std::string& text, const std::string& path) {
+    Scenario s;
+    s.source = path;
+    toml::table t;
+    try {
+        t = toml::parse(text, path);
+    } catch (const toml::parse_error& e) {
+        throw InputError(path + ":" + std::to_string(e.source().begin.line) + ": TOML syntax error: " +
+                         std::string(e.description()));
+    }
+    read_table(s, t, "", path);
+    return s;
+}
+
+Scenario load_scenario(const std::string& path) {
+    std::ifstream in(path);
+    if (!in) throw InputError(path + ": cannot open the scenario file");
+    std::stringstream buf;
+    buf << in.rdbuf();
+    return parse_scenario(buf.str(), path);
+}
+
+void apply_override(Scenario& s, const std::string& assignment) {
+    const auto eq = assignment.find('=');
+    if (eq == std::string::npos || eq == 0)
+        throw InputError("--set '" + assignment + "': expected key=value, e.g. --set material.friction_disc_deg=16");
+    const std::string key = assignment.substr(0, eq);
+    std::string value = assignment.substr(eq + 1);
+    const Key* spec = find_key(key);
+    if (!spec) unknown_key("--set '" + assignment + "'", key, key_names());
+    toml::table t;
+    try {
+        t = toml::parse("v = " + value);
+    } catch (const toml::parse_error&) {
+        // a bare word: take it as a string
+        t = toml::table{{"v", value}};
+    }
+    spec->set(s, *t.get("v"), "--set key '" + key + "'");
+    if (key.rfind("flume.", 0) == 0) s.flume.enabled = true;
+    if (key.rfind("dam_break.", 0) == 0) s.dam_break.enabled = true;
+}
+
+void finish_scenario(Scenario& s) {
+    const std::string where = s.source + ": ";
+    s.disc.friction = std::tan(deg_to_rad(s.disc_friction_deg));
+    ReleaseDef& r = s.release;
+    if (r.r_min == 0.0) r.r_min = scale_r_min(r.scale);
+    if (r.r_max == 0.0) r.r_max = scale_r_max(r.scale);
+    if (s.flume.enabled && s.dam_break.enabled)
+        throw InputError(where + "a scenario is a [flume] or a [dam_break], not both");
+    if (has_release(s) && !(r.r_min <= r.r_max))
+        throw InputError(where + "release.r_min = " + format_number(r.r_min) + " m must be <= release.r_max = " +
+                         format_number(r.r_max) + " m");
+    if (s.stop.rest_duration >= s.stop.t_max)
+        throw InputError(where + "stop.rest_duration = " + format_number(s.stop.rest_duration) +
+                         " s must be shorter than stop.t_max = " + format_number(s.stop.t_max) + " s");
+    if (!has_release(s) && s.discs.empty())
+        throw InputError(where + "no discs: give a [flume] or [dam_break] (its release mass is generated), or [[discs]]");
+    if (s.dam_break.enabled) {
+        const DamBreakDef& d = s.dam_break;
+        if (2.0 * r.r_max > 0.25 * std::min(d.width, d.height))
+            throw InputError(where + "release.r_max = " + format_number(r.r_max) + " m is too large for the " +
+                             format_number(d.width) + " m x " + format_number(d.height) + " m column: at most " +
+                             format_number(std::min(d.width, d.height) / 8) + " m");
+        if (d.floor_length <= d.width)
+            throw InputError(where + "dam_break.floor_length = " + format_number(d.floor_length) +
+                             " m must exceed dam_break.width = " + format_number(d.width) + " m");
+        if (s.world.rotation.model >= 2 && !(s.world.rotation.u_rr < 0.6 * r.r_min * (1.0 - r.radius_reduction)))
+            throw InputError(where + "rotation.u_rr = " + format_number(s.world.rotation.u_rr) +
+                             " m must be < 0.6 times the smallest radius after the reduction");
+    }
+    if (s.flume.enabled) {
+        // the release box must close: the gate stands on W1 and meets the lid, the lid meets W1's start
+        const double tol = std::max(s.world.joint_tolerance, 1e-6);
+        const Vec2 d = s.flume.w1_p1 - s.flume.w1_p0;
+        const double along = (s.flume.gate_p0 - s.flume.w1_p0).dot(d) / d.squaredNorm();
+        const double off = std::abs(cross(d.normalized(), s.flume.gate_p0 - s.flume.w1_p0));
+        if (along <= 0.0 || along >= 1.0 || off > tol)
+            throw InputError(where + "flume.gate_start = (" + format_number(s.flume.gate_p0.x()) + ", " +
+                             format_number(s.flume.gate_p0.y()) + ") must lie on W1 (within " + format_number(tol) +
+                             " m): the release box does not close");
+        if ((s.flume.gate_p1 - s.flume.lid_p0).norm() > tol)
+            throw InputError(where + "flume.lid_start must meet flume.gate_end: the release box does not close");
+        if ((s.flume.lid_p1 - s.flume.w1_p0).norm() > tol)
+            throw InputError(where + "flume.lid_end must meet flume.w1_start: the release box does not close");
+        const double height = (s.flume.gate_p1 - s.flume.gate_p0).norm();
+        if (2.0 * r.r_max > 0.25 * height)
+            throw InputError(where + "release.r_max = " + format_number(r.r_max) + " m is too large for the release box (gate " +
+                             format_number(height) + " m high): at most " + format_number(height / 8) + " m");
+        if (s.world.rotation.model >= 2 && !(s.world.rotation.u_rr < 0.6 * r.r_min * (1.0 - r.radius_reduction)))
+            throw InputError(where + "rotation.u_rr = " + format_number(s.world.rotation.u_rr) +
+                             " m must be < 0.6 times the smallest radius after the reduction = " +
+                             format_number(0.6 * r.r_min * (1.0 - r.radius_reduction)) + " m (eq. 2.71 needs r_rr > 2/5 r)");
+    }
+    for (long id : s.output.track)
+        if (!s.discs.empty() && id >= long(s.discs.size()))
+            throw InputError(where + "output.track: disc id " + std::to_string(id) + " does not exist (" +
+                             std::to_string(s.discs.size()) + " discs)");
+}
+
+std::string resolved_toml(const Scenario& s) {
+    std::ostringstream o;
+    o << "# Resolved scenario: every key with the value the run used (defaults included).\n";
+    o << "# Source: " << s.source << "\n";
+    std::string section;
+    for (const Key& k : registry()) {
+        const auto dot = k.name.find('.');
+        const std::string sec = k.name.substr(0, dot);
+        if (sec != section) {
+            if ((sec == "flume" && !s.flume.enabled) || (sec == "dam_break" && !s.dam_break.enabled)) continue;
+            o << "\n[" << sec << "]\n";
+            section = sec;
+        }
+        if ((sec == "flume" && !s.flume.enabled) || (sec == "dam_break" && !s.dam_break.enabled)) continue;
+        o << k.name.substr(dot + 1) << " = " << k.get(s) << "\n";
+    }
+    for (const WallDef& w : s.walls) {
+        o << "\n[[walls]]\nname = " << toml_string(w.name) << "\n";
+        if (w.shape == WallShape::Segment) {
+            o << "type = \"segment\"\nstart = [" << toml_number(w.p0.x()) << ", " << toml_number(w.p0.y()) << "]\nend = ["
+              << toml_number(w.p1.x()) << ", " << toml_number(w.p1.y()) << "]\nsolid = \""
+              << (w.segment_solid == SegmentSolid::Both ? "both" : (w.segment_solid == SegmentSolid::Left ? "left" : "right")) << "\"\n";
+        } else {
+            o << "type = \"arc\"\ncentre = [" << toml_number(w.centre.x()) << ", " << toml_number(w.centre.y())
+              << "]\nradius = " << toml_number(w.radius) << "\nstart_deg = " << toml_number(w.angle_start_deg)
+              << "\nend_deg = " << toml_number(w.angle_end_deg) << "\nsolid = \""
+              << (w.arc_solid == ArcSolid::Outside ? "outside" : "inside") << "\"\n";
+        }
+        o << "kn = " << toml_number(w.kn) << "\nks = " << toml_number(w.ks) << "\nfriction_deg = "
+          << toml_number(std::atan(w.friction) * 180.0 / kPi) << "\nvelocity = [" << toml_number(w.velocity.x()) << ", "
+          << toml_number(w.velocity.y()) << "]\nmove_from = " << toml_number(w.move_from) << "\nmove_until = "
+          << toml_number(w.move_until) << "\nremove_at = " << toml_number(w.remove_at) << "\n";
+    }
+    for (const DiscDef& d : s.discs)
+        o << "\n[[discs]]\nposition = [" << toml_number(d.pos.x()) << ", " << toml_number(d.pos.y())
+          << "]\nradius = " << toml_number(d.radius) << "\nvelocity = [" << toml_number(d.vel.x()) << ", "
+          << toml_number(d.vel.y()) << "]\nomega = " << toml_number(d.omega) << "\nangle = " << toml_number(d.angle) << "\n";
+    return o.str();
+}
+
+std::string scenario_reference_markdown() {
+    std::ostringstream o;
+    const Scenario defaults;
+    o << "# Scenario reference\n\n"
+         "A scenario is a TOML file. Every key below is optional: the default is the thesis' value (Table 15) "
+         "where it has one. Unknown keys, wrong types and values out of range are refused with the file, line, "
+         "key and accepted range. Any key can be overridden on the command line: `--set key=value` (value in "
+         "TOML syntax, e.g. `--set material.friction_disc_deg=16`, `--set release.variant=I`).\n\n"
+         "Generated by `demlab keys`; do not edit by hand.\n\n"
+         "| key | unit | default | accepted | meaning |\n|---|---|---|---|---|\n";
+    for (const Key& k : registry()) {
+        std::string def = k.get(defaults);
+        if (k.name.rfind("release.r_m", 0) == 0) def = "0 (from the scale)";
+        o << "| `" << k.name << "` | " << k.unit << " | `" << def << "` | " << k.accepted << " | " << k.doc << " |\n";
+    }
+    o << "\n## Explicit walls: `[[walls]]`\n\n"
+         "| key | unit | default | meaning |\n|---|---|---|---|\n"
+         "| `name` | - | `walls[i]` | name in messages and outputs |\n"
+         "| `type` | - | `\"segment\"` | `\"segment\"` or `\"arc\"` |\n"
+         "| `start`, `end` | m | | segment ends `[x, y]` |\n"
+         "| `solid` | - | `\"both\"` / `\"outside\"` | segment: `both`, `left`, `right` (looking from start to end); arc: `outside` (discs run on the inside) or `inside` |\n"
+         "| `centre`, `radius`, `start_deg`, `end_deg` | m, m, deg, deg | | arc, counter-clockwise from start_deg to end_deg |\n"
+         "| `kn`, `ks` | N/m | 1e8 | stiffness, in series with the disc's |\n"
+         "| `friction_deg` | deg | 21.7 | friction angle |\n"
+         "| `velocity` | m/s | [0, 0] | prescribed velocity from `move_from` to `move_until` (s) |\n"
+         "| `remove_at` | s | inf | the wall disappears at this time |\n"
+         "| `cap_start`, `cap_end` | - | `\"auto\"` | `auto`, `capped` or `open`: whether the end is a corner discs can touch |\n"
+         "\n## Explicit discs: `[[discs]]`\n\n"
+         "| key | unit | default | meaning |\n|---|---|---|---|\n"
+         "| `position` | m | required | centre `[x, y]` |\n"
+         "| `radius` | m | required | > 0 |\n"
+         "| `velocity` | m/s | [0, 0] | initial velocity |\n"
+         "| `omega` | rad/s | 0 | initial angular velocity (counter-clockwise) |\n"
+         "| `angle` | rad | 0 | initial angle |\n";
+    return o.str();
+}
+
+}  // namespace demlab

@@ -1,0 +1,107 @@
+// A scenario: everything a run needs, read from TOML. Every parameter has a key, a unit, a
+// default and an accepted range in one registry (scenario_keys.cpp), which also writes the
+// reference page docs/scenario-reference.md and the resolved scenario of a run.
+#pragma once
+#include <string>
+#include <vector>
+
+#include "dem/material.h"
+#include "geometry/wall.h"
+#include "dem/world.h"
+
+namespace demlab {
+
+// The flume of Table 2 (geometry rows) and the release box of Table 3.
+struct FlumeDef {
+    bool enabled = false;                  // a [flume] table was given
+    Vec2 w1_p0{0.0, 1.115}, w1_p1{1.4486, 0.3121};          // slope, m
+    Vec2 arc_centre{1.4970, 0.3995};       // transition arc, m
+    double arc_radius = 0.10;              // m
+    double arc_start_deg = 241.0, arc_end_deg = 303.0;      // deg, counter-clockwise from +x
+    Vec2 w3_p0{1.5515, 0.3156}, w3_p1{2.4390, 0.8920};      // barrier, m
+    Vec2 gate_p0{0.5276, 0.8226}, gate_p1{0.5276, 1.1150};  // W4, m
+    Vec2 lid_p0{0.5276, 1.1150}, lid_p1{0.0, 1.1150};       // W5, m
+};
+
+// The dam break of the calibration (section 4.3.3; geometry assumed, data/dam_break_geometry.md):
+// a column between a back wall at x = 0 and a gate at x = width, on a horizontal floor.
+struct DamBreakDef {
+    bool enabled = false;                  // a [dam_break] table was given
+    double width = 0.20;                   // m, back wall to gate
+    double height = 0.40;                  // m, height of the column (the lid while it is generated)
+    double floor_length = 1.5;             // m, floor from the back wall
+};
+
+struct ReleaseDef {
+    int scale = 4;                         // upscaling factor of the sand (Table 14): radii [0.25, 0.5] mm * scale
+    double r_min = 0.0;                    // m; 0 = from the scale
+    double r_max = 0.0;                    // m; 0 = from the scale
+    double porosity = 0.166;               // 2D porosity of the generated mass (Table 5)
+    double radius_reduction = 0.03;        // fraction by which all radii shrink after generation
+    std::string variant = "II";            // I: gate deleted at t = 0; II: gate lifted at gate_speed
+    double gate_speed = 2.25;              // m/s, Variant II
+    double settle_alpha = 0.7;             // local damping while settling (frictionless phase)
+    double settle_ratio = 5e-4;            // settled when mean |unbalanced force| / mean |contact force| < this
+    double settle_max_time = 1.5;          // s of simulated settling at most
+    double layer_height = 0.03;            // m, height of the colour bands (layers)
+    double grid_cell = 0.05;               // m, size of the colour grid cells
+    std::string from_file;                 // a settled mass saved by an earlier run (release.csv)
+    std::string space_order = "auto";      // number the discs in space order before settling: on, off,
+                                           // auto (on above kSpaceOrderDiscs discs; release.cpp)
+};
+
+struct StopDef {
+    double t_max = 5.0;                    // s after release
+    double rest_ke_fraction = 1e-3;        // at rest: kinetic energy below this fraction of its peak ...
+    double rest_duration = 0.2;            // s ... for this long
+    double max_energy_gain = 1.0;          // -, energy created beyond this multiple of the energy turned over stops the run
+};
+
+struct OutputDef {
+    double series_interval = 0.005;        // s between rows of the CSV series
+    double snapshot_interval = 0.05;       // s between snapshots (VTK)
+    std::vector<long> track;               // disc ids whose path is written to track.csv
+    double deposit_bin = 0.01;             // m, spacing of deposit.csv along the flume path
+    double front_neighbour_gap = 0.0;      // m, a front disc must have a neighbour within this gap; 0 = r_max
+};
+
+struct Scenario {
+    std::string source;                    // file it was read from (for messages)
+    std::string name = "unnamed";
+    std::string description;
+    unsigned long long seed = 1;
+    WorldDef world;                        // gravity, damping, time step, rotation model, rules
+    MaterialDef disc;                      // disc material (friction as a coefficient)
+    double disc_friction_deg = 15.5;
+    double wall_friction_deg = 21.7;
+    double wall_kn = 1.0e8, wall_ks = 1.0e8;
+    FlumeDef flume;
+    DamBreakDef dam_break;
+    ReleaseDef release;
+    StopDef stop;
+    OutputDef output;
+    std::vector<WallDef> walls;            // [[walls]]: explicit walls
+    std::vector<DiscDef> discs;            // [[discs]]: explicit discs
+};
+
+// Reads a scenario file. Throws InputError "FILE:LINE: key ...: message" on any problem.
+Scenario load_scenario(const std::string& path);
+// Parses scenario text (path only names it in messages).
+Scenario parse_scenario(const std::string& text, const std::string& path);
+// Applies a --set override "key=value" (value in TOML syntax; a bare word is taken as a string).
+void apply_override(Scenario& s, const std::string& assignment);
+// Checks the cross-key constraints (after overrides) and derives dependent values.
+void finish_scenario(Scenario& s);
+// The resolved scenario as TOML (every key, with its value).
+std::string resolved_toml(const Scenario& s);
+// The reference page: every key with its unit, default, range and meaning (Markdown).
+std::string scenario_reference_markdown();
+
+// A scenario whose discs come from a generated (or saved) release mass.
+inline bool has_release(const Scenario& s) { return s.flume.enabled || s.dam_break.enabled; }
+
+// Radii of the release mass for a scale factor (Table 14): [0.25, 0.5] mm times the scale.
+inline double scale_r_min(int scale) { return 0.00025 * scale; }
+inline double scale_r_max(int scale) { return 0.0005 * scale; }
+
+}  // namespace demlab

@@ -1,0 +1,374 @@
+#include "setups/release.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <fstream>
+#include <random>
+#include <sstream>
+#include <unordered_map>
+
+#include "core/error.h"
+#include "core/fileio.h"
+#include "setups/flume.h"
+#include "core/interrupt.h"
+#include "core/progress.h"
+#include "core/validate.h"
+#include "dem/world.h"
+
+namespace demlab {
+
+long release_count(double area, double porosity, double r_min, double r_max) {
+    const double r_mean = 0.5 * (r_min + r_max);
+    return std::lround(area * (1.0 - porosity) / (kPi * r_mean * r_mean));
+}
+
+namespace {
+
+// Uniform in [0, 1) from the top 53 bits: the same numbers on every platform.
+double uniform01(std::mt19937_64& rng) { return double(rng() >> 11) * 0x1.0p-53; }
+
+// A convex polygon (the release box), counter-clockwise or not.
+struct Polygon {
+    std::vector<Vec2> v;
+    double area() const {
+        double a = 0;
+        for (size_t i = 0; i < v.size(); ++i) a += cross(v[i], v[(i + 1) % v.size()]);
+        return 0.5 * std::abs(a);
+    }
+    // distance from p to the nearest edge, positive inside
+    double inset(const Vec2& p) const {
+        Vec2 g = Vec2::Zero();
+        for (const Vec2& q : v) g += q;
+        g /= double(v.size());
+        double d = INFINITY;
+        for (size_t i = 0; i < v.size(); ++i) {
+            const Vec2 a = v[i], b = v[(i + 1) % v.size()];
+            const Vec2 n = perp((b - a).normalized());
+            const double side = (g - a).dot(n) > 0 ? 1.0 : -1.0;
+            d = std::min(d, side * (p - a).dot(n));
+        }
+        return d;
+    }
+    Vec2 sample(std::mt19937_64& rng) const {
+        Vec2 lo = v[0], hi = v[0];
+        for (const Vec2& q : v) {
+            lo = lo.cwiseMin(q);
+            hi = hi.cwiseMax(q);
+        }
+        while (true) {
+            const Vec2 p(lo.x() + (hi.x() - lo.x()) * uniform01(rng), lo.y() + (hi.y() - lo.y()) * uniform01(rng));
+            if (inset(p) >= 0) return p;
+        }
+    }
+};
+
+// Random sequential addition of discs of the given radii (scaled by s) without overlap.
+std::vector<Vec2> place_without_overlap(const Polygon& tri, const std::vector<double>& radius, double s,
+                                        std::mt19937_64& rng) {
+    const double cell = 2.0 * s * *std::max_element(radius.begin(), radius.end());
+    std::unordered_map<long long, std::vector<int>> grid;
+    auto key = [&](long long ix, long long iy) { return ix * 1000003LL + iy; };
+    std::vector<Vec2> pos(radius.size());
+    for (size_t i = 0; i < radius.size(); ++i) {
+        const double ri = s * radius[i];
+        bool placed = false;
+        for (int attempt = 0; attempt < 20000 && !placed; ++attempt) {
+            const Vec2 p = tri.sample(rng);
+            if (tri.inset(p) < ri) continue;
+            const long long ix = (long long)std::floor(p.x() / cell), iy = (long long)std::floor(p.y() / cell);
+            bool free = true;
+            for (long long dx = -1; dx <= 1 && free; ++dx)
+                for (long long dy = -1; dy <= 1 && free; ++dy) {
+                    auto it = grid.find(key(ix + dx, iy + dy));
+                    if (it == grid.end()) continue;
+                    for (int j : it->second)
+                        if ((pos[size_t(j)] - p).norm() < ri + s * radius[size_t(j)]) {
+                            free = false;
+                            break;
+                        }
+                }
+            if (!free) continue;
+            pos[i] = p;
+            grid[key(ix, iy)].push_back(int(i));
+            placed = true;
+        }
+        if (!placed)
+            throw RunError("release generation: could not place disc " + std::to_string(i) + " of " +
+                           std::to_string(radius.size()) + " without overlap (the box is too small for the discs)");
+    }
+    return pos;
+}
+
+}  // namespace
+
+namespace {
+// The generation is not checkpointed (minutes at scale 4): a signal ends it
+// here, and `demlab resume` starts the run again (the seed gives the same mass).
+void throw_if_interrupted_in_generation() {
+    if (pending_interrupt())
+        throw Interrupted("stopped during the release generation, which is not checkpointed");
+}
+}  // namespace
+
+ReleaseMass generate_release(const Scenario& s) {
+    const auto t0 = std::chrono::steady_clock::now();
+    const ReleaseDef& rd = s.release;
+    const ReleaseBox box = release_box(s);
+    const Polygon tri{box.polygon};
+    ReleaseMass m;
+    m.box_area = tri.area();
+    m.porosity_target = rd.porosity;
+    const long n = release_count(m.box_area, rd.porosity, rd.r_min, rd.r_max);
+    if (n < 1) throw InputError(s.source + ": release: the box holds no disc of these radii");
+
+    std::mt19937_64 rng(s.seed);
+    std::vector<double> radius(static_cast<size_t>(n), 0.0);
+    for (double& r : radius) r = rd.r_min + (rd.r_max - rd.r_min) * uniform01(rng);
+    double solid = 0.0;
+    for (double r : radius) solid += kPi * r * r;
+    // place at an area fraction of 0.35, where random addition is quick, then expand
+    const double s0 = std::min(1.0, std::sqrt(0.35 * m.box_area / solid));
+    std::vector<Vec2> start = place_without_overlap(tri, radius, s0, rng);
+    // Space order before settling (release.space_order). Discs placed at random get numbers
+    // at random, and the force pass then runs as one range: one thread, and at large N a
+    // pair's two discs far apart in memory. The numbering decides the order in which each
+    // disc sums its terms, so it changes the settled mass' bits: auto leaves the masses of
+    // up to kSpaceOrderDiscs discs (scales 4 and 20, the references) as they were.
+    if (rd.space_order == "on" || (rd.space_order == "auto" && n > kSpaceOrderDiscs)) {
+        ReleaseMass placed;
+        placed.pos = std::move(start);
+        placed.radius = std::move(radius);
+        order_in_space(placed, 4.0 * rd.r_max);
+        start = std::move(placed.pos);
+        radius = std::move(placed.radius);
+    }
+
+    // --- radius expansion: frictionless, no gravity, heavily damped, rotation locked
+    WorldDef gen;
+    gen.threads = s.world.threads;  // the same bits for any count
+    gen.gravity = Vec2::Zero();
+    gen.rotation.model = 1;
+    gen.damping.beta_n = 0.5;
+    gen.damping.beta_s = 0.0;
+    gen.damping.local_alpha = 0.7;
+    gen.max_overlap_ratio = 2.0;
+    gen.timestep.safety = 0.8;
+    World expand(gen);
+    MaterialDef slick = s.disc;
+    slick.friction = 0.0;
+    const int mat = expand.add_material(slick);
+    for (size_t i = 0; i < radius.size(); ++i) expand.add_disc({start[i], s0 * radius[i], Vec2::Zero(), 0, 0, mat});
+    std::vector<WallDef> walls = box.walls;
+    for (WallDef& w : walls) {
+        w.friction = 0.0;
+        expand.add_wall(w);
+    }
+    expand.finalize();
+    Progress progress(1.0, "of generation");
+    const int stages = 60, steps_per_stage = 150;
+    for (int k = 1; k <= stages; ++k) {
+        const double sk = s0 + (1.0 - s0) * double(k) / stages;
+        for (size_t i = 0; i < radius.size(); ++i) expand.set_radius(int(i), sk * radius[i]);
+        expand.refresh_dashpots();
+        expand.run(steps_per_stage);
+        throw_if_interrupted_in_generation();
+        progress.update(0.5 * double(k) / stages, expand.step_count());
+    }
+    expand.run(3000);  // relax at full size
+    m.porosity_generated = 1.0 - solid / m.box_area;
+
+    // --- radius reduction, then settling under gravity: first frictionless, so the mass
+    // compacts below the lid as far as it can (frictional discs jam looser than the
+    // generated density and would stay pressed against the lid), then with the real
+    // friction until it is at rest
+    WorldDef settle = s.world;
+    settle.rotation.model = 1;  // settling is quasi-static; rotation does not change the state reached
+    settle.damping.local_alpha = rd.settle_alpha;
+    // no tensile contact forces while settling: with local damping, PFC mode 0 chatters
+    settle.damping.dp_mode = DashpotMode::NoTension;
+    const double shrink = 1.0 - rd.radius_reduction;
+    std::vector<Vec2> positions = expand.positions();
+    for (double& r : radius) r *= shrink;
+    double settled_time = 0.0;
+    long settled_steps = 0;
+    for (int phase = 0; phase < 2; ++phase) {
+        // local damping compacts the frictionless phase quickly; with friction it makes the
+        // mass chatter (measured: unbalanced ratio stays at 0.4), so the second phase settles
+        // on the dashpots alone
+        settle.damping.local_alpha = phase == 0 ? rd.settle_alpha : 0.0;
+        World w(settle);
+        MaterialDef mat_phase = s.disc;
+        if (phase == 0) mat_phase.friction = 0.0;
+        const int mat2 = w.add_material(mat_phase);
+        for (size_t i = 0; i < radius.size(); ++i) w.add_disc({positions[i], radius[i], Vec2::Zero(), 0, 0, mat2});
+        walls = box.walls;
+        // the lid only holds the mass while it compacts; the second phase goes without it, so
+        // prestress locked in by the lid (a small mass of large discs jams looser than the
+        // generated density) is released gently here rather than at the release
+        int lid_index = -1;
+        for (int k = 0; k < int(walls.size()); ++k) {
+            if (phase == 0) walls[size_t(k)].friction = 0.0;
+            if (k == box.lid) {
+                if (phase != 0) continue;
+                lid_index = int(w.wall_count());
+            }
+            w.add_wall(walls[size_t(k)]);
+        }
+        w.finalize();
+        const double t_phase = 0.5 * rd.settle_max_time;
+        bool done = false;
+        while (w.time() < t_phase) {
+            w.run(200);
+            throw_if_interrupted_in_generation();
+            m.settle_ratio = w.unbalanced_force_ratio();
+            progress.update(0.5 + 0.25 * phase + 0.25 * std::min(1.0, w.time() / t_phase), w.step_count());
+            // the frictionless phase only compacts: it may stop at ten times the final ratio
+            if (w.time() > 0.02 && m.settle_ratio < (phase == 0 ? 10.0 : 1.0) * rd.settle_ratio) {
+                done = true;
+                break;
+            }
+        }
+        if (phase == 0) {
+            double weight = 0;
+            for (double mi : w.masses()) weight += mi * s.world.gravity.norm();
+            m.lid_load_fraction = w.wall_force(lid_index).norm() / weight;
+        }
+        positions = w.positions();
+        settled_time += w.time();
+        settled_steps += w.step_count();
+        if (phase == 1) m.settled = done;
+    }
+    progress.finish();
+    m.settle_time = settled_time;
+    m.settle_steps = settled_steps;
+    m.pos = positions;
+    m.radius = radius;
+    double solid_settled = 0.0;
+    double y_min = INFINITY;
+    Vec2 lo(INFINITY, INFINITY);
+    for (size_t i = 0; i < m.pos.size(); ++i) {
+        solid_settled += kPi * m.radius[i] * m.radius[i];
+        y_min = std::min(y_min, m.pos[i].y());
+        lo = lo.cwiseMin(m.pos[i]);
+    }
+    m.porosity_settled = 1.0 - solid_settled / m.box_area;
+    m.layer.resize(m.pos.size());
+    m.grid.resize(m.pos.size());
+    for (size_t i = 0; i < m.pos.size(); ++i) {
+        m.layer[i] = int(std::floor((m.pos[i].y() - y_min) / rd.layer_height));
+        const int gx = int(std::floor((m.pos[i].x() - lo.x()) / rd.grid_cell));
+        const int gy = int(std::floor((m.pos[i].y() - lo.y()) / rd.grid_cell));
+        m.grid[i] = gy * 1000 + gx;  // the renderer decodes the cell as (grid % 1000, grid / 1000)
+    }
+    m.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    return m;
+}
+
+void order_in_space(ReleaseMass& m, double strip) {
+    const size_t n = m.pos.size();
+    if (n == 0 || !(strip > 0.0)) return;
+    double x_min = INFINITY;
+    for (const Vec2& p : m.pos) x_min = std::min(x_min, p.x());
+    std::vector<size_t> order(n);
+    std::vector<long> column(n);
+    for (size_t i = 0; i < n; ++i) {
+        order[i] = i;
+        column[i] = long(std::floor((m.pos[i].x() - x_min) / strip));
+    }
+    std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {
+        if (column[a] != column[b]) return column[a] < column[b];
+        return m.pos[a].y() < m.pos[b].y();
+    });
+    auto permute = [&](auto& v) {
+        if (v.size() != n) return;
+        auto old = v;
+        for (size_t k = 0; k < n; ++k) v[k] = old[order[k]];
+    };
+    permute(m.pos);
+    permute(m.radius);
+    permute(m.layer);
+    permute(m.grid);
+}
+
+void save_release(const ReleaseMass& m, const std::string& path) {
+    std::ostringstream o;
+    o.precision(17);
+    o << "# demlab release mass: a settled mass to start runs from (--release-from)\n";
+    o << "# n " << m.pos.size() << "\n# box_area_m2 " << m.box_area << "\n# porosity_target " << m.porosity_target
+      << "\n# porosity_generated " << m.porosity_generated << "\n# porosity_settled " << m.porosity_settled
+      << "\n# settle_time_s " << m.settle_time << "\n# settle_steps " << m.settle_steps << "\n# settle_ratio "
+      << m.settle_ratio << "\n# settled " << (m.settled ? 1 : 0) << "\n# lid_load_fraction " << m.lid_load_fraction
+      << "\n";
+    for (const auto& w : m.box_walls)
+        o << "# wall " << w[0].x() << ' ' << w[0].y() << ' ' << w[1].x() << ' ' << w[1].y() << '\n';
+    o << "id,x_m,y_m,r_m,layer,grid\n";
+    for (size_t i = 0; i < m.pos.size(); ++i)
+        o << i << ',' << m.pos[i].x() << ',' << m.pos[i].y() << ',' << m.radius[i] << ',' << m.layer[i] << ','
+          << m.grid[i] << '\n';
+    write_file_atomic(path, o.str());
+}
+
+ReleaseMass load_release(const std::string& path) {
+    std::ifstream in(path);
+    if (!in) throw InputError(path + ": cannot open the release mass file");
+    ReleaseMass m;
+    std::string line;
+    long lineno = 0;
+    bool header = false;
+    while (std::getline(in, line)) {
+        ++lineno;
+        if (line.empty()) continue;
+        if (line[0] == '#') {
+            std::istringstream h(line.substr(1));
+            std::string k;
+            double v = 0;
+            if (line.rfind("# wall ", 0) == 0) {
+                double x0, y0, x1, y1;
+                std::istringstream wl(line.substr(7));
+                if (!(wl >> x0 >> y0 >> x1 >> y1))
+                    throw InputError(path + ":" + std::to_string(lineno) + ": expected '# wall x0 y0 x1 y1'");
+                m.box_walls.push_back({Vec2(x0, y0), Vec2(x1, y1)});
+                continue;
+            }
+            if (h >> k >> v) {
+                if (k == "box_area_m2") m.box_area = v;
+                else if (k == "porosity_target") m.porosity_target = v;
+                else if (k == "porosity_generated") m.porosity_generated = v;
+                else if (k == "porosity_settled") m.porosity_settled = v;
+                else if (k == "settle_time_s") m.settle_time = v;
+                else if (k == "settle_steps") m.settle_steps = long(v);
+                else if (k == "settle_ratio") m.settle_ratio = v;
+                else if (k == "settled") m.settled = v != 0;
+                else if (k == "lid_load_fraction") m.lid_load_fraction = v;
+            }
+            continue;
+        }
+        if (!header) {
+            if (line.rfind("id,x_m,y_m,r_m,layer,grid", 0) != 0)
+                throw InputError(path + ":" + std::to_string(lineno) + ": expected the header 'id,x_m,y_m,r_m,layer,grid'");
+            header = true;
+            continue;
+        }
+        std::istringstream row(line);
+        std::string cell;
+        std::vector<double> v;
+        while (std::getline(row, cell, ',')) {
+            try {
+                v.push_back(std::stod(cell));
+            } catch (...) {
+                throw InputError(path + ":" + std::to_string(lineno) + ": '" + cell + "' is not a number");
+            }
+        }
+        if (v.size() != 6 || !(v[3] > 0) || !std::isfinite(v[1]) || !std::isfinite(v[2]))
+            throw InputError(path + ":" + std::to_string(lineno) + ": expected id,x,y,r,layer,grid with r > 0");
+        m.pos.emplace_back(v[1], v[2]);
+        m.radius.push_back(v[3]);
+        m.layer.push_back(int(v[4]));
+        m.grid.push_back(int(v[5]));
+    }
+    if (m.pos.empty()) throw InputError(path + ": no discs in the release mass file");
+    return m;
+}
+
+}  // namespace demlab

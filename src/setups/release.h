@@ -1,0 +1,53 @@
+// The release mass (thesis section 4.2): discs of radii uniform in [r_min, r_max] fill the
+// triangle between W1, the gate and the lid at a target porosity, all radii shrink by 3 %,
+// and the mass settles under gravity. The count follows PFC's radius-expansion rule,
+// N = A (1 - n) / (pi R_mean^2), which gives the thesis' 9,099 (scale 4), 36,403 (2) and 364 (20).
+#pragma once
+#include <array>
+#include <string>
+#include <vector>
+
+#include "scenario/scenario.h"
+
+namespace demlab {
+
+struct ReleaseMass {
+    std::vector<Vec2> pos;
+    std::vector<double> radius;
+    std::vector<int> layer;        // horizontal colour band, 0 at the bottom
+    std::vector<int> grid;         // colour grid cell
+    double box_area = 0;           // m2, the release triangle
+    double porosity_target = 0;
+    double porosity_generated = 0; // before the radius reduction
+    double porosity_settled = 0;   // after reduction and settling, over the triangle
+    double settle_time = 0;        // s simulated
+    long settle_steps = 0;
+    double settle_ratio = 0;       // final unbalanced-force ratio
+    bool settled = false;
+    double lid_load_fraction = 0;
+    std::vector<std::array<Vec2, 2>> box_walls;  // W1, gate, lid the mass settled against  // load on the lid / weight at the end of the frictionless phase
+    double wall_seconds = 0;
+};
+
+// Number of discs for a box area, porosity and radius range (PFC's rule, see above).
+long release_count(double area, double porosity, double r_min, double r_max);
+
+// Generates and settles the mass (deterministic for a seed). Progress on a terminal.
+ReleaseMass generate_release(const Scenario& s);
+
+// release.space_order = auto numbers the discs in space order before they settle above this
+// many discs (generate_release).
+constexpr long kSpaceOrderDiscs = 20000;
+
+// Renumbers the discs in space order: strips across x, `strip` metres wide, from left to
+// right, and up each strip. The engine gives each thread a range of disc numbers and works
+// through its contacts in number order, so numbers that follow space keep a thread's discs
+// together (few pairs cross between threads) and a contact's two discs near in memory
+// (docs/performance.md). Deterministic: ties keep the old order.
+void order_in_space(ReleaseMass& m, double strip);
+
+// release.csv: id, x, y, r, layer, grid and the generation figures as comments.
+void save_release(const ReleaseMass& m, const std::string& path);
+ReleaseMass load_release(const std::string& path);
+
+}  // namespace demlab
