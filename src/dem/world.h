@@ -13,6 +13,7 @@
 #include "dem/laws/contact_law.h"
 #include "dem/material.h"
 #include "dem/laws/pair_kernel.h"
+#include "dem/laws/wall_kernel.h"
 #include "dem/range_balance.h"
 #include "dem/rotation.h"
 #include "core/vec2.h"
@@ -77,13 +78,6 @@ struct DiscDef {
     double omega = 0.0;                    // rad/s, counter-clockwise
     double angle = 0.0;                    // rad
     int material = 0;                      // index returned by add_material
-};
-
-// A disc-wall contact candidate and its history.
-struct WallContact {
-    int32_t disc, wall;
-    double fs, cn, cs;
-    float damp_n, damp_s;
 };
 
 // Energies of the current state and what was dissipated so far, J per metre of thickness.
@@ -242,9 +236,6 @@ public:
     void load_state(BinaryReader& in);
 
 private:
-    // The force pass; with then_integrate (a step), each range's discs are integrated as soon
-    // as their sums are complete, and integrate_finish() must follow.
-    void compute_forces(bool then_integrate = false);
     struct DtFactors {
         bool rotation_free;
         double phi_sq, phi_t_sq;
@@ -256,6 +247,29 @@ private:
         bool auto_dt = false;
         DtFactors dtf{};
     };
+    // The force pass (force_pass.cpp); with then_integrate (a step), each range's discs are
+    // integrated as soon as their sums are complete, and integrate_finish() must follow.
+    void compute_forces(bool then_integrate = false);
+    // what every range of one pass reads
+    struct PassContext {
+        DiscArrays discs;
+        PairPassParams pp;
+        IntegrateConsts ic;
+        bool then_integrate;
+        bool prefetch;
+        uint64_t pass;                    // this pass' number (the cross contacts' flags)
+        float approach_lo, approach_hi;   // the clearance test's bound (PairSkip)
+    };
+    struct WallSum;
+    void range_pass(int t, const PassContext& ctx);
+    void compute_cross_contacts(size_t t, const PassContext& ctx);
+    double wait_for_cross(size_t t, uint64_t pass) const;
+    size_t wall_contacts(size_t& kw, size_t end, int t, const PassContext& ctx, WallSum* sums, size_t n);
+    void block_ledger(size_t b0, size_t b1, size_t t);
+    void add_up_pass();
+    void copy_cross_contacts();
+    void note_disc_fault(size_t k, double overlap, int chunk);
+    void note_wall_fault(size_t kw, double overlap, int chunk);
     IntegrateConsts integrate_prepare();
     void integrate_discs(size_t begin, size_t end, int chunk, const IntegrateConsts& k);
     // does integrate_discs use the AVX2 (or AVX-512) loop? (per-disc rotational damping)

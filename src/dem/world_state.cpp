@@ -29,15 +29,10 @@ namespace demlab {
 namespace {
 constexpr uint32_t kWorldStateVersion = 1;
 
-// A contact's history (DiscContact and WallContact share these fields), listed once: fn is
-// called on each field of one contact, or on the same field of two contacts.
+// A contact's history: the law's fields (LinearLaw::for_each_history_field).
 template <typename Fn, typename... Contact>
 void for_each_history_field(Fn fn, Contact&... c) {
-    fn(c.fs...);
-    fn(c.cn...);
-    fn(c.cs...);
-    fn(c.damp_n...);
-    fn(c.damp_s...);
+    LinearLaw::for_each_history_field(fn, c...);
 }
 
 template <typename Contact>

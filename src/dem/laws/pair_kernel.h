@@ -1,4 +1,4 @@
-// The disc-disc force kernel: one candidate pair, one step of the linear law (contact_law.h),
+// The disc-disc force kernel: one candidate pair, one step of the linear law (linear_law.h),
 // as a small function over the discs' state and the pair's history. World's force pass calls
 // it either to add a pair straight into both discs' sums (the common case) or to park the
 // result in a slot when the two discs belong to different threads (world.cpp).
@@ -8,17 +8,10 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "dem/laws/contact_law.h"
+#include "dem/laws/linear_law.h"
 #include "core/vec2.h"
 
 namespace demlab {
-
-// Series stiffnesses and friction of a pair of materials (eq. 2.59, 2.61).
-struct PairMaterial {
-    double kn, ks, mu;
-    double k_tran;  // max(kn, ks): the pair's share of the automatic step's translational stiffness
-    double inv_ks;  // 1 / ks, m/N
-};
 
 // A disc-disc contact candidate (i < j) and its history.
 struct DiscContact {
@@ -55,21 +48,6 @@ struct PairPassParams {
     double dt, last_dt;  // s, this step's and the last one's
     double max_overlap_ratio;
 };
-
-// One step of the law for a touching contact: updates the history (shear spring, last
-// dashpot forces) and returns the forces; `dissipated` receives the energy the step took out:
-// sliding, plus the dashpots' work centred on v(t - dt/2) (this step's force over the first
-// half of the velocity interval, the last step's over the second half).
-template <typename Contact>
-inline LinearContactForce step_contact(const LinearContactParams& p, double overlap, double vn, double vs, double dt,
-                                       double last_dt, Contact& c, double& dissipated) {
-    const LinearContactForce f = linear_contact(p, overlap, vn, vs, dt, c.fs);
-    c.fs = f.fs_spring;
-    dissipated = f.slip_work - 0.5 * ((f.damp_n * dt + c.damp_n * last_dt) * vn + (f.damp_s * dt + c.damp_s * last_dt) * vs);
-    c.damp_n = float(f.damp_n);
-    c.damp_s = float(f.damp_s);
-    return f;
-}
 
 // Pair (c.i, c.j): n from i (A) to j (B); the force on j is F = fn n + ft t, on i -F.
 // Returns false, with `overlap` set, when the overlap exceeds max_overlap_ratio of the smaller
@@ -110,14 +88,13 @@ inline LinearContactForce step_contact(const LinearContactParams& p, double over
     // eq. 2.46: tangential velocity of B relative to A at the contact point
     const double vs = vrel.dot(t) - (d.omega[i] * ra + d.omega[j] * rb);
     const PairMaterial& pm = p.materials[size_t(d.material[i]) * p.n_materials + size_t(d.material[j])];
-    const LinearContactForce f =
-        step_contact({pm.kn, pm.ks, pm.mu, c.cn, c.cs, p.mode, pm.inv_ks}, overlap, vn, vs, p.dt, p.last_dt, c, out.dissipated);
+    const LinearContactForce f = LinearLaw::step(pm, p.mode, overlap, vn, vs, p.dt, p.last_dt, c, out.dissipated);
     out.f = f.fn * nrm + f.ft * t;
     // torque = lever x force; both levers give -r * ft (docs/engine.md)
     out.torque_i = -ra * f.ft;
     out.torque_j = -rb * f.ft;
-    out.k_tran = pm.k_tran;
-    out.k_rot = pm.ks;
+    out.k_tran = LinearLaw::k_tran(pm);
+    out.k_rot = LinearLaw::k_rot(pm);
     out.touching = true;
     return true;
 }

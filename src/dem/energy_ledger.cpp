@@ -1,0 +1,69 @@
+// The energy ledger's state terms (World::energy): kinetic, potential and elastic energy now,
+// beside the dissipation and the walls' work that the steps add up as they go.
+#include <algorithm>
+
+#include "core/thread_pool.h"
+#include "dem/world.h"
+
+namespace demlab {
+
+// The sums run over fixed blocks (kEnergyBlock discs or contacts), each added up in order,
+// then the blocks in order, with the blocks shared out among the pool's threads: the same
+// bits for any thread count. The run's blow-up watch calls this every 100 steps, and on the
+// calling thread alone it was 1.4 % of a 2-thread flume run with the other thread waiting.
+EnergyReport World::energy() const {
+    const size_t nd = pos_.size(), nc = dd_.size();
+    const size_t disc_blocks = (nd + kEnergyBlock - 1) / kEnergyBlock;
+    const size_t blocks = disc_blocks + (nc + kEnergyBlock - 1) / kEnergyBlock;
+    energy_blocks_.assign(blocks, EnergyBlock{});
+    const Vec2 g = def_.gravity;
+    const size_t nm = materials_.size(), nw = walls_.size();
+    auto block = [&](size_t b) {
+        EnergyBlock& s = energy_blocks_[b];
+        if (b < disc_blocks) {
+            for (size_t i = b * kEnergyBlock, end = std::min(nd, (b + 1) * kEnergyBlock); i < end; ++i) {
+                s.kinetic_translation += 0.5 * mass_[i] * vel_[i].squaredNorm();
+                s.kinetic_rotation += 0.5 * inertia_[i] * omega_[i] * omega_[i];
+                // at t - dt/2: the mean of x(t) and x(t - dt) = x(t) - v(t - dt/2) dt
+                s.potential -= mass_[i] * g.dot(pos_[i] - 0.5 * last_dt_ * vel_[i]);
+            }
+            return;
+        }
+        const size_t c0 = (b - disc_blocks) * kEnergyBlock;
+        for (size_t k = c0, end = std::min(nc, c0 + kEnergyBlock); k < end; ++k) {
+            const DiscContact& c = dd_[k];
+            const size_t i = size_t(c.i), j = size_t(c.j);
+            const double overlap = radius_[i] + radius_[j] - (pos_[j] - pos_[i]).norm();
+            if (overlap <= 0.0) continue;
+            const PairMaterial& pm = mat_dd_[size_t(material_[i]) * nm + size_t(material_[j])];
+            s.elastic += LinearLaw::elastic_energy(pm, overlap, c);
+        }
+    };
+    const int threads = pool_->size();
+    if (pool_->shares(nd + nc))
+        pool_->for_each_thread([&](int t) {
+            for (size_t b = blocks * size_t(t) / size_t(threads); b < blocks * size_t(t + 1) / size_t(threads); ++b) block(b);
+        });
+    else
+        for (size_t b = 0; b < blocks; ++b) block(b);
+    EnergyReport e;
+    for (const EnergyBlock& s : energy_blocks_) {
+        e.kinetic_translation += s.kinetic_translation;
+        e.kinetic_rotation += s.kinetic_rotation;
+        e.potential += s.potential;
+        e.elastic += s.elastic;
+    }
+    for (const WallContact& c : dw_) {
+        const size_t i = size_t(c.disc), w = size_t(c.wall);
+        if (!wall_active_[w]) continue;
+        e.elastic += wall_contact_elastic_energy(geom_[w], pos_[i], radius_[i], mat_dw_[size_t(material_[i]) * nw + w], c);
+    }
+    e.dissipated_contacts = diss_contacts_;
+    e.dissipated_local = diss_local_;
+    e.dissipated_rotation = diss_rotation_;
+    e.work_by_walls = work_walls_;
+    e.removed_with_walls = removed_walls_;
+    return e;
+}
+
+}  // namespace demlab
