@@ -69,7 +69,7 @@ TEST(Scenario, EveryShippedScenarioLoadsAndResolves) {
                   resolved_toml(s).substr(resolved_toml(s).find('\n', 80)));
         ++count;
     }
-    EXPECT_EQ(count, 12);  // 8 rows of Table 2, the presets A, B, C and the dam break
+    EXPECT_EQ(count, 13);  // 8 rows of Table 2, the presets A, B, C, the dam break and the terrain profile
 }
 
 TEST(Release, CountFollowsPfcsRuleForTheThesisScales) {

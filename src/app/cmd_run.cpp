@@ -14,6 +14,7 @@
 #include "output/plot.h"
 #include "output/render_run.h"
 #include "scenario/scenario.h"
+#include "setups/setup.h"
 
 namespace demlab {
 
@@ -41,7 +42,7 @@ int report(const Scenario& s, const RunSummary& r, const std::string& dir, bool 
                 r.n_discs, s.world.rotation.model, s.release.variant.c_str(), r.steps, r.t_end, r.stop_reason.c_str(),
                 r.dt_min, r.dt_max);
     std::printf("  wall time %.1f s, %.3e particle-steps/s\n", r.wall_seconds, r.particle_steps_per_second);
-    if (s.flume.enabled) {
+    if (make_setup(s)->kind() == "flume") {
         std::printf("  porosity %.3f; front at the barrier %.3f s; peak x-force on the barrier %.3f s; peak y-force on the arc %.3f s\n",
                     r.porosity, r.t_front_at_barrier, r.t_peak_fx_barrier, r.t_peak_fy_arc);
         std::printf("  run-out s = %.3f m; run-up %.3f m (max during run %.3f m)\n", r.runout_s, r.runup_height,
@@ -78,7 +79,7 @@ int run_command(const RunCliOptions& o) {
     ro.handle_signals = true;
     ro.frames = o.frames;
     ro.plots = !o.no_plots;
-    if (o.frames) attach_frame_hook(ro, s.flume.enabled);
+    if (o.frames) attach_frame_hook(ro, make_setup(s)->kind() == "flume");
     const RunSummary r = run_scenario(s, ro);
     return report(s, r, ro.out_dir, ro.plots);
 }
@@ -152,7 +153,7 @@ int resume_command(const ResumeCliOptions& o) {
         ro.frames = fs::exists(dir + "/frames");
         std::fprintf(stderr, "%s has no checkpoint: running it again from the start (same scenario and seed)\n", dir.c_str());
     }
-    if (ro.frames) attach_frame_hook(ro, s.flume.enabled);
+    if (ro.frames) attach_frame_hook(ro, make_setup(s)->kind() == "flume");
     const RunSummary r = run_scenario(s, ro);
     return report(s, r, dir, ro.plots);
 }

@@ -22,6 +22,7 @@
 #include "output/renderer.h"
 #include "run/run.h"
 #include "scenario/scenario.h"
+#include "setups/setup.h"
 #include "core/validate.h"
 
 namespace demlab {
@@ -242,7 +243,7 @@ CalibrationResult calibrate(const CalibrationConfig& c, const CalibrationOptions
                         if (c.scale) apply_override(s, "release.scale=" + std::to_string(c.scale));
                         apply_override(s, "scenario.seed=" + std::to_string(s.seed + unsigned(job.seed)));
                         finish_scenario(s);
-                        if (!s.dam_break.enabled) throw InputError(c.scenario + ": not a [dam_break] scenario");
+                        if (make_setup(s)->kind() != "dam_break") throw InputError(c.scenario + ": not a [dam_break] scenario");
                         RunOptions ro;
                         ro.out_dir = dir;
                         run_scenario(s, ro);

@@ -66,7 +66,7 @@ int render_run(const RenderRunOptions& o) {
     if (o.every > 0 && o.fps > 0) throw InputError("give --every or --fps, not both");
     if (o.threads < 0 || o.threads > 64) throw InputError("--threads " + std::to_string(o.threads) + ": must be 0 to 64");
     const auto snaps = list_snapshots(o.run_dir);
-    RenderStyle style = default_render_style(run_is_flume(o.run_dir));
+    RenderStyle style = default_render_style(setup_kind_of_run(o.run_dir) == "flume");
     parse_size(o.size, style);
     style.color = parse_color_mode(o.color);
     require_positive("--speed-max", o.speed_max, "m/s");

@@ -68,14 +68,6 @@ ColorMode parse_color_mode(const std::string& s) {
     throw InputError("--color '" + s + "': must be layers, grid, speed or rotation");
 }
 
-bool run_is_flume(const std::string& run_dir) {
-    std::ifstream in(run_dir + "/scenario.toml");
-    std::string line;
-    while (std::getline(in, line))
-        if (line == "[flume]") return true;
-    return false;
-}
-
 RenderStyle default_render_style(bool flume) {
     RenderStyle s;
     s.flume_marks = flume;

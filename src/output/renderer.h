@@ -47,8 +47,6 @@ private:
 
 // The look of `demlab run --frames` and of `demlab render` without options.
 RenderStyle default_render_style(bool flume);
-// Whether a run folder holds a flume run (its scenario.toml has a [flume] table).
-bool run_is_flume(const std::string& run_dir);
 
 // The world window that shows all walls of a frame with a 3 % border.
 void fit_view(const Frame& f, Vec2& lo, Vec2& hi);

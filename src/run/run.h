@@ -76,4 +76,8 @@ struct RunSummary {
 
 RunSummary run_scenario(const Scenario& s, const RunOptions& o);
 
+// The set-up of a run folder's scenario ("flume", "dam_break", "terrain", "explicit";
+// setups/setup.h), from its scenario.toml.
+std::string setup_kind_of_run(const std::string& run_dir);
+
 }  // namespace demlab

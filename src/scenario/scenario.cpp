@@ -4,12 +4,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <fstream>
 #include <functional>
 #include <sstream>
 
 #include "core/error.h"
 #include "core/validate.h"
+#include "geometry/profile.h"
 
 namespace demlab {
 
@@ -234,6 +236,24 @@ const std::vector<Key>& registry() {
         k.push_back(real("dam_break.width", "m", "column width: back wall at x = 0, gate at x = width (assumed: 0.20)", [](Scenario& s) -> double& { return s.dam_break.width; }, 0, 10, true));
         k.push_back(real("dam_break.height", "m", "column height (assumed: 0.40; 0.08 m2 holds the thesis' 9,439 discs)", [](Scenario& s) -> double& { return s.dam_break.height; }, 0, 10, true));
         k.push_back(real("dam_break.floor_length", "m", "length of the floor from the back wall", [](Scenario& s) -> double& { return s.dam_break.floor_length; }, 0, 100, true));
+        // terrain
+        k.push_back(text("terrain.profile", "CSV file of the ground's profile (a relative path is taken from the scenario file's folder): rows x,y in m with x increasing (a header line and # comments allowed); a wall per segment, the ground below, friction and stiffness from material.friction_wall_deg, wall_kn, wall_ks", [](Scenario& s) -> std::string& { return s.terrain.profile; }));
+        {
+            Key rel{"terrain.release", "m", "array of >= 3 points [x, y] of a convex polygon", "the polygon the release mass fills (generated as for the flume, then dropped onto the profile); [] = the [[discs]] given", nullptr, nullptr};
+            rel.set = [](Scenario& s, const toml::node& n, const std::string& where) {
+                const toml::array* a = n.as_array();
+                if (!a) throw InputError(where + " = " + node_text(n) + ": must be an array of points [x, y] (m)");
+                s.terrain.release.clear();
+                for (const auto& e : *a) s.terrain.release.push_back(read_vec2(e, where, "m"));
+            };
+            rel.get = [](const Scenario& s) {
+                std::string out = "[";
+                for (size_t i = 0; i < s.terrain.release.size(); ++i)
+                    out += (i ? ", [" : "[") + toml_number(s.terrain.release[i].x()) + ", " + toml_number(s.terrain.release[i].y()) + "]";
+                return out + "]";
+            };
+            k.push_back(rel);
+        }
         // release
         k.push_back(integer("release.scale", "-", "upscaling of the sand (Table 14): radii [0.25, 0.5] mm times this (2: 36,403 discs; 4: 9,099; 20: 364)", [](Scenario& s) -> int& { return s.release.scale; }, 1, 100));
         k.push_back(real("release.r_min", "m", "smallest radius before the reduction; 0 = from the scale", [](Scenario& s) -> double& { return s.release.r_min; }, 0, 1));
@@ -436,6 +456,7 @@ void read_table(Scenario& s, const toml::table& t, const std::string& prefix, co
         }
         if (key == "flume") s.flume.enabled = true;
         if (key == "dam_break") s.dam_break.enabled = true;
+        if (key == "terrain") s.terrain.enabled = true;
         if (const toml::table* sub = node.as_table()) {
             read_table(s, *sub, key, file);
             continue;
@@ -488,6 +509,48 @@ void apply_override(Scenario& s, const std::string& assignment) {
     spec->set(s, *t.get("v"), "--set key '" + key + "'");
     if (key.rfind("flume.", 0) == 0) s.flume.enabled = true;
     if (key.rfind("dam_break.", 0) == 0) s.dam_break.enabled = true;
+    if (key.rfind("terrain.", 0) == 0) s.terrain.enabled = true;
+}
+
+// The profile read and the release polygon checked: a convex polygon of >= 3 corners that
+// holds discs of the release's radii.
+void finish_terrain(Scenario& s) {
+    const std::string where = s.source + ": ";
+    TerrainDef& t = s.terrain;
+    if (t.profile.empty()) throw InputError(where + "terrain.profile: a [terrain] needs its profile (a CSV file of x,y rows in m)");
+    // a relative path is the scenario file's neighbour; resolved, it is written absolute, so
+    // the run folder's copy of the scenario (and a resume) reads the same file
+    const std::filesystem::path prof(t.profile);
+    if (prof.is_relative() && std::filesystem::is_regular_file(s.source))
+        t.profile = (std::filesystem::absolute(std::filesystem::path(s.source)).parent_path() / prof).lexically_normal().string();
+    t.points = read_profile_csv(t.profile);
+    const auto& p = t.release;
+    if (p.empty()) return;
+    if (p.size() < 3) throw InputError(where + "terrain.release: " + std::to_string(p.size()) + " points; a polygon needs at least 3");
+    double turn = 0.0;
+    for (size_t k = 0; k < p.size(); ++k) {
+        const double c = cross(p[(k + 1) % p.size()] - p[k], p[(k + 2) % p.size()] - p[(k + 1) % p.size()]);
+        if (c == 0.0 || (turn != 0.0 && (c > 0.0) != (turn > 0.0)))
+            throw InputError(where + "terrain.release: corner " + std::to_string((k + 1) % p.size()) +
+                             " makes the polygon non-convex or degenerate (the release box must be convex)");
+        turn = c;
+    }
+    double lo = INFINITY, hi = -INFINITY, x0 = INFINITY, x1 = -INFINITY;
+    for (const Vec2& q : p) {
+        lo = std::min(lo, q.y());
+        hi = std::max(hi, q.y());
+        x0 = std::min(x0, q.x());
+        x1 = std::max(x1, q.x());
+    }
+    const ReleaseDef& r = s.release;
+    if (s.world.rotation.model >= 2 && !(s.world.rotation.u_rr < 0.6 * r.r_min * (1.0 - r.radius_reduction)))
+        throw InputError(where + "rotation.u_rr = " + format_number(s.world.rotation.u_rr) +
+                         " m must be < 0.6 times the smallest radius after the reduction = " +
+                         format_number(0.6 * r.r_min * (1.0 - r.radius_reduction)) + " m (eq. 2.71 needs r_rr > 2/5 r)");
+    const double size = std::min(hi - lo, x1 - x0);
+    if (2.0 * s.release.r_max > 0.25 * size)
+        throw InputError(where + "release.r_max = " + format_number(s.release.r_max) + " m is too large for the release polygon (" +
+                         format_number(size) + " m across): at most " + format_number(size / 8) + " m");
 }
 
 void finish_scenario(Scenario& s) {
@@ -496,8 +559,9 @@ void finish_scenario(Scenario& s) {
     ReleaseDef& r = s.release;
     if (r.r_min == 0.0) r.r_min = scale_r_min(r.scale);
     if (r.r_max == 0.0) r.r_max = scale_r_max(r.scale);
-    if (s.flume.enabled && s.dam_break.enabled)
-        throw InputError(where + "a scenario is a [flume] or a [dam_break], not both");
+    if (int(s.flume.enabled) + int(s.dam_break.enabled) + int(s.terrain.enabled) > 1)
+        throw InputError(where + "a scenario is one of [flume], [dam_break] and [terrain], not several");
+    if (s.terrain.enabled) finish_terrain(s);
     if (has_release(s) && !(r.r_min <= r.r_max))
         throw InputError(where + "release.r_min = " + format_number(r.r_min) + " m must be <= release.r_max = " +
                          format_number(r.r_max) + " m");
@@ -505,7 +569,7 @@ void finish_scenario(Scenario& s) {
         throw InputError(where + "stop.rest_duration = " + format_number(s.stop.rest_duration) +
                          " s must be shorter than stop.t_max = " + format_number(s.stop.t_max) + " s");
     if (!has_release(s) && s.discs.empty())
-        throw InputError(where + "no discs: give a [flume] or [dam_break] (its release mass is generated), or [[discs]]");
+        throw InputError(where + "no discs: give a [flume] or [dam_break] (its release mass is generated), a [terrain] with a release polygon, or [[discs]]");
     if (s.dam_break.enabled) {
         const DamBreakDef& d = s.dam_break;
         if (2.0 * r.r_max > 0.25 * std::min(d.width, d.height))
@@ -548,6 +612,14 @@ void finish_scenario(Scenario& s) {
                              std::to_string(s.discs.size()) + " discs)");
 }
 
+// A set-up's table is written only when the scenario has it (its presence chooses the set-up).
+static bool section_in_use(const Scenario& s, const std::string& sec) {
+    if (sec == "flume") return s.flume.enabled;
+    if (sec == "dam_break") return s.dam_break.enabled;
+    if (sec == "terrain") return s.terrain.enabled;
+    return true;
+}
+
 std::string resolved_toml(const Scenario& s) {
     std::ostringstream o;
     o << "# Resolved scenario: every key with the value the run used (defaults included).\n";
@@ -557,11 +629,11 @@ std::string resolved_toml(const Scenario& s) {
         const auto dot = k.name.find('.');
         const std::string sec = k.name.substr(0, dot);
         if (sec != section) {
-            if ((sec == "flume" && !s.flume.enabled) || (sec == "dam_break" && !s.dam_break.enabled)) continue;
+            if (!section_in_use(s, sec)) continue;
             o << "\n[" << sec << "]\n";
             section = sec;
         }
-        if ((sec == "flume" && !s.flume.enabled) || (sec == "dam_break" && !s.dam_break.enabled)) continue;
+        if (!section_in_use(s, sec)) continue;
         o << k.name.substr(dot + 1) << " = " << k.get(s) << "\n";
     }
     for (const WallDef& w : s.walls) {

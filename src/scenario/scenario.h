@@ -32,6 +32,15 @@ struct DamBreakDef {
     double floor_length = 1.5;             // m, floor from the back wall
 };
 
+// A terrain profile (setups/setup.h): walls along a polyline read from a CSV file, the ground
+// below it; the mass from a release polygon or explicit discs.
+struct TerrainDef {
+    bool enabled = false;                  // a [terrain] table was given
+    std::string profile;                   // CSV file of x,y rows (m), x increasing
+    std::vector<Vec2> release;             // m, a convex polygon the release mass fills; empty: [[discs]]
+    std::vector<Vec2> points;              // m, the profile as read (finish_scenario)
+};
+
 struct ReleaseDef {
     int scale = 4;                         // upscaling factor of the sand (Table 14): radii [0.25, 0.5] mm * scale
     double r_min = 0.0;                    // m; 0 = from the scale
@@ -77,6 +86,7 @@ struct Scenario {
     double wall_kn = 1.0e8, wall_ks = 1.0e8;
     FlumeDef flume;
     DamBreakDef dam_break;
+    TerrainDef terrain;
     ReleaseDef release;
     StopDef stop;
     OutputDef output;
@@ -98,7 +108,9 @@ std::string resolved_toml(const Scenario& s);
 std::string scenario_reference_markdown();
 
 // A scenario whose discs come from a generated (or saved) release mass.
-inline bool has_release(const Scenario& s) { return s.flume.enabled || s.dam_break.enabled; }
+inline bool has_release(const Scenario& s) {
+    return s.flume.enabled || s.dam_break.enabled || (s.terrain.enabled && !s.terrain.release.empty());
+}
 
 // Radii of the release mass for a scale factor (Table 14): [0.25, 0.5] mm times the scale.
 inline double scale_r_min(int scale) { return 0.00025 * scale; }

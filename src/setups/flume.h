@@ -1,6 +1,6 @@
-// The flume of the study: its walls (W1 slope, W2 transition arc, W3 barrier, W4 gate,
-// W5 lid) from a scenario, and the path coordinate s along W1, W2, W3 that the measurements
-// use (s = 0 at W1's upper end).
+// The walls of the lab set-ups: the flume of the study (W1 slope, W2 transition arc, W3
+// barrier, W4 gate, W5 lid) and the dam break's column, with their release boxes. The set-ups
+// (setup.h) build on these.
 #pragma once
 #include <vector>
 
@@ -28,27 +28,5 @@ struct ReleaseBox {
     int lid = -1;
 };
 ReleaseBox release_box(const Scenario& s);
-
-// The walls of a run (flume: W1, W2, W3, gate, lid; dam break: floor, back, gate, lid).
-std::vector<WallDef> lab_walls(const Scenario& s);
-
-// The flume's bed as a path: W1, the arc, W3 (as joined by the world).
-class FlumePath {
-public:
-    FlumePath(const WallGeom& w1, const WallGeom& arc, const WallGeom& w3);
-    // Projects a point onto the path: s along it (m) and h, the height above the bed on the
-    // flow side (m, negative below the bed).
-    void project(const Vec2& p, double& s, double& h) const;
-    double s_arc_start() const { return l1_; }
-    double s_barrier_start() const { return l1_ + l2_; }
-    double length() const { return l1_ + l2_ + l3_; }
-    Vec2 barrier_foot() const { return w3_.p0; }
-    // The point of the bed at s and the unit normal into the flow there.
-    void at(double s, Vec2& point, Vec2& normal) const;
-
-private:
-    WallGeom w1_, arc_, w3_;
-    double l1_, l2_, l3_;
-};
 
 }  // namespace demlab

@@ -10,7 +10,7 @@
 
 #include "core/error.h"
 #include "core/fileio.h"
-#include "setups/flume.h"
+#include "setups/setup.h"
 #include "core/interrupt.h"
 #include "core/progress.h"
 #include "core/validate.h"
@@ -114,7 +114,7 @@ void throw_if_interrupted_in_generation() {
 ReleaseMass generate_release(const Scenario& s) {
     const auto t0 = std::chrono::steady_clock::now();
     const ReleaseDef& rd = s.release;
-    const ReleaseBox box = release_box(s);
+    const ReleaseBox box = make_setup(s)->release_box();
     const Polygon tri{box.polygon};
     ReleaseMass m;
     m.box_area = tri.area();

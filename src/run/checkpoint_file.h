@@ -1,0 +1,24 @@
+// A run's checkpoint file (RUN_DIR/checkpoint.bin): its header, which `demlab resume` reads
+// first (the resolved scenario and the options to resume with); the run's own state ("RUN ")
+// and the solver's (World::save_state) follow it (run.cpp).
+#pragma once
+#include <string>
+
+#include "core/binary_io.h"
+#include "run/run.h"
+
+namespace demlab {
+
+struct CheckpointHeader {
+    std::string scenario_text;
+    CheckpointInfo info;
+};
+
+void put_checkpoint_header(BinaryWriter& out, const std::string& scenario_text, double t, double t_max, long steps,
+                           const RunOptions& o);
+CheckpointHeader get_checkpoint_header(BinaryReader& in, const std::string& path);
+
+// A whole file's bytes (InputError naming it when it cannot be read).
+std::string read_whole(const std::string& path);
+
+}  // namespace demlab

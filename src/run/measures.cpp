@@ -1,0 +1,231 @@
+#include "run/measures.h"
+
+#include <cmath>
+#include <sstream>
+
+#include "core/error.h"
+#include "core/machine.h"
+#include "core/validate.h"
+
+namespace demlab {
+
+namespace {
+std::string json_number(double v) {
+    if (!std::isfinite(v)) return "null";
+    std::ostringstream o;
+    o.precision(10);
+    o << v;
+    return o.str();
+}
+
+// A group of walls' force or impulse: the first wall's own value, then the others added (a
+// group of one gives that wall's bits, a signed zero too); none: zero.
+template <typename Get>
+Vec2 group_sum(const std::vector<int>& walls, Get get) {
+    if (walls.empty()) return Vec2::Zero();
+    Vec2 v = get(walls[0]);
+    for (size_t k = 1; k < walls.size(); ++k) v += get(walls[k]);
+    return v;
+}
+}  // namespace
+
+void RunSeries::open() {
+    forces_.open(dir_ + "/forces.csv");
+    forces_.out() << "t,fx_slope,fy_slope,fx_arc,fy_arc,fx_barrier,fy_barrier,fx_total,fy_total,"
+                     "ix_slope,iy_slope,ix_arc,iy_arc,ix_barrier,iy_barrier,ix_total,iy_total,fx_gate,fy_gate,ix_gate,iy_gate\n";
+    energy_.open(dir_ + "/energy.csv");
+    energy_.out() << "t,kinetic_translation,kinetic_rotation,potential,elastic,dissipated_contacts,dissipated_local,"
+                     "dissipated_rotation,work_by_walls,removed_with_walls,balance\n";
+    if (has_front_) {
+        front_.open(dir_ + "/front.csv");
+        front_.out() << "t,s_front,displacement\n";
+    }
+    if (has_track_) {
+        track_.open(dir_ + "/track.csv");
+        track_.out() << "t,id,x,y,vx,vy,angle,omega\n";
+    }
+}
+
+void RunSeries::reopen(const std::array<uint64_t, 4>& size) {
+    forces_.reopen(dir_ + "/forces.csv", size[0]);
+    energy_.reopen(dir_ + "/energy.csv", size[1]);
+    if (has_front_) front_.reopen(dir_ + "/front.csv", size[2]);
+    if (has_track_) track_.reopen(dir_ + "/track.csv", size[3]);
+}
+
+std::array<uint64_t, 4> RunSeries::flush() { return {forces_.flush(), energy_.flush(), front_.flush(), track_.flush()}; }
+
+void RunSeries::close() {
+    forces_.close();
+    energy_.close();
+    front_.close();
+    track_.close();
+}
+
+void RunSeries::sample(const World& w, const MeasureContext& m, RunState& st, RunSummary& sum) {
+    const double t = w.time();
+    const ForceWalls& fw = m.force_walls;
+    auto force = [&](int k) { return w.wall_force(k); };
+    auto impulse = [&](int k) { return w.wall_impulse(k); };
+    const Vec2 f[3] = {group_sum(fw.slope, force), group_sum(fw.arc, force), group_sum(fw.barrier, force)};
+    const Vec2 imp[3] = {group_sum(fw.slope, impulse), group_sum(fw.arc, impulse), group_sum(fw.barrier, impulse)};
+    const Vec2 ft = f[0] + f[1] + f[2], it = imp[0] + imp[1] + imp[2];
+    std::ostream& fo = forces_.out();
+    fo << t;
+    for (const Vec2& v : {f[0], f[1], f[2], ft, imp[0], imp[1], imp[2], it}) fo << ',' << v.x() << ',' << v.y();
+    const Vec2 fg = fw.gate >= 0 ? w.wall_force(fw.gate) : Vec2::Zero();
+    const Vec2 ig = fw.gate >= 0 ? w.wall_impulse(fw.gate) : Vec2::Zero();
+    fo << ',' << fg.x() << ',' << fg.y() << ',' << ig.x() << ',' << ig.y() << '\n';
+    if (std::abs(f[2].x()) > st.peak_fx_barrier) {
+        st.peak_fx_barrier = std::abs(f[2].x());
+        sum.t_peak_fx_barrier = t;
+    }
+    if (std::abs(f[1].y()) > st.peak_fy_arc) {
+        st.peak_fy_arc = std::abs(f[1].y());
+        sum.t_peak_fy_arc = t;
+    }
+    const EnergyReport e = w.energy();
+    energy_.out() << t << ',' << e.kinetic_translation << ',' << e.kinetic_rotation << ',' << e.potential << ','
+                  << e.elastic << ',' << e.dissipated_contacts << ',' << e.dissipated_local << ','
+                  << e.dissipated_rotation << ',' << e.work_by_walls << ',' << e.removed_with_walls << ','
+                  << e.balance() << '\n';
+    if (m.path) {
+        const BedPath& path = *m.path;
+        const size_t n = w.disc_count();
+        const auto conn = connected_discs(w.positions(), w.radii(), m.front_gap);
+        double s_front = -INFINITY, disp = 0, runup = 0;
+        for (size_t i = 0; i < n; ++i) {
+            if (!conn[i]) continue;
+            double si, hi_;
+            path.project(w.positions()[i], si, hi_);
+            if (si > s_front) {
+                s_front = si;
+                disp = (w.positions()[i] - m.start_pos[i]).norm();
+            }
+            if (si > m.barrier.s_barrier) runup = std::max(runup, w.positions()[i].y() + w.radii()[i] - m.barrier.foot.y());
+        }
+        front_.out() << t << ',' << s_front << ',' << disp << '\n';
+        sum.max_runup_height_during_run = std::max(sum.max_runup_height_during_run, runup);
+        if (sum.t_front_at_barrier < 0 && s_front >= m.barrier.s_barrier) sum.t_front_at_barrier = t;
+    }
+    for (long id : m.scenario.output.track) {
+        const size_t i = size_t(id);
+        track_.out() << t << ',' << id << ',' << w.positions()[i].x() << ',' << w.positions()[i].y() << ','
+                     << w.velocities()[i].x() << ',' << w.velocities()[i].y() << ',' << w.angles()[i] << ','
+                     << w.omegas()[i] << '\n';
+    }
+}
+
+// Energy created by the numerics (an unstable step, a disc driven through a wall): the
+// ledger's balance stays at its start value in a sound run (it closes to < 1 % of the
+// dissipated energy over a flume run), so a rise beyond `max_gain` times the energy turned
+// over (the peak kinetic and elastic energies plus what was dissipated) is a blow-up in the
+// making. The elastic energy is in the scale because the centred ledger's error on a contact
+// oscillating near the critical step is a fair fraction of that contact's energy (measured:
+// 20-50 % for a disc settling on a floor at 0.4-0.9 of the critical step), while a blow-up
+// multiplies the energy by orders of magnitude. Checked every kEnergyWatchSteps steps.
+//
+// Every 100 steps, as first, the check cost 1.3 % of a 2-thread flume run: one call to
+// World::energy() (a pass over the discs and the candidate pairs) took 225 us on geometry A,
+// more than a step. A runaway caught 1,000 steps later has grown for 2 ms more of simulated
+// time; a state that turns non-finite or a disc that leaves the domain is caught at its step
+// by the integration, and an overlap beyond max_overlap_ratio by the force pass.
+void check_energy_growth(const World& w, double e0, double peak_ke, double& peak_elastic, double max_gain) {
+    const EnergyReport e = w.energy();
+    peak_elastic = std::max(peak_elastic, e.elastic);
+    const double gain = e.balance() - e0;
+    const double turned_over =
+        peak_ke + peak_elastic + e.dissipated_contacts + e.dissipated_local + e.dissipated_rotation;
+    if (gain > max_gain * turned_over && gain > 1e-12 * std::abs(e0))
+        throw RunError("blow-up: energy growth: the energy balance rose by " + format_number(gain) + " J/m, " +
+                       format_number(turned_over > 0 ? gain / turned_over : INFINITY) +
+                       " times the energy turned over (stop.max_energy_gain = " + format_number(max_gain) +
+                       "), at step " + std::to_string(w.step_count()) + ", t = " + format_number(w.time()) +
+                       " s, with no work put in to match. Likely cause: a time step too large for the stiffness "
+                       "(use the automatic step or a smaller timestep.safety)");
+}
+
+void write_deposit(const World& w, const MeasureContext& m, const std::string& dir, RunSummary& sum) {
+    const BedPath& path = *m.path;
+    const double bin = m.scenario.output.deposit_bin;
+    const size_t n = w.disc_count();
+    const auto conn = connected_discs(w.positions(), w.radii(), m.front_gap);
+    const int bins = int(std::ceil(path.length() / bin)) + 1;
+    std::vector<double> top(size_t(bins), 0.0);
+    for (size_t i = 0; i < n; ++i) {
+        if (!conn[i]) continue;
+        double si, hi_;
+        path.project(w.positions()[i], si, hi_);
+        sum.runout_s = std::max(sum.runout_s, si + w.radii()[i]);
+        const int b = int(std::floor(si / bin + 0.5));
+        if (b >= 0 && b < bins) top[size_t(b)] = std::max(top[size_t(b)], hi_ + w.radii()[i]);
+        if (si > m.barrier.s_barrier)
+            sum.runup_height = std::max(sum.runup_height, w.positions()[i].y() + w.radii()[i] - m.barrier.foot.y());
+    }
+    std::ostringstream d;
+    d << "s_m,height_m\n";
+    for (int b = 0; b < bins; ++b) d << b * bin << ',' << top[size_t(b)] << '\n';
+    write_file_atomic(dir + "/deposit.csv", d.str());
+}
+
+SlopeAngles write_envelope(const World& w, double gap, double length, const std::string& dir, RunSummary& sum) {
+    const auto conn = connected_discs(w.positions(), w.radii(), gap);
+    const Envelope env = upper_envelope(w.positions(), w.radii(), conn, 0.0, length, 0.001);
+    const SlopeAngles angles = slope_angles(env);
+    sum.runout_s = angles.toe_x;
+    std::ostringstream d;
+    d << "x_m,surface_m\n";
+    for (size_t k = 0; k < env.y.size(); ++k)
+        if (!std::isnan(env.y[k])) d << env.x(k) << ',' << env.y[k] << '\n';
+    write_file_atomic(dir + "/envelope.csv", d.str());
+    return angles;
+}
+
+void write_summary(const std::string& path, const Scenario& s, const RunSummary& sum, const ReleaseFigures& release,
+                   const SlopeAngles* angles) {
+    const bool r = release.generated;
+    std::ostringstream j;
+    j << "{\n"
+      << "  \"scenario\": \"" << s.name << "\",\n"
+      << "  \"n_discs\": " << sum.n_discs << ",\n"
+      << "  \"total_mass\": " << json_number(sum.total_mass) << ",\n"
+      << "  \"porosity\": " << json_number(sum.porosity) << ",\n"
+      << "  \"release_porosity_generated\": " << json_number(r ? release.porosity_generated : NAN) << ",\n"
+      << "  \"release_settle_time\": " << json_number(r ? release.settle_time : NAN) << ",\n"
+      << "  \"release_wall_seconds\": " << json_number(r ? release.wall_seconds : NAN) << ",\n"
+      << "  \"dt\": " << json_number(sum.dt) << ",\n"
+      << "  \"dt_min\": " << json_number(sum.dt_min) << ",\n"
+      << "  \"dt_max\": " << json_number(sum.dt_max) << ",\n"
+      << "  \"steps\": " << sum.steps << ",\n"
+      << "  \"t_end\": " << json_number(sum.t_end) << ",\n"
+      << "  \"stop_reason\": \"" << sum.stop_reason << "\",\n"
+      << "  \"wall_seconds\": " << json_number(sum.wall_seconds) << ",\n"
+      << "  \"particle_steps_per_second\": " << json_number(sum.particle_steps_per_second) << ",\n"
+      // the machine the timings above come from (a resumed run: the one that finished it)
+      << "  \"machine\": " << json_string(machine_summary(machine_info())) << ",\n"
+      << "  \"runout_s\": " << json_number(sum.runout_s) << ",\n"
+      << "  \"runup_height\": " << json_number(sum.runup_height) << ",\n"
+      << "  \"max_runup_height_during_run\": " << json_number(sum.max_runup_height_during_run) << ",\n"
+      << "  \"t_front_at_barrier\": " << json_number(sum.t_front_at_barrier) << ",\n"
+      << "  \"t_peak_fx_barrier\": " << json_number(sum.t_peak_fx_barrier) << ",\n"
+      << "  \"t_peak_fy_arc\": " << json_number(sum.t_peak_fy_arc) << ",\n"
+      << "  \"energy_balance_error\": " << json_number(sum.energy_balance_error) << ",\n"
+      << "  \"broadphase_margin\": " << json_number(sum.broadphase_margin) << ",\n"
+      << "  \"broadphase_updates\": " << sum.broadphase_updates << ",\n"
+      << "  \"broadphase_reinserts\": " << sum.broadphase_reinserts << ",\n"
+      << "  \"broadphase_mean_candidates\": " << json_number(sum.broadphase_mean_candidates) << ",\n"
+      << "  \"broadphase_mean_touching\": " << json_number(sum.broadphase_mean_touching) << ",\n"
+      << "  \"broadphase_update_seconds\": " << json_number(sum.broadphase_update_seconds) << ",\n"
+      << "  \"force_pass_one_range_cuts\": " << sum.force_pass_one_range_cuts << ",\n"
+      << "  \"force_pass_busy_share\": " << json_number(sum.force_pass_busy_share) << ",\n"
+      << "  \"force_pass_busy_fallbacks\": " << sum.force_pass_busy_fallbacks;
+    if (angles) {
+        j << ",\n  \"gamma_ges\": " << json_number(angles->gamma_ges);
+        for (int i = 0; i < 5; ++i) j << ",\n  \"gamma_" << i + 1 << "\": " << json_number(angles->gamma[i]);
+        j << ",\n  \"toe_x\": " << json_number(angles->toe_x) << ",\n  \"surface_at_back_wall\": " << json_number(angles->h_wall);
+    }
+    j << "\n}\n";
+    write_file_atomic(path, j.str());
+}
+
+}  // namespace demlab

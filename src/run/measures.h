@@ -1,0 +1,77 @@
+// The measurements of a run, each a part the run loop calls (run.cpp): the series sampled
+// every output.series_interval (forces.csv, energy.csv, front.csv, track.csv) with the
+// landmarks they find (force peaks, the front's arrival, the run-up), the deposit along the
+// bed path (deposit.csv), the envelope and slope angles of a dam break (envelope.csv), the
+// energy watch, and summary.json.
+#pragma once
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "core/fileio.h"
+#include "dem/world.h"
+#include "geometry/deposit.h"
+#include "run/run.h"
+#include "setups/setup.h"
+
+namespace demlab {
+
+// What the measurements read of the set-up, fixed for the run.
+struct MeasureContext {
+    const Scenario& scenario;
+    const BedPath* path;           // null: no front, deposit or run-up
+    BarrierMarks barrier;
+    ForceWalls force_walls;
+    double front_gap;              // m, a front disc's neighbour gap (output.front_neighbour_gap)
+    const std::vector<Vec2>& start_pos;  // the discs at the start (the front's displacement)
+};
+
+// The loop's own state between two steps, saved in checkpoints (in this order).
+struct RunState {
+    double peak_fx_barrier = -1, peak_fy_arc = -1, peak_ke = 0, peak_elastic = 0, rest_since = -1, e0 = 0;
+    double next_series = 0.0, next_snap = 0.0;
+    template <typename IO, typename Field>
+    void fields(IO& io, Field&& field, RunSummary& sum) {
+        for (double* v : {&peak_fx_barrier, &peak_fy_arc, &peak_ke, &peak_elastic, &rest_since, &e0, &next_series,
+                          &next_snap, &sum.dt_min, &sum.dt_max, &sum.t_peak_fx_barrier, &sum.t_peak_fy_arc,
+                          &sum.max_runup_height_during_run, &sum.t_front_at_barrier})
+            field(io, *v);
+    }
+};
+
+// forces.csv, energy.csv, front.csv (with a bed path), track.csv (with tracers).
+class RunSeries {
+public:
+    RunSeries(std::string dir, bool front, bool track) : dir_(std::move(dir)), has_front_(front), has_track_(track) {}
+    void open();                                        // new files with their headers
+    void reopen(const std::array<uint64_t, 4>& sizes);  // a resumed run's, cut back to these sizes
+    std::array<uint64_t, 4> flush();                    // their sizes now
+    void sample(const World& w, const MeasureContext& m, RunState& st, RunSummary& sum);
+    void close();
+
+private:
+    std::string dir_;
+    bool has_front_, has_track_;
+    SeriesFile forces_, energy_, front_, track_;
+};
+
+// Energy created by the numerics: throws RunError (run.cpp's watch, measures.cpp).
+constexpr long kEnergyWatchSteps = 1000;
+void check_energy_growth(const World& w, double e0, double peak_ke, double& peak_elastic, double max_gain);
+
+// deposit.csv: the deposit's top, normal to the bed, in bins along the path; the run-out and
+// final run-up into the summary.
+void write_deposit(const World& w, const MeasureContext& m, const std::string& dir, RunSummary& sum);
+// envelope.csv and the slope angles of a dam break's deposit over [0, length].
+SlopeAngles write_envelope(const World& w, double gap, double length, const std::string& dir, RunSummary& sum);
+
+// summary.json.
+struct ReleaseFigures {
+    bool generated = false;  // a release mass (not explicit discs)
+    double porosity_generated = 0, settle_time = 0, wall_seconds = 0;
+};
+void write_summary(const std::string& path, const Scenario& s, const RunSummary& sum, const ReleaseFigures& release,
+                   const SlopeAngles* angles);
+
+}  // namespace demlab

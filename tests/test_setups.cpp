@@ -1,0 +1,149 @@
+// Set-ups as parts (setups/setup.h): the bed path against closed forms, the terrain profile
+// from a CSV polyline end to end, and its refusals.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "core/error.h"
+#include "files.h"
+#include "geometry/bed_path.h"
+#include "geometry/profile.h"
+#include "helpers.h"
+#include "run/run.h"
+#include "scenario/scenario.h"
+#include "setups/setup.h"
+
+using namespace demlab;
+using demlab::test::expect_refused;
+using demlab::test::read_file;
+using demlab::test::temp_dir;
+namespace fs = std::filesystem;
+
+namespace {
+WallGeom seg(Vec2 a, Vec2 b) { return make_geom(test::segment(a, b, 0.0, SegmentSolid::Right)); }
+
+std::string write_temp(const std::string& name, const std::string& text) {
+    const fs::path p = fs::temp_directory_path() / ("demlab-test-" + name + "-" + std::to_string(::getpid()));
+    std::ofstream(p) << text;
+    return p.string();
+}
+}  // namespace
+
+// A chain of a 3-4-5 segment and a horizontal one: s adds up along the parts, h is the
+// distance above the bed; the first part reaches back and the last forward without end.
+TEST(BedPath, ProjectsOntoAChainOfSegments) {
+    const BedPath path({seg({0, 4}, {3, 0}), seg({3, 0}, {7, 0})});
+    EXPECT_DOUBLE_EQ(path.part_start(1), 5.0);
+    EXPECT_DOUBLE_EQ(path.length(), 9.0);
+    double s, h;
+    path.project({5, 1}, s, h);  // above the flat, 2 m along it
+    EXPECT_DOUBLE_EQ(s, 7.0);
+    EXPECT_DOUBLE_EQ(h, 1.0);
+    path.project({10, 0.5}, s, h);  // beyond the end
+    EXPECT_DOUBLE_EQ(s, 12.0);
+    EXPECT_DOUBLE_EQ(h, 0.5);
+    // on the slope's normal through its middle (1.5, 2), 1 m out: (1.5, 2) + (0.8, 0.6)
+    path.project({2.3, 2.6}, s, h);
+    EXPECT_NEAR(s, 2.5, 1e-12);
+    EXPECT_NEAR(h, 1.0, 1e-12);
+    Vec2 p, n;
+    path.at(7.0, p, n);
+    EXPECT_NEAR((p - Vec2(5, 0)).norm(), 0.0, 1e-12);
+    EXPECT_NEAR((n - Vec2(0, 1)).norm(), 0.0, 1e-12);
+}
+
+// An arc's s is its radius times the angle from its start; h is measured inwards.
+TEST(BedPath, ArcPartsCountTheirAngle) {
+    WallDef a = test::arc({0, 1}, 1.0, 180.0, 270.0);  // from (-1, 1) down to (0, 0)
+    const BedPath path({seg({-1, 3}, {-1, 1}), make_geom(a), seg({0, 0}, {2, 0})});
+    EXPECT_NEAR(path.part_start(2), 2.0 + 0.5 * kPi, 1e-12);
+    double s, h;
+    const Vec2 q = Vec2(0, 1) + 0.5 * Vec2(std::cos(1.25 * kPi), std::sin(1.25 * kPi));  // halfway, 0.5 m in
+    path.project(q, s, h);
+    EXPECT_NEAR(s, 2.0 + 0.25 * kPi, 1e-12);
+    EXPECT_NEAR(h, 0.5, 1e-12);
+}
+
+TEST(TerrainProfile, CsvIsReadWithHeaderAndComments) {
+    const auto p = read_profile_csv(write_temp("profile-ok.csv", "# ground\nx,y\n0,1\n1.5,0.5\n\n2,0.5\n"));
+    ASSERT_EQ(p.size(), 3u);
+    EXPECT_DOUBLE_EQ(p[1].x(), 1.5);
+    EXPECT_DOUBLE_EQ(p[2].y(), 0.5);
+}
+
+TEST(TerrainProfile, BadCsvIsRefusedWithFileAndLine) {
+    const std::string back = write_temp("profile-back.csv", "x,y\n0,1\n1,0.5\n0.5,0.4\n");
+    expect_refused([&] { read_profile_csv(back); }, {":4:", "must exceed the previous row's x"});
+    const std::string text = write_temp("profile-text.csv", "x,y\n0,1\n1,abc\n");
+    expect_refused([&] { read_profile_csv(text); }, {":3:", "two numbers"});
+    const std::string one = write_temp("profile-one.csv", "0,1\n");
+    expect_refused([&] { read_profile_csv(one); }, {"at least 2 points"});
+    expect_refused([] { read_profile_csv("/nonexistent/profile.csv"); }, {"cannot read"});
+}
+
+TEST(TerrainProfile, ScenarioRefusesWhatCannotRun) {
+    const std::string prof = write_temp("profile-s.csv", "0,1\n1,0\n2,0\n");
+    auto load = [&](const std::string& extra) {
+        Scenario s = parse_scenario("[terrain]\nprofile = \"" + prof + "\"\n" + extra, "t.toml");
+        finish_scenario(s);
+        return s;
+    };
+    expect_refused([&] { load("release = [[0.1, 1.0], [0.3, 1.0]]\n"); }, {"terrain.release", "at least 3"});
+    expect_refused([&] { load("release = [[0, 1], [0.4, 1], [0.2, 1.1], [0.4, 1.3], [0, 1.3]]\n"); }, {"non-convex"});
+    expect_refused([&] { load(""); }, {"no discs"});
+    expect_refused([] {
+        Scenario s = parse_scenario("[terrain]\nrelease = [[0, 1], [1, 1], [1, 2]]\n", "t.toml");
+        finish_scenario(s);
+    }, {"terrain.profile"});
+    expect_refused([&] { load("[flume]\n"); }, {"not several"});
+    const Scenario s = load("release = [[0.1, 1.0], [0.4, 1.0], [0.4, 1.3], [0.1, 1.3]]\n");
+    EXPECT_EQ(make_setup(s)->kind(), "terrain");
+    EXPECT_EQ(make_setup(s)->walls().size(), 2u);
+    // the resolved scenario keeps the table, and reads back to the same set-up
+    const Scenario back = parse_scenario(resolved_toml(s), "resolved.toml");
+    EXPECT_EQ(make_setup(back)->kind(), "terrain");
+    EXPECT_EQ(back.terrain.release.size(), 4u);
+}
+
+// The shipped terrain scenario at scale 20: the mass is generated in its polygon, runs down the
+// profile, and front.csv, deposit.csv and summary.json measure it along the profile.
+TEST(TerrainProfile, ShippedScenarioRunsDownTheProfile) {
+    const fs::path root = DEMLAB_SOURCE_DIR;
+    Scenario s = load_scenario((root / "scenarios/terrain-slope-dam.toml").string());
+    apply_override(s, "release.scale=20");
+    apply_override(s, "stop.t_max=1.0");
+    apply_override(s, "output.snapshot_interval=0");
+    finish_scenario(s);
+    RunOptions o;
+    o.out_dir = temp_dir("terrain").string();
+    const RunSummary r = run_scenario(s, o);
+    EXPECT_GT(r.n_discs, 20);
+    EXPECT_EQ(setup_kind_of_run(o.out_dir), "terrain");
+    // the front: monotone enough to have moved well down the 1.6 m slope in 1 s
+    std::ifstream front(fs::path(o.out_dir) / "front.csv");
+    std::string line;
+    std::getline(front, line);
+    EXPECT_EQ(line, "t,s_front,displacement");
+    double s_first = NAN, s_last = NAN;
+    while (std::getline(front, line)) {
+        std::stringstream row(line);
+        std::string t, sf;
+        std::getline(row, t, ',');
+        std::getline(row, sf, ',');
+        if (std::isnan(s_first)) s_first = std::stod(sf);
+        s_last = std::stod(sf);
+    }
+    EXPECT_LT(s_first, 0.6);   // the polygon ends 0.45 m along x: s < 0.52 m
+    EXPECT_GT(s_last, 1.0);    // g sin 30 - friction: well over a metre in 1 s
+    EXPECT_GT(r.runout_s, s_last - 0.1);
+    EXPECT_LT(r.runout_s, 3.2);  // on the profile (3.12 m long)
+    EXPECT_LT(r.energy_balance_error, 0.05);
+    EXPECT_FALSE(read_file(fs::path(o.out_dir) / "deposit.csv").empty());
+    // the profile's load is in forces.csv's slope columns and the total: it carries the weight
+    const std::string forces = read_file(fs::path(o.out_dir) / "forces.csv");
+    EXPECT_NE(forces.find("fx_slope"), std::string::npos);
+    fs::remove_all(o.out_dir);
+}
