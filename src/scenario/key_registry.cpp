@@ -1,0 +1,351 @@
+#include "scenario/key_registry.h"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+#include "core/error.h"
+#include "core/validate.h"
+
+namespace demlab::keys {
+
+std::string where_of(const std::string& file, const toml::node& n, const std::string& key) {
+    const auto line = n.source().begin.line;
+    return file + (line > 0 ? ":" + std::to_string(line) : std::string()) + ": key '" + key + "'";
+}
+
+std::string toml_number(double v) {
+    if (std::isinf(v)) return v > 0 ? "inf" : "-inf";
+    std::string s = format_number(v);
+    if (s.find_first_of(".eEn") == std::string::npos) s += ".0";
+    return s;
+}
+
+std::string toml_string(const std::string& s) {
+    std::string out = "\"";
+    for (char c : s) {
+        if (c == '"' || c == '\\') out += '\\';
+        out += c;
+    }
+    return out + "\"";
+}
+
+std::string node_text(const toml::node& n) {
+    std::ostringstream o;
+    if (auto v = n.as_string()) return toml_string(v->get());
+    n.visit([&](auto&& x) { o << x; });
+    return o.str();
+}
+
+double read_number(const toml::node& n, const std::string& where, const std::string& unit) {
+    if (auto v = n.value<double>(); v && (n.is_floating_point() || n.is_integer())) return *v;
+    throw InputError(where + " = " + node_text(n) + ": must be a number (" + unit + ")");
+}
+
+Vec2 read_vec2(const toml::node& n, const std::string& where, const std::string& unit) {
+    const toml::array* a = n.as_array();
+    if (!a || a->size() != 2) throw InputError(where + " = " + node_text(n) + ": must be [x, y] (" + unit + ")");
+    Vec2 v(read_number(*a->get(0), where, unit), read_number(*a->get(1), where, unit));
+    if (!std::isfinite(v.x()) || !std::isfinite(v.y())) throw InputError(where + ": must be finite (" + unit + ")");
+    return v;
+}
+
+namespace {
+
+using DRef = double& (*)(Scenario&);
+using IRef = int& (*)(Scenario&);
+using BRef = bool& (*)(Scenario&);
+using SRef = std::string& (*)(Scenario&);
+using VRef = Vec2& (*)(Scenario&);
+
+// a real number in [lo, hi] (open ends when lo_open / hi_open)
+Key real(std::string name, std::string unit, std::string doc, DRef ref, double lo, double hi, bool lo_open = false,
+         bool hi_open = false) {
+    std::ostringstream acc;
+    acc << (lo_open ? "(" : "[") << toml_number(lo) << ", " << toml_number(hi) << (hi_open ? ")" : "]");
+    Key k{name, unit, acc.str(), std::move(doc), nullptr, nullptr};
+    const std::string accepted = k.accepted;
+    k.set = [=](Scenario& s, const toml::node& n, const std::string& where) {
+        const double v = read_number(n, where, unit);
+        const bool ok = !std::isnan(v) && (lo_open ? v > lo : v >= lo) && (hi_open ? v < hi : v <= hi);
+        if (!ok) throw InputError(where + " = " + format_number(v) + " " + unit + ": must be in " + accepted);
+        ref(s) = v;
+    };
+    k.get = [=](const Scenario& s) { return toml_number(ref(const_cast<Scenario&>(s))); };
+    return k;
+}
+
+Key integer(std::string name, std::string unit, std::string doc, IRef ref, long lo, long hi) {
+    Key k{name, unit, "integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]", std::move(doc), nullptr,
+          nullptr};
+    const std::string accepted = k.accepted;
+    k.set = [=](Scenario& s, const toml::node& n, const std::string& where) {
+        auto v = n.value_exact<int64_t>();
+        if (!v) throw InputError(where + " = " + node_text(n) + ": must be an " + accepted);
+        if (*v < lo || *v > hi) throw InputError(where + " = " + std::to_string(*v) + ": must be an " + accepted);
+        ref(s) = int(*v);
+    };
+    k.get = [=](const Scenario& s) { return std::to_string(ref(const_cast<Scenario&>(s))); };
+    return k;
+}
+
+Key boolean(std::string name, std::string doc, BRef ref) {
+    Key k{name, "-", "true or false", std::move(doc), nullptr, nullptr};
+    k.set = [=](Scenario& s, const toml::node& n, const std::string& where) {
+        auto v = n.value_exact<bool>();
+        if (!v) throw InputError(where + " = " + node_text(n) + ": must be true or false");
+        ref(s) = *v;
+    };
+    k.get = [=](const Scenario& s) { return std::string(ref(const_cast<Scenario&>(s)) ? "true" : "false"); };
+    return k;
+}
+
+Key text(std::string name, std::string doc, SRef ref, std::vector<std::string> choices = {}) {
+    std::string acc = "any text";
+    if (!choices.empty()) {
+        acc = "one of";
+        for (auto& c : choices) acc += " \"" + c + "\"";
+    }
+    Key k{name, "-", acc, std::move(doc), nullptr, nullptr};
+    k.set = [=](Scenario& s, const toml::node& n, const std::string& where) {
+        auto v = n.value_exact<std::string>();
+        if (!v) throw InputError(where + " = " + node_text(n) + ": must be a string (" + acc + ")");
+        if (!choices.empty() && std::find(choices.begin(), choices.end(), *v) == choices.end())
+            throw InputError(where + " = \"" + *v + "\": must be " + acc);
+        ref(s) = *v;
+    };
+    k.get = [=](const Scenario& s) { return toml_string(ref(const_cast<Scenario&>(s))); };
+    return k;
+}
+
+Key vec2(std::string name, std::string unit, std::string doc, VRef ref) {
+    Key k{name, unit, "[x, y], finite", std::move(doc), nullptr, nullptr};
+    k.set = [=](Scenario& s, const toml::node& n, const std::string& where) { ref(s) = read_vec2(n, where, unit); };
+    k.get = [=](const Scenario& s) {
+        const Vec2& v = ref(const_cast<Scenario&>(s));
+        return "[" + toml_number(v.x()) + ", " + toml_number(v.y()) + "]";
+    };
+    return k;
+}
+
+// enum-valued keys stored in non-string fields
+template <typename E>
+Key choice(std::string name, std::string doc, E& (*ref)(Scenario&), std::vector<std::pair<std::string, E>> map) {
+    std::string acc = "one of";
+    for (auto& [t, e] : map) acc += " \"" + t + "\"";
+    Key k{name, "-", acc, std::move(doc), nullptr, nullptr};
+    k.set = [=](Scenario& s, const toml::node& n, const std::string& where) {
+        std::string v;
+        if (auto str = n.value_exact<std::string>()) v = *str;
+        else if (auto i = n.value_exact<int64_t>()) v = std::to_string(*i);
+        else throw InputError(where + " = " + node_text(n) + ": must be " + acc);
+        for (auto& [t, e] : map)
+            if (t == v) {
+                ref(s) = e;
+                return;
+            }
+        throw InputError(where + " = \"" + v + "\": must be " + acc);
+    };
+    k.get = [=](const Scenario& s) {
+        for (auto& [t, e] : map)
+            if (e == ref(const_cast<Scenario&>(s))) return toml_string(t);
+        return std::string("\"?\"");
+    };
+    return k;
+}
+
+constexpr double kInf = INFINITY;
+
+void add_scenario_and_material_keys(std::vector<Key>& k) {
+    // scenario
+    k.push_back(text("scenario.name", "name of the scenario, used in outputs", [](Scenario& s) -> std::string& { return s.name; }));
+    k.push_back(text("scenario.description", "free text", [](Scenario& s) -> std::string& { return s.description; }));
+    {
+        Key seed{"scenario.seed", "-", "integer in [0, 2^63)", "seed of every random draw (release mass radii and positions)", nullptr, nullptr};
+        seed.set = [](Scenario& s, const toml::node& n, const std::string& where) {
+            auto v = n.value_exact<int64_t>();
+            if (!v || *v < 0) throw InputError(where + " = " + node_text(n) + ": must be an integer >= 0");
+            s.seed = static_cast<unsigned long long>(*v);
+        };
+        seed.get = [](const Scenario& s) { return std::to_string(s.seed); };
+        k.push_back(seed);
+    }
+    // material
+    k.push_back(real("material.density", "kg/m3", "disc density (Table 15: quartz sand)", [](Scenario& s) -> double& { return s.disc.density; }, 0, 1e6, true));
+    k.push_back(real("material.kn", "N/m", "disc normal stiffness, in series with the partner's (Table 15: 1e8)", [](Scenario& s) -> double& { return s.disc.kn; }, 0, 1e15, true));
+    k.push_back(real("material.ks", "N/m", "disc shear stiffness (Table 15: 1e8)", [](Scenario& s) -> double& { return s.disc.ks; }, 0, 1e15, true));
+    k.push_back(real("material.friction_disc_deg", "deg", "disc-disc friction angle (calibrated on the dam break: 15.5)", [](Scenario& s) -> double& { return s.disc_friction_deg; }, 0, 89));
+    k.push_back(real("material.friction_wall_deg", "deg", "disc-wall friction angle (basal angle on the zinc-coated sheet: 21.7)", [](Scenario& s) -> double& { return s.wall_friction_deg; }, 0, 89));
+    k.push_back(real("material.wall_kn", "N/m", "wall normal stiffness (same as discs unless set)", [](Scenario& s) -> double& { return s.wall_kn; }, 0, 1e15, true));
+    k.push_back(real("material.wall_ks", "N/m", "wall shear stiffness", [](Scenario& s) -> double& { return s.wall_ks; }, 0, 1e15, true));
+    k.push_back(choice<FrictionRule>("material.friction_rule_disc_disc", "which coefficient a disc-disc contact takes (PFC: min)", [](Scenario& s) -> FrictionRule& { return s.world.friction_rule_disc_disc; }, {{"min", FrictionRule::Min}, {"max", FrictionRule::Max}}));
+    k.push_back(choice<FrictionRule>("material.friction_rule_disc_wall", "which coefficient a disc-wall contact takes (thesis 4.3.2: max)", [](Scenario& s) -> FrictionRule& { return s.world.friction_rule_disc_wall; }, {{"min", FrictionRule::Min}, {"max", FrictionRule::Max}}));
+}
+
+void add_dynamics_keys(std::vector<Key>& k) {
+    // damping
+    k.push_back(real("damping.beta_n", "-", "normal critical damping ratio (Table 15: 0.5)", [](Scenario& s) -> double& { return s.world.damping.beta_n; }, 0, 1, false, true));
+    k.push_back(real("damping.beta_s", "-", "shear critical damping ratio (Table 15: 0.5)", [](Scenario& s) -> double& { return s.world.damping.beta_s; }, 0, 1, false, true));
+    k.push_back(choice<DashpotMode>("damping.dp_mode", "PFC dashpot mode: 0 both always; 1 no tensile normal force; 2 no shear dashpot while sliding; 3 both", [](Scenario& s) -> DashpotMode& { return s.world.damping.dp_mode; }, {{"0", DashpotMode::Full}, {"1", DashpotMode::NoTension}, {"2", DashpotMode::NoShearWhileSliding}, {"3", DashpotMode::NoTensionNoShearWhileSliding}}));
+    // rotation
+    k.push_back(integer("rotation.model", "-", "1: rotation locked; 2: free rotation with Preh-Poisel rolling resistance at walls; 3: 2 plus rotational damping at disc-disc contacts", [](Scenario& s) -> int& { return s.world.rotation.model; }, 1, 3));
+    k.push_back(real("rotation.u_rr", "m", "penetration depth of the rolling resistance, models 2 and 3 (Table 15: 0.00015); < 0.6 r_min", [](Scenario& s) -> double& { return s.world.rotation.u_rr; }, 0, 1));
+    k.push_back(choice<RollingForm>("rotation.rolling_form", "g in eq. 2.71: gravity (literal) or the actual wall normal force per mass", [](Scenario& s) -> RollingForm& { return s.world.rotation.rolling_form; }, {{"literal", RollingForm::Literal}, {"normal_force", RollingForm::NormalForce}}));
+    k.push_back(real("rotation.mu_br", "-", "rotational damping factor per step at disc-disc contacts, model 3 (Table 15: 0.5)", [](Scenario& s) -> double& { return s.world.rotation.mu_br; }, 0, 1, true, false));
+    k.push_back(choice<RotDampingPer>("rotation.damping_per", "mu_Br once per disc touching discs, or once per contact", [](Scenario& s) -> RotDampingPer& { return s.world.rotation.damping_per; }, {{"disc", RotDampingPer::Disc}, {"contact", RotDampingPer::Contact}}));
+    // time step
+    k.push_back(boolean("timestep.automatic", "PFC's automatic step (docs/engine.md) or the fixed one", [](Scenario& s) -> bool& { return s.world.timestep.automatic; }));
+    k.push_back(real("timestep.safety", "-", "safety factor of the automatic step (PFC: 0.8)", [](Scenario& s) -> double& { return s.world.timestep.safety; }, 0, 1, true, false));
+    k.push_back(real("timestep.fixed", "s", "the step when automatic = false", [](Scenario& s) -> double& { return s.world.timestep.fixed; }, 0, 1, true));
+    k.push_back(boolean("timestep.damping_correction", "shrink the rotational bound for the shear dashpot (stability, docs/engine.md)", [](Scenario& s) -> bool& { return s.world.timestep.damping_correction; }));
+    // world
+    k.push_back(vec2("world.gravity", "m/s2", "gravity vector", [](Scenario& s) -> Vec2& { return s.world.gravity; }));
+    k.push_back(real("world.broadphase_margin", "m", "smallest pad of the broad phase's fat boxes (moving discs get wider ones); 0 = half the smallest radius", [](Scenario& s) -> double& { return s.world.broadphase_margin; }, 0, 1));
+    k.push_back(real("world.joint_tolerance", "m", "wall ends closer than this are joined", [](Scenario& s) -> double& { return s.world.joint_tolerance; }, 0, 0.1));
+    k.push_back(real("world.max_overlap_ratio", "-", "an overlap beyond this fraction of the smaller radius stops the run (blow-up)", [](Scenario& s) -> double& { return s.world.max_overlap_ratio; }, 0, 2, true));
+}
+
+void add_setups_keys(std::vector<Key>& k) {
+    // flume
+    k.push_back(vec2("flume.w1_start", "m", "slope W1, upper end (Table 2)", [](Scenario& s) -> Vec2& { return s.flume.w1_p0; }));
+    k.push_back(vec2("flume.w1_end", "m", "slope W1, lower end", [](Scenario& s) -> Vec2& { return s.flume.w1_p1; }));
+    k.push_back(vec2("flume.arc_centre", "m", "transition arc W2, centre", [](Scenario& s) -> Vec2& { return s.flume.arc_centre; }));
+    k.push_back(real("flume.arc_radius", "m", "transition arc W2, radius", [](Scenario& s) -> double& { return s.flume.arc_radius; }, 0, 100, true));
+    k.push_back(real("flume.arc_start_deg", "deg", "transition arc W2, start angle (counter-clockwise from +x)", [](Scenario& s) -> double& { return s.flume.arc_start_deg; }, -360, 720));
+    k.push_back(real("flume.arc_end_deg", "deg", "transition arc W2, end angle", [](Scenario& s) -> double& { return s.flume.arc_end_deg; }, -360, 720));
+    k.push_back(vec2("flume.w3_start", "m", "barrier W3, lower end", [](Scenario& s) -> Vec2& { return s.flume.w3_p0; }));
+    k.push_back(vec2("flume.w3_end", "m", "barrier W3, upper end", [](Scenario& s) -> Vec2& { return s.flume.w3_p1; }));
+    k.push_back(vec2("flume.gate_start", "m", "gate W4, lower end (on W1) (Table 3)", [](Scenario& s) -> Vec2& { return s.flume.gate_p0; }));
+    k.push_back(vec2("flume.gate_end", "m", "gate W4, upper end", [](Scenario& s) -> Vec2& { return s.flume.gate_p1; }));
+    k.push_back(vec2("flume.lid_start", "m", "lid W5, end at the gate", [](Scenario& s) -> Vec2& { return s.flume.lid_p0; }));
+    k.push_back(vec2("flume.lid_end", "m", "lid W5, end at W1's upper end", [](Scenario& s) -> Vec2& { return s.flume.lid_p1; }));
+    // dam break
+    k.push_back(real("dam_break.width", "m", "column width: back wall at x = 0, gate at x = width (assumed: 0.20)", [](Scenario& s) -> double& { return s.dam_break.width; }, 0, 10, true));
+    k.push_back(real("dam_break.height", "m", "column height (assumed: 0.40; 0.08 m2 holds the thesis' 9,439 discs)", [](Scenario& s) -> double& { return s.dam_break.height; }, 0, 10, true));
+    k.push_back(real("dam_break.floor_length", "m", "length of the floor from the back wall", [](Scenario& s) -> double& { return s.dam_break.floor_length; }, 0, 100, true));
+    // terrain
+    k.push_back(text("terrain.profile", "CSV file of the ground's profile (a relative path is taken from the scenario file's folder): rows x,y in m with x increasing (a header line and # comments allowed); a wall per segment, the ground below, friction and stiffness from material.friction_wall_deg, wall_kn, wall_ks", [](Scenario& s) -> std::string& { return s.terrain.profile; }));
+    {
+        Key rel{"terrain.release", "m", "array of >= 3 points [x, y] of a convex polygon", "the polygon the release mass fills (generated as for the flume, then dropped onto the profile); [] = the [[discs]] given", nullptr, nullptr};
+        rel.set = [](Scenario& s, const toml::node& n, const std::string& where) {
+            const toml::array* a = n.as_array();
+            if (!a) throw InputError(where + " = " + node_text(n) + ": must be an array of points [x, y] (m)");
+            s.terrain.release.clear();
+            for (const auto& e : *a) s.terrain.release.push_back(read_vec2(e, where, "m"));
+        };
+        rel.get = [](const Scenario& s) {
+            std::string out = "[";
+            for (size_t i = 0; i < s.terrain.release.size(); ++i)
+                out += (i ? ", [" : "[") + toml_number(s.terrain.release[i].x()) + ", " + toml_number(s.terrain.release[i].y()) + "]";
+            return out + "]";
+        };
+        k.push_back(rel);
+    }
+}
+
+void add_run_keys(std::vector<Key>& k) {
+    // release
+    k.push_back(integer("release.scale", "-", "upscaling of the sand (Table 14): radii [0.25, 0.5] mm times this (2: 36,403 discs; 4: 9,099; 20: 364)", [](Scenario& s) -> int& { return s.release.scale; }, 1, 100));
+    k.push_back(real("release.r_min", "m", "smallest radius before the reduction; 0 = from the scale", [](Scenario& s) -> double& { return s.release.r_min; }, 0, 1));
+    k.push_back(real("release.r_max", "m", "largest radius before the reduction; 0 = from the scale", [](Scenario& s) -> double& { return s.release.r_max; }, 0, 1));
+    k.push_back(real("release.porosity", "-", "target 2D porosity of the generated mass (Table 5: 0.166)", [](Scenario& s) -> double& { return s.release.porosity; }, 0.05, 0.9));
+    k.push_back(real("release.radius_reduction", "-", "fraction all radii shrink by after generation (thesis: 0.03)", [](Scenario& s) -> double& { return s.release.radius_reduction; }, 0, 0.5));
+    k.push_back(text("release.variant", "I: the gate is deleted at t = 0; II: the gate is lifted at gate_speed", [](Scenario& s) -> std::string& { return s.release.variant; }, {"I", "II"}));
+    k.push_back(real("release.gate_speed", "m/s", "lifting speed of the gate, Variant II (lab: 2.25)", [](Scenario& s) -> double& { return s.release.gate_speed; }, 0, 100, true));
+    k.push_back(real("release.settle_alpha", "-", "local damping while the mass compacts without friction (the frictional phase settles on the dashpots alone)", [](Scenario& s) -> double& { return s.release.settle_alpha; }, 0, 1, false, true));
+    k.push_back(real("release.settle_ratio", "-", "settled when mean |unbalanced force| / mean |contact force| falls below this", [](Scenario& s) -> double& { return s.release.settle_ratio; }, 0, 1, true));
+    k.push_back(real("release.settle_max_time", "s", "simulated settling time at most (the run refuses a mass that did not settle)", [](Scenario& s) -> double& { return s.release.settle_max_time; }, 0, 100, true));
+    k.push_back(real("release.layer_height", "m", "height of the horizontal colour bands (layers)", [](Scenario& s) -> double& { return s.release.layer_height; }, 0, 10, true));
+    k.push_back(real("release.grid_cell", "m", "size of the colour grid's cells", [](Scenario& s) -> double& { return s.release.grid_cell; }, 0, 10, true));
+    k.push_back(text("release.space_order", "number the generated discs in space order before they settle, so that the settling runs on all threads: on, off, or auto (on above 20,000 discs). A different numbering settles into a different, equally valid mass", [](Scenario& s) -> std::string& { return s.release.space_order; }, {"auto", "on", "off"}));
+    k.push_back(text("release.from_file", "a settled mass (release.csv of an earlier run) to start from instead of generating one", [](Scenario& s) -> std::string& { return s.release.from_file; }));
+    // stop
+    k.push_back(real("stop.t_max", "s", "simulated time after the release at most", [](Scenario& s) -> double& { return s.stop.t_max; }, 0, 1e4, true));
+    k.push_back(real("stop.rest_ke_fraction", "-", "at rest when the kinetic energy stays below this fraction of its peak ...", [](Scenario& s) -> double& { return s.stop.rest_ke_fraction; }, 0, 1, true));
+    k.push_back(real("stop.rest_duration", "s", "... for this long", [](Scenario& s) -> double& { return s.stop.rest_duration; }, 0, 100));
+    k.push_back(real("stop.max_energy_gain", "-", "blow-up watch: the run stops when the energy balance (kinetic + potential + elastic + dissipated - work of moving walls) has risen by more than this multiple of the energy turned over (peak kinetic + peak elastic + dissipated): the numerics are creating energy", [](Scenario& s) -> double& { return s.stop.max_energy_gain; }, 0, 10, true));
+    // output
+    k.push_back(real("output.series_interval", "s", "time between rows of forces.csv, front.csv, energy.csv, track.csv", [](Scenario& s) -> double& { return s.output.series_interval; }, 0, 100, true));
+    k.push_back(real("output.snapshot_interval", "s", "time between snapshots (VTK .vtp with a .pvd series); 0 = none", [](Scenario& s) -> double& { return s.output.snapshot_interval; }, 0, 100));
+    k.push_back(real("output.deposit_bin", "m", "spacing of deposit.csv along the flume path", [](Scenario& s) -> double& { return s.output.deposit_bin; }, 0, 10, true));
+    k.push_back(real("output.front_neighbour_gap", "m", "a disc counts for the front only with a neighbour within this gap; 0 = r_max", [](Scenario& s) -> double& { return s.output.front_neighbour_gap; }, 0, 10));
+    {
+        Key track{"output.track", "-", "array of disc ids >= 0", "disc ids written to track.csv (tracer discs)", nullptr, nullptr};
+        track.set = [](Scenario& s, const toml::node& n, const std::string& where) {
+            const toml::array* a = n.as_array();
+            if (!a) throw InputError(where + " = " + node_text(n) + ": must be an array of disc ids, e.g. [0, 17]");
+            s.output.track.clear();
+            for (const auto& e : *a) {
+                auto v = e.value_exact<int64_t>();
+                if (!v || *v < 0) throw InputError(where + ": entry " + node_text(e) + " must be a disc id >= 0");
+                s.output.track.push_back(long(*v));
+            }
+        };
+        track.get = [](const Scenario& s) {
+            std::string out = "[";
+            for (size_t i = 0; i < s.output.track.size(); ++i) out += (i ? ", " : "") + std::to_string(s.output.track[i]);
+            return out + "]";
+        };
+        k.push_back(track);
+    }
+}
+
+}  // namespace
+
+// The table, in the order of the reference page and the resolved scenario.
+const std::vector<Key>& registry() {
+    static const std::vector<Key> keys = [] {
+        std::vector<Key> k;
+        add_scenario_and_material_keys(k);
+        add_dynamics_keys(k);
+        add_setups_keys(k);
+        add_run_keys(k);
+        return k;
+    }();
+    return keys;
+}
+
+size_t edit_distance(const std::string& a, const std::string& b) {
+    std::vector<size_t> prev(b.size() + 1), cur(b.size() + 1);
+    for (size_t j = 0; j <= b.size(); ++j) prev[j] = j;
+    for (size_t i = 1; i <= a.size(); ++i) {
+        cur[0] = i;
+        for (size_t j = 1; j <= b.size(); ++j)
+            cur[j] = std::min({prev[j] + 1, cur[j - 1] + 1, prev[j - 1] + (a[i - 1] == b[j - 1] ? 0 : 1)});
+        std::swap(prev, cur);
+    }
+    return prev[b.size()];
+}
+
+std::string nearest(const std::string& key, const std::vector<std::string>& names) {
+    std::string best;
+    size_t best_d = 1000;
+    for (const auto& n : names) {
+        const size_t d = edit_distance(key, n);
+        if (d < best_d) {
+            best_d = d;
+            best = n;
+        }
+    }
+    return best_d <= std::max<size_t>(3, key.size() / 3) ? best : std::string();
+}
+
+const Key* find_key(const std::string& name) {
+    for (const Key& k : registry())
+        if (k.name == name) return &k;
+    return nullptr;
+}
+
+std::vector<std::string> key_names() {
+    std::vector<std::string> names;
+    for (const Key& k : registry()) names.push_back(k.name);
+    return names;
+}
+
+[[noreturn]] void unknown_key(const std::string& where, const std::string& key, const std::vector<std::string>& names) {
+    const std::string near = nearest(key, names);
+    throw InputError(where + ": unknown key" + (near.empty() ? std::string() : "; did you mean '" + near + "'?") +
+                     " (docs/scenario-reference.md lists every key)");
+}
+
+}  // namespace demlab::keys
