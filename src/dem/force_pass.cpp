@@ -131,6 +131,11 @@ void World::note_wall_fault(size_t kw, double overlap, int chunk) {
 }
 
 void World::compute_forces(bool then_integrate) {
+    with_contact_law(def_.law, [&](auto law) { compute_forces_with<decltype(law)>(then_integrate); });
+}
+
+template <typename Law>
+void World::compute_forces_with(bool then_integrate) {
     wall_sums_.resize(size_t(force_ranges_));
     for (size_t t = 0; t < wall_sums_.size(); ++t) wall_sums_[t].resize(wall_split_[t + 1] - wall_split_[t]);
     // one fault record per chunk, kept between steps (no allocation in the step)
@@ -144,9 +149,9 @@ void World::compute_forces(bool then_integrate) {
         clearances_stale_ = false;
     }
     if (cross_copies_stale_) copy_cross_contacts();
-    const PassContext ctx{DiscArrays{pos_.data(), vel_.data(), radius_.data(), omega_.data(), material_.data()},
-                          PairPassParams{mat_dd_.data(), materials_.size(), def_.damping.dp_mode, dt_, last_dt_,
-                                         def_.max_overlap_ratio},
+    const PassContext<Law> ctx{DiscArrays{pos_.data(), vel_.data(), radius_.data(), omega_.data(), material_.data()},
+                          PairPassParamsT<typename Law::Params>{tables<Law>().disc_disc.data(), materials_.size(),
+                                                                def_.damping.dp_mode, dt_, last_dt_, def_.max_overlap_ratio},
                           then_integrate ? integrate_prepare() : IntegrateConsts{},
                           then_integrate,
                           prefetching(),
@@ -155,10 +160,10 @@ void World::compute_forces(bool then_integrate) {
                           round_down_float(approach_),
                           round_up_float(approach_)};
     if (force_ranges_ == 1) {
-        range_pass(0, ctx);
+        range_pass<Law>(0, ctx);
     } else {
         const auto pass_started = std::chrono::steady_clock::now();
-        pool_->for_each_thread([&](int t) { range_pass(t, ctx); });
+        pool_->for_each_thread([&](int t) { range_pass<Law>(t, ctx); });
         const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - pass_started).count();
         shared_pass_seconds_ += wall;
         window_pass_seconds_ += wall;
@@ -207,8 +212,9 @@ void World::copy_cross_contacts() {
 // when that range came to it: DB-9k's 223 cross contacts a step took 22-44 ns each against
 // 14-31 ns with the copies. The owning range copies a history back when it adds the contact,
 // so dd_ is whole after every pass (energy(), checkpoints and the lists' merge read it).
-void World::compute_cross_contacts(size_t t, const PassContext& ctx) {
-    PairBatch* const batch = avx2_ ? &pair_batch_[t] : nullptr;
+template <typename Law>
+void World::compute_cross_contacts(size_t t, const PassContext<Law>& ctx) {
+    PairBatch* const batch = Law::kWideKernels && avx2_ ? &pair_batch_[t] : nullptr;
     const size_t e0 = size_t(cross_in_start_[t]), e1 = size_t(cross_in_start_[t + 1]);
     // A pair with nothing to do gets no results (it would add +0 and keep its zero history);
     // the rest of a batch (fewer than four, or from a blown-up pair on) goes to the scalar
@@ -218,7 +224,7 @@ void World::compute_cross_contacts(size_t t, const PassContext& ctx) {
         const size_t n = std::min(PairBatch::kSize, e1 - e);
         for (size_t p = e; p < e + n; ++p) cross_todo_[size_t(cross_in_[p])] = 0;
         size_t done = 0;
-        if (batch) {
+        if constexpr (Law::kWideKernels) if (batch) {
             skip.clearance = cross_clearance_.data() + e;
             done = avx512_ ? disc_pairs_avx512(ctx.discs, ctx.pp, cross_dd_.data() + e, n, *batch, &skip)
                            : disc_pairs_avx2(ctx.discs, ctx.pp, cross_dd_.data() + e, n, *batch, &skip);
@@ -239,7 +245,7 @@ void World::compute_cross_contacts(size_t t, const PassContext& ctx) {
         for (size_t p = e + done; p < e + n; ++p) {
             const size_t m = size_t(cross_in_[p]);
             double overlap = 0.0;
-            if (!disc_pair_force(ctx.discs, ctx.pp, cross_dd_[p], cross_out_[m], overlap))
+            if (!disc_pair_force<Law>(ctx.discs, ctx.pp, cross_dd_[p], cross_out_[m], overlap))
                 note_disc_fault(size_t(cross_[m]), overlap, int(t));
             cross_todo_[m] = 1;
         }
@@ -274,7 +280,8 @@ double World::wait_for_cross(size_t t, uint64_t pass) const {
 // reads its discs (a pair's second disc comes after its first), so the block is integrated
 // while its loads and state are still in the cache. Every disc adds its terms in the order it
 // did when the range was one block: the same bits.
-void World::range_pass(int t, const PassContext& ctx) {
+template <typename Law>
+void World::range_pass(int t, const PassContext<Law>& ctx) {
     const auto started = std::chrono::steady_clock::now();
     const size_t tr = size_t(t);
     const size_t d0 = disc_split_[tr];
@@ -291,7 +298,7 @@ void World::range_pass(int t, const PassContext& ctx) {
         zeroed = e;
     };
     // cross contacts into this range's discs: computed here, then added first, in their order
-    if (force_ranges_ > 1) compute_cross_contacts(tr, ctx);
+    if (force_ranges_ > 1) compute_cross_contacts<Law>(tr, ctx);
     zero_to(cross_in_reach_[tr]);
     for (int32_t e = cross_in_start_[tr]; e < cross_in_start_[tr + 1]; ++e) {
         const size_t m = size_t(cross_in_[size_t(e)]);
@@ -300,7 +307,7 @@ void World::range_pass(int t, const PassContext& ctx) {
     // this range's own cross contacts, in list order
     size_t next = cross_start_[tr];
     size_t next_k = next < cross_.size() ? size_t(cross_[next]) : SIZE_MAX;
-    PairBatch* const batch = avx2_ ? &pair_batch_[tr] : nullptr;
+    PairBatch* const batch = Law::kWideKernels && avx2_ ? &pair_batch_[tr] : nullptr;
     PairSkip skip_base{nullptr, ctx.approach_lo, ctx.approach_hi};
     range_clock_[tr].touching_dd = 0;
     WallSum* const wall_sums = wall_sums_[tr].data();
@@ -346,13 +353,13 @@ void World::range_pass(int t, const PassContext& ctx) {
                 if (cross_todo_[next]) {
                     add_to_i(load, size_t(c.i), cross_out_[next]);
                     const DiscContact& h = cross_dd_[size_t(cross_pos_[next])];
-                    LinearLaw::for_each_history_field([](const auto& from, auto& to) { to = from; }, h, c);
+                    Law::for_each_history_field([](const auto& from, auto& to) { to = from; }, h, c);
                 }
                 ++next;
                 next_k = next < cross_.size() ? size_t(cross_[next]) : SIZE_MAX;
                 continue;
             }
-            if (batch) {
+            if constexpr (Law::kWideKernels) if (batch) {
                 // up to a batch of pairs before the next cross contact, four (or eight) at a
                 // time, then added in list order (what the scalar kernel below does pair by pair)
                 const size_t n = std::min({fb.contact_end, next_k, k + PairBatch::kSize}) - k;
@@ -368,14 +375,14 @@ void World::range_pass(int t, const PassContext& ctx) {
             }
             PairOut o;
             double overlap = 0.0;
-            if (!disc_pair_force(ctx.discs, ctx.pp, c, o, overlap)) {
+            if (!disc_pair_force<Law>(ctx.discs, ctx.pp, c, o, overlap)) {
                 note_disc_fault(k, overlap, t);
                 continue;
             }
             add_to_i(load, size_t(c.i), o);
             add_to_j(load, size_t(c.j), o);
         }
-        n_wall_sums = wall_contacts(kw, fb.wall_end, t, ctx, wall_sums, n_wall_sums);
+        n_wall_sums = wall_contacts<Law>(kw, fb.wall_end, t, ctx, wall_sums, n_wall_sums);
         // The block's sums are complete. A range that met a fault integrates no more blocks,
         // but goes on with its pairs (the pass then throws the first fault in list order,
         // whatever the blocks and ranges).
@@ -396,17 +403,18 @@ void World::range_pass(int t, const PassContext& ctx) {
 // The wall contacts dw_[kw, end) of range t: their law, their terms into their discs' sums,
 // and a record (WallSum) for the walls' loads and the ledger of each one that touches or
 // dissipates, from sums[n] on. Returns the records' count.
-size_t World::wall_contacts(size_t& kw, size_t end, int t, const PassContext& ctx, WallSum* sums, size_t n) {
+template <typename Law>
+size_t World::wall_contacts(size_t& kw, size_t end, int t, const PassContext<Law>& ctx, WallSum* sums, size_t n) {
     const size_t nw = walls_.size();
     DiscLoad* const load = load_.data();
     for (; kw < end; ++kw) {
         WallContact& c = dw_[kw];
         const size_t i = size_t(c.disc), w = size_t(c.wall);
         const Vec2 vwall = wall_moving_[w] ? walls_[w].velocity : Vec2::Zero();
-        const PairMaterial& pm = mat_dw_[size_t(material_[i]) * nw + w];
+        const typename Law::Params& pm = tables<Law>().disc_wall[size_t(material_[i]) * nw + w];
         WallOut o;
         double overlap = 0.0;
-        if (!disc_wall_force(geom_[w], wall_active_[w] != 0, vwall, pos_[i], vel_[i], omega_[i], radius_[i], pm,
+        if (!disc_wall_force<Law>(geom_[w], wall_active_[w] != 0, vwall, pos_[i], vel_[i], omega_[i], radius_[i], pm,
                              ctx.pp.mode, ctx.pp.dt, ctx.pp.last_dt, ctx.pp.max_overlap_ratio, c, o, overlap)) {
             note_wall_fault(kw, overlap, t);
             continue;

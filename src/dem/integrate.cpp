@@ -26,15 +26,17 @@ World::DtFactors World::dt_factors() const {
 // without contacts uses its own stiffnesses. Inlined by force: out of line it was a call per
 // disc and step, 7 % of geometry A's time (perf); inlined, its two divisions overlap the
 // integration's other work.
-[[gnu::always_inline]] inline double World::critical_step_squared_at(const DiscLoad& l, const MaterialDef& m, double mass,
-                                                                     double inertia, double radius, const DtFactors& f) {
-    const double kt = l.k_tran > 0.0 ? l.k_tran : LinearLaw::default_k_tran(m.kn, m.ks);
-    const double kr = l.k_rot > 0.0 ? l.k_rot : LinearLaw::default_k_rot(m.kn, m.ks);
+[[gnu::always_inline]] inline double World::critical_step_squared_at(const DiscLoad& l, double own_k_tran,
+                                                                     double own_k_rot, double mass, double inertia,
+                                                                     double radius, const DtFactors& f) {
+    const double kt = l.k_tran > 0.0 ? l.k_tran : own_k_tran;
+    const double kr = l.k_rot > 0.0 ? l.k_rot : own_k_rot;
     return critical_step_squared(mass, inertia, radius, kt, kr, f.rotation_free, f.phi_sq, f.phi_t_sq);
 }
 
 double World::critical_step_squared_of(size_t i, const DtFactors& f) const {
-    return critical_step_squared_at(load_[i], materials_[size_t(material_[i])], mass_[i], inertia_[i], radius_[i], f);
+    const size_t m = size_t(material_[i]);
+    return critical_step_squared_at(load_[i], default_k_tran_[m], default_k_rot_[m], mass_[i], inertia_[i], radius_[i], f);
 }
 
 double World::step_from_critical_squared(double best_sq) const {
@@ -57,12 +59,6 @@ World::IntegrateConsts World::integrate_prepare() {
     chunk_note_.assign(chunks, ChunkNote{});  // no allocation after the first step
     // the AVX2 loop's inputs: a disc without contacts uses its material's stiffnesses for its
     // step bound; each range's ledger terms, per disc
-    default_k_tran_.resize(materials_.size());
-    default_k_rot_.resize(materials_.size());
-    for (size_t m = 0; m < materials_.size(); ++m) {
-        default_k_tran_[m] = LinearLaw::default_k_tran(materials_[m].kn, materials_[m].ks);
-        default_k_rot_[m] = LinearLaw::default_k_rot(materials_[m].kn, materials_[m].ks);
-    }
     return {dt_, def_.gravity, def_.damping.local_alpha, def_.gravity.norm(), def_.timestep.automatic, dt_factors()};
 }
 
@@ -97,7 +93,8 @@ void World::integrate_discs(size_t begin, size_t end, int chunk, const Integrate
     const RotationDef rot = def_.rotation;
     const DtFactors dtf = k.dtf;
     const bool auto_dt = k.auto_dt;
-    const MaterialDef* const materials = materials_.data();
+    const double* const own_k_tran = default_k_tran_.data();
+    const double* const own_k_rot = default_k_rot_.data();
     const int32_t* const material = material_.data();
     LedgerBlock* const ledger_blocks = ledger_blocks_.data();
     const Vec2* const fat_lo = broad_.fat_lo_data();
@@ -130,8 +127,9 @@ void World::integrate_discs(size_t begin, size_t end, int chunk, const Integrate
     double kinetic_lanes[4] = {0.0, 0.0, 0.0, 0.0};  // disc i in lane i % 4, as the AVX2 loop sums it
     for (size_t i = begin; i < end; ++i) {
         if (auto_dt)
-            best_sq = std::min(best_sq, critical_step_squared_at(load[i], materials[size_t(material[i])], mass[i],
-                                                                 inertia[i], radius[i], dtf));
+            best_sq = std::min(best_sq, critical_step_squared_at(load[i], own_k_tran[size_t(material[i])],
+                                                                 own_k_rot[size_t(material[i])], mass[i], inertia[i],
+                                                                 radius[i], dtf));
         double diss_local = 0.0, diss_rot = 0.0;
         const DiscLoad& l = load[i];
         const Vec2 v_old = vel[i];

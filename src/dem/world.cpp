@@ -107,16 +107,21 @@ void World::set_radius(int i, double r) {
 }
 
 void World::refresh_dashpots() {
+    with_contact_law(def_.law, [&](auto law) { refresh_dashpots_with<decltype(law)>(); });
+}
+
+template <typename Law>
+void World::refresh_dashpots_with() {
     const size_t nm = materials_.size(), nw = walls_.size();
     cross_copies_stale_ = true;
     const double beta_n = def_.damping.beta_n, beta_s = def_.damping.beta_s;
     for (DiscContact& c : dd_) {
-        const PairMaterial& pm = mat_dd_[size_t(material_[size_t(c.i)]) * nm + size_t(material_[size_t(c.j)])];
-        LinearLaw::refresh_dashpots(c, pm, contact_mass_disc(c.i, c.j), beta_n, beta_s);
+        const auto& pm = tables<Law>().disc_disc[size_t(material_[size_t(c.i)]) * nm + size_t(material_[size_t(c.j)])];
+        Law::refresh_dashpots(c, pm, contact_mass_disc(c.i, c.j), beta_n, beta_s);
     }
     for (WallContact& c : dw_) {
-        const PairMaterial& pm = mat_dw_[size_t(material_[size_t(c.disc)]) * nw + size_t(c.wall)];
-        LinearLaw::refresh_dashpots(c, pm, mass_[size_t(c.disc)], beta_n, beta_s);
+        const auto& pm = tables<Law>().disc_wall[size_t(material_[size_t(c.disc)]) * nw + size_t(c.wall)];
+        Law::refresh_dashpots(c, pm, mass_[size_t(c.disc)], beta_n, beta_s);
     }
 }
 
@@ -196,6 +201,28 @@ void World::join_wall_ends() {
     }
 }
 
+// The chosen law's parameters per pair of materials and per material and wall, and the
+// stiffness a disc without contacts takes for its step.
+template <typename Law>
+void World::build_law_tables() {
+    const size_t nw = walls_.size(), nm = materials_.size();
+    LawTables<Law>& t = tables<Law>();
+    t.disc_disc.resize(nm * nm);
+    for (size_t a = 0; a < nm; ++a)
+        for (size_t b = 0; b < nm; ++b)
+            t.disc_disc[a * nm + b] = Law::pair_params(materials_[a], materials_[b], def_.friction_rule_disc_disc);
+    t.disc_wall.resize(nm * nw);
+    for (size_t a = 0; a < nm; ++a)
+        for (size_t w = 0; w < nw; ++w)
+            t.disc_wall[a * nw + w] = Law::wall_params(materials_[a], walls_[w], def_.friction_rule_disc_wall);
+    default_k_tran_.resize(nm);
+    default_k_rot_.resize(nm);
+    for (size_t m = 0; m < nm; ++m) {
+        default_k_tran_[m] = Law::default_k_tran(materials_[m].kn, materials_[m].ks);
+        default_k_rot_[m] = Law::default_k_rot(materials_[m].kn, materials_[m].ks);
+    }
+}
+
 void World::finalize() {
     if (finalized_) return;
     validate(def_, "world");
@@ -206,7 +233,7 @@ void World::finalize() {
     validate(def_.rotation, r_min, "rotation");
 
     join_wall_ends();
-    const size_t nw = walls_.size(), nm = materials_.size();
+    const size_t nw = walls_.size();
     wall_active_.assign(nw, 1);
     wall_moving_.assign(nw, 0);
     wall_force_.assign(nw, Vec2::Zero());
@@ -215,21 +242,7 @@ void World::finalize() {
     for (size_t w = 0; w < nw; ++w)
         if (walls_[w].remove_at <= 0.0) wall_active_[w] = 0;
 
-    mat_dd_.resize(nm * nm);
-    for (size_t a = 0; a < nm; ++a)
-        for (size_t b = 0; b < nm; ++b)
-            mat_dd_[a * nm + b] = LinearLaw::params(series_stiffness(materials_[a].kn, materials_[b].kn),
-                                                series_stiffness(materials_[a].ks, materials_[b].ks),
-                                                combine_friction(def_.friction_rule_disc_disc, materials_[a].friction,
-                                                                 materials_[b].friction));
-    mat_dw_.resize(nm * nw);
-    for (size_t a = 0; a < nm; ++a)
-        for (size_t w = 0; w < nw; ++w)
-            mat_dw_[a * nw + w] = LinearLaw::params(series_stiffness(materials_[a].kn, walls_[w].kn),
-                                                series_stiffness(materials_[a].ks, walls_[w].ks),
-                                                combine_friction(def_.friction_rule_disc_wall, materials_[a].friction,
-                                                                 walls_[w].friction));
-
+    with_contact_law(def_.law, [&](auto law) { build_law_tables<decltype(law)>(); });
     rr_factor_.assign(n, 0.0);
     if (def_.rotation.model >= 2 && def_.rotation.u_rr > 0.0)
         for (size_t i = 0; i < n; ++i) rr_factor_[i] = preh_poisel_factor(radius_[i], def_.rotation.u_rr);
@@ -274,6 +287,11 @@ double World::contact_mass_disc(int i, int j) const { return effective_mass(mass
 // Carries the shear history of pairs that stay candidates; new pairs start with F_s = 0 and
 // get their dashpot coefficients (eq. 2.56-2.62) once.
 void World::refresh_contacts() {
+    with_contact_law(def_.law, [&](auto law) { refresh_contacts_with<decltype(law)>(); });
+}
+
+template <typename Law>
+void World::refresh_contacts_with() {
     const size_t nm = materials_.size(), nw = walls_.size();
     const auto& keys = broad_.disc_pairs();
     // The new list has one contact per key, in key order: contact m is key m's, so the
@@ -297,11 +315,11 @@ void World::refresh_contacts() {
                 continue;
             }
             clearance_scratch_[m] = 0.0f;  // a new pair: look at it
-            const PairMaterial& pm = mat_dd_[size_t(material_[size_t(i)]) * nm + size_t(material_[size_t(j)])];
+            const auto& pm = tables<Law>().disc_disc[size_t(material_[size_t(i)]) * nm + size_t(material_[size_t(j)])];
             DiscContact& c = dd_scratch_[m];
             c.i = i;
             c.j = j;
-            LinearLaw::start_history(c, pm, contact_mass_disc(i, j), def_.damping.beta_n, def_.damping.beta_s);
+            Law::start_history(c, pm, contact_mass_disc(i, j), def_.damping.beta_n, def_.damping.beta_s);
         }
     };
     pool_->parallel_for(keys.size(), merge);
@@ -319,10 +337,10 @@ void World::refresh_contacts() {
             dw_scratch_.push_back(dw_[o]);
             continue;
         }
-        const PairMaterial& pm = mat_dw_[size_t(material_[size_t(i)]) * nw + size_t(w)];
+        const auto& pm = tables<Law>().disc_wall[size_t(material_[size_t(i)]) * nw + size_t(w)];
         WallContact c{i, w, 0.0, 0.0, 0.0, 0.0f, 0.0f};
         // eq. 2.60: the wall's mass is infinite, the contact's mass the disc's
-        LinearLaw::start_history(c, pm, mass_[size_t(i)], def_.damping.beta_n, def_.damping.beta_s);
+        Law::start_history(c, pm, mass_[size_t(i)], def_.damping.beta_n, def_.damping.beta_s);
         dw_scratch_.push_back(c);
     }
     dw_.swap(dw_scratch_);
@@ -366,7 +384,11 @@ void World::step() {
             const size_t w = size_t(c.wall);
             if (wall_active_[w]) continue;
             const size_t i = size_t(c.disc);
-            removed_walls_ += wall_contact_elastic_energy(geom_[w], pos_[i], radius_[i], mat_dw_[size_t(material_[i]) * nw + w], c);
+            removed_walls_ += with_contact_law(def_.law, [&](auto law) {
+                using Law = decltype(law);
+                return wall_contact_elastic_energy<Law>(geom_[w], pos_[i], radius_[i],
+                                                        tables<Law>().disc_wall[size_t(material_[i]) * nw + w], c);
+            });
         }
     }
     // every kPadCheckSteps steps the broad phase also looks for pads wider than the discs'

@@ -12,6 +12,7 @@
 #include "dem/integrate_kernel.h"
 #include "dem/laws/contact_law.h"
 #include "dem/material.h"
+#include "dem/laws/contact_laws.h"
 #include "dem/laws/pair_kernel.h"
 #include "dem/laws/wall_kernel.h"
 #include "dem/range_balance.h"
@@ -46,6 +47,7 @@ enum class Prefetch { Auto, Off, On };
 size_t prefetch_threshold_bytes();
 
 struct WorldDef {
+    ContactLawKind law = ContactLawKind::Linear;  // the contact law of every contact (contact_laws.h)
     Vec2 gravity{0.0, -9.81};              // m/s2
     DampingDef damping;
     TimeStepDef timestep;
@@ -250,10 +252,13 @@ private:
     // The force pass (force_pass.cpp); with then_integrate (a step), each range's discs are
     // integrated as soon as their sums are complete, and integrate_finish() must follow.
     void compute_forces(bool then_integrate = false);
+    template <typename Law>
+    void compute_forces_with(bool then_integrate);
     // what every range of one pass reads
+    template <typename Law>
     struct PassContext {
         DiscArrays discs;
-        PairPassParams pp;
+        PairPassParamsT<typename Law::Params> pp;
         IntegrateConsts ic;
         bool then_integrate;
         bool prefetch;
@@ -261,10 +266,13 @@ private:
         float approach_lo, approach_hi;   // the clearance test's bound (PairSkip)
     };
     struct WallSum;
-    void range_pass(int t, const PassContext& ctx);
-    void compute_cross_contacts(size_t t, const PassContext& ctx);
+    template <typename Law>
+    void range_pass(int t, const PassContext<Law>& ctx);
+    template <typename Law>
+    void compute_cross_contacts(size_t t, const PassContext<Law>& ctx);
     double wait_for_cross(size_t t, uint64_t pass) const;
-    size_t wall_contacts(size_t& kw, size_t end, int t, const PassContext& ctx, WallSum* sums, size_t n);
+    template <typename Law>
+    size_t wall_contacts(size_t& kw, size_t end, int t, const PassContext<Law>& ctx, WallSum* sums, size_t n);
     void block_ledger(size_t b0, size_t b1, size_t t);
     void add_up_pass();
     void copy_cross_contacts();
@@ -278,6 +286,15 @@ private:
     void integrate_finish();
     void move_walls();
     void refresh_contacts();
+    // the parts of the world that depend on the contact law, as templates over it
+    template <typename Law>
+    void build_law_tables();
+    template <typename Law>
+    void refresh_contacts_with();
+    template <typename Law>
+    void refresh_dashpots_with();
+    template <typename Law>
+    EnergyReport energy_with() const;
     void join_wall_ends();
     double contact_mass_disc(int i, int j) const;
     double margin_target() const;  // m, the broad phase's pad (WorldDef::broadphase_margin)
@@ -286,7 +303,7 @@ private:
     DtFactors dt_factors() const;
     double critical_step_squared_of(size_t i, const DtFactors& f) const;
     static constexpr long kPadCheckSteps = 128;  // see step()
-    static double critical_step_squared_at(const DiscLoad& l, const MaterialDef& m, double mass, double inertia,
+    static double critical_step_squared_at(const DiscLoad& l, double own_k_tran, double own_k_rot, double mass, double inertia,
                                            double radius, const DtFactors& f);
     double step_from_critical_squared(double best_sq) const;
 
@@ -296,8 +313,12 @@ private:
     long steps_ = 0;
 
     std::vector<MaterialDef> materials_;
-    std::vector<PairMaterial> mat_dd_;   // [mi * nm + mj]
-    std::vector<PairMaterial> mat_dw_;   // [mi * nw + w]
+    // every registered law's parameter tables; the chosen law's are filled by finalize()
+    AllLawTables law_tables_;
+    template <typename Law>
+    LawTables<Law>& tables() { return std::get<LawTables<Law>>(law_tables_); }
+    template <typename Law>
+    const LawTables<Law>& tables() const { return std::get<LawTables<Law>>(law_tables_); }
 
     // discs, structure of arrays
     std::vector<Vec2> pos_, vel_;
@@ -355,7 +376,8 @@ private:
     bool avx2_ = false;                     // def_.simd and the CPU has AVX2
     bool avx512_ = false;                   // and def_.avx512 and the CPU has AVX-512
     std::vector<PairBatch> pair_batch_;     // per range: the AVX2 kernel's results before they are added
-    std::vector<double> default_k_tran_, default_k_rot_;  // per material, N/m (integrate_prepare)
+    // per material: the stiffness a disc without contacts takes for its step (the law's), N/m
+    std::vector<double> default_k_tran_, default_k_rot_;
     void split_force_pass();
     void cut_ranges(size_t r);
     double max_cross_share_ = 0.10;  // of the disc-disc candidates (split_force_pass)

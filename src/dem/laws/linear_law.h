@@ -12,6 +12,13 @@
 //   step            one step of a touching contact (force, updated history, dissipation)
 //   elastic_energy  the energy a touching contact stores
 //   k_tran, k_rot   what a touching contact adds to the automatic step's stiffness sums
+//   open_work       what an opening contact's history still does (its last dashpot force)
+//   kWideKernels    whether the AVX2 and AVX-512 pair kernels (pair_kernel_avx2.cpp,
+//                   pair_kernel_avx512.cpp) compute this law; a law without them runs the
+//                   scalar kernels
+//
+// A law is registered in contact_laws.h; the force pass, the ledger and the checkpoint are
+// templates over it and need no edit for a new one.
 //
 // The kernels that apply a law to a disc pair (pair_kernel.h, with its AVX2 and AVX-512
 // forms) and to a disc-wall contact (wall_kernel.h) hold the contact's geometry and
@@ -21,6 +28,8 @@
 #include <cmath>
 
 #include "dem/laws/contact_law.h"
+#include "dem/material.h"
+#include "geometry/wall.h"
 
 namespace demlab {
 
@@ -33,9 +42,18 @@ struct PairMaterial {
 
 struct LinearLaw {
     using Params = PairMaterial;
+    static constexpr const char* kName = "linear";
+    static constexpr bool kWideKernels = true;
 
     // kn, ks: the series stiffnesses (N/m); mu: the combined friction coefficient
     static Params params(double kn, double ks, double mu) { return {kn, ks, mu, std::max(kn, ks), 1.0 / ks}; }
+    // A pair of discs (eq. 2.59, 2.61: springs in series) and a disc with a wall.
+    static Params pair_params(const MaterialDef& a, const MaterialDef& b, FrictionRule rule) {
+        return params(series_stiffness(a.kn, b.kn), series_stiffness(a.ks, b.ks), combine_friction(rule, a.friction, b.friction));
+    }
+    static Params wall_params(const MaterialDef& a, const WallDef& w, FrictionRule rule) {
+        return params(series_stiffness(a.kn, w.kn), series_stiffness(a.ks, w.ks), combine_friction(rule, a.friction, w.friction));
+    }
 
     // A new contact: no shear spring force, dashpots of critical damping scaled by beta
     // (eq. 2.56-2.57) for its effective mass (eq. 2.60, 2.62: a wall's mass is infinite, so a
@@ -81,6 +99,23 @@ struct LinearLaw {
         c.damp_n = float(f.damp_n);
         c.damp_s = float(f.damp_s);
         return f;
+    }
+
+    // A contact that opened: PFC deletes it, so its history starts again at zero; its last
+    // dashpot force still acted over the second half of the previous step (open_work, J/m,
+    // from the relative velocity along the normal and the tangent, when open_work_due).
+    template <typename Contact>
+    static bool open_work_due(const Contact& c) {
+        return c.damp_n != 0.0f || c.damp_s != 0.0f;
+    }
+    template <typename Contact>
+    static double open_work(const Contact& c, double vn, double vs, double last_dt) {
+        return -0.5 * last_dt * (c.damp_n * vn + c.damp_s * vs);
+    }
+    template <typename Contact>
+    static void clear_history(Contact& c) {
+        c.fs = 0.0;
+        c.damp_n = c.damp_s = 0.0f;
     }
 
     // The energy a touching contact stores: the normal spring's (kn U^2 / 2, from the secant

@@ -40,14 +40,17 @@ struct DiscArrays {
     const int32_t* material;
 };
 
-// The step's constants.
-struct PairPassParams {
-    const PairMaterial* materials;  // [mi * n_materials + mj]
+// The step's constants, with the law's parameter table (Params: the law's per-pair record).
+template <typename Params>
+struct PairPassParamsT {
+    const Params* materials;  // [mi * n_materials + mj]
     size_t n_materials;
     DashpotMode mode;
     double dt, last_dt;  // s, this step's and the last one's
     double max_overlap_ratio;
 };
+// the linear law's, which the AVX2 and AVX-512 kernels take
+using PairPassParams = PairPassParamsT<PairMaterial>;
 
 // Pair (c.i, c.j): n from i (A) to j (B); the force on j is F = fn n + ft t, on i -F.
 // Returns false, with `overlap` set, when the overlap exceeds max_overlap_ratio of the smaller
@@ -55,8 +58,9 @@ struct PairPassParams {
 // Inlined by force: GCC kept it out of line (it has two callers), and the PairOut then went
 // through the stack, with a call per candidate; perf put a third of the range pass on the
 // return and on reloading the result (docs/performance.md, session 4).
-[[gnu::always_inline]] inline bool disc_pair_force(const DiscArrays& d, const PairPassParams& p, DiscContact& c, PairOut& out,
-                            double& overlap) {
+template <typename Law = LinearLaw>
+[[gnu::always_inline]] inline bool disc_pair_force(const DiscArrays& d, const PairPassParamsT<typename Law::Params>& p,
+                                                   DiscContact& c, PairOut& out, double& overlap) {
     const size_t i = size_t(c.i), j = size_t(c.j);
     const Vec2 dx = d.pos[j] - d.pos[i];
     const double rsum = d.radius[i] + d.radius[j];
@@ -64,16 +68,13 @@ struct PairPassParams {
     out.touching = false;
     out.dissipated = 0.0;
     if (dist2 >= rsum * rsum) {
-        // PFC deletes a contact that opens: its history starts again at zero. The last
-        // dashpot force still acted over the second half of the previous step.
-        if (c.damp_n != 0.0f || c.damp_s != 0.0f) {
+        if (Law::open_work_due(c)) {
             const Vec2 vrel = d.vel[j] - d.vel[i];
             const Vec2 nrm = dx / std::sqrt(dist2);
             const double vs = vrel.dot(perp(nrm)) - (d.omega[i] * d.radius[i] + d.omega[j] * d.radius[j]);
-            out.dissipated = -0.5 * p.last_dt * (c.damp_n * vrel.dot(nrm) + c.damp_s * vs);
+            out.dissipated = Law::open_work(c, vrel.dot(nrm), vs, p.last_dt);
         }
-        c.fs = 0.0;
-        c.damp_n = c.damp_s = 0.0f;
+        Law::clear_history(c);
         return true;
     }
     const double dist = std::sqrt(dist2);
@@ -87,14 +88,14 @@ struct PairPassParams {
     const double vn = vrel.dot(nrm);
     // eq. 2.46: tangential velocity of B relative to A at the contact point
     const double vs = vrel.dot(t) - (d.omega[i] * ra + d.omega[j] * rb);
-    const PairMaterial& pm = p.materials[size_t(d.material[i]) * p.n_materials + size_t(d.material[j])];
-    const LinearContactForce f = LinearLaw::step(pm, p.mode, overlap, vn, vs, p.dt, p.last_dt, c, out.dissipated);
+    const typename Law::Params& pm = p.materials[size_t(d.material[i]) * p.n_materials + size_t(d.material[j])];
+    const auto f = Law::step(pm, p.mode, overlap, vn, vs, p.dt, p.last_dt, c, out.dissipated);
     out.f = f.fn * nrm + f.ft * t;
     // torque = lever x force; both levers give -r * ft (docs/engine.md)
     out.torque_i = -ra * f.ft;
     out.torque_j = -rb * f.ft;
-    out.k_tran = LinearLaw::k_tran(pm);
-    out.k_rot = LinearLaw::k_rot(pm);
+    out.k_tran = Law::k_tran(pm);
+    out.k_rot = Law::k_rot(pm);
     out.touching = true;
     return true;
 }

@@ -1,5 +1,5 @@
 // The disc-wall force kernel: one candidate contact of a disc with a wall, one step of the
-// contact law (linear_law.h), as a small function over the disc's state and the contact's
+// contact law (a law of contact_laws.h), as a small function over the disc's state and the contact's
 // history; the counterpart of disc_pair_force (pair_kernel.h) for walls. The normal points
 // from the wall (A) to the disc (B); a wall is of infinite mass and moves at a given velocity.
 #pragma once
@@ -31,24 +31,25 @@ struct WallOut {
 // Contact c of a disc (pos, vel, omega, radius) with wall geometry g, which is present
 // (active) and moves at vwall. Returns false, with `overlap` set, when the overlap exceeds
 // max_ratio of the radius: a blown-up run, which the caller reports.
+template <typename Law = LinearLaw>
 [[gnu::always_inline]] inline bool disc_wall_force(const WallGeom& g, bool active, const Vec2& vwall, const Vec2& pos,
-                                                   const Vec2& vel, double omega, double radius, const PairMaterial& pm,
+                                                   const Vec2& vel, double omega, double radius,
+                                                   const typename Law::Params& pm,
                                                    DashpotMode mode, double dt, double last_dt, double max_ratio,
                                                    WallContact& c, WallOut& out, double& overlap) {
     WallHit hit;
     if (!active || !disc_wall_contact(g, pos, radius, hit)) {
         out.touching = false;
         out.dissipated = 0.0;
-        if (c.damp_n != 0.0f || c.damp_s != 0.0f) {
-            // the last dashpot force's second half, along the normal it had
+        if (Law::open_work_due(c)) {
+            // along the normal it had
             const Vec2 vrel = vel - vwall;
             const Vec2 q = closest_point(g, pos);
             const Vec2 nrm = (pos - q).normalized();
             const double vs = vrel.dot(perp(nrm)) - omega * radius;
-            out.dissipated = -0.5 * last_dt * (c.damp_n * vrel.dot(nrm) + c.damp_s * vs);
+            out.dissipated = Law::open_work(c, vrel.dot(nrm), vs, last_dt);
         }
-        c.fs = 0.0;
-        c.damp_n = c.damp_s = 0.0f;
+        Law::clear_history(c);
         return true;
     }
     overlap = hit.overlap;
@@ -60,23 +61,24 @@ struct WallOut {
     const Vec2 vrel = vel - vwall;
     const double vn = vrel.dot(nrm);
     const double vs = vrel.dot(tan) - omega * rb;
-    const LinearContactForce f = LinearLaw::step(pm, mode, hit.overlap, vn, vs, dt, last_dt, c, out.dissipated);
+    const auto f = Law::step(pm, mode, hit.overlap, vn, vs, dt, last_dt, c, out.dissipated);
     out.force = f.fn * nrm + f.ft * tan;
     out.point = pos - rb * nrm;
     out.torque = -rb * f.ft;
     out.fn_spring = f.fn_spring;
-    out.k_tran = LinearLaw::k_tran(pm);
-    out.k_rot = LinearLaw::k_rot(pm);
+    out.k_tran = Law::k_tran(pm);
+    out.k_rot = Law::k_rot(pm);
     out.touching = true;
     return true;
 }
 
 // The energy a touching disc-wall contact stores, J/m (0 when it does not touch).
-inline double wall_contact_elastic_energy(const WallGeom& g, const Vec2& pos, double radius, const PairMaterial& pm,
-                                          const WallContact& c) {
+template <typename Law = LinearLaw>
+inline double wall_contact_elastic_energy(const WallGeom& g, const Vec2& pos, double radius,
+                                          const typename Law::Params& pm, const WallContact& c) {
     WallHit hit;
     if (!disc_wall_contact(g, pos, radius, hit)) return 0.0;
-    return LinearLaw::elastic_energy(pm, hit.overlap, c);
+    return Law::elastic_energy(pm, hit.overlap, c);
 }
 
 }  // namespace demlab
