@@ -68,6 +68,10 @@ EnergyReport World::energy_with() const {
     e.dissipated_rotation = diss_rotation_;
     e.work_by_walls = work_walls_;
     e.removed_with_walls = removed_walls_;
+    if (!bonds_.empty()) {
+        e.bond_elastic = bond_elastic_energy();
+        e.bond_break_loss = bond_break_loss_;
+    }
     return e;
 }
 

@@ -159,6 +159,7 @@ void World::compute_forces_with(bool then_integrate) {
                           // the clearance test's bound as floats, rounded outwards (PairSkip)
                           round_down_float(approach_),
                           round_up_float(approach_)};
+    if (!bonds_.empty()) compute_bond_forces();
     if (force_ranges_ == 1) {
         range_pass<Law>(0, ctx);
     } else {
@@ -181,6 +182,7 @@ void World::compute_forces_with(bool then_integrate) {
         if (first) throw RunError(first->message);
     }
     add_up_pass();
+    if (!bonds_.empty()) settle_bond_breaks();
 }
 
 // The cross contacts' own copies of their records and clearances (cross_dd_, world.h).
@@ -383,6 +385,7 @@ void World::range_pass(int t, const PassContext<Law>& ctx) {
             add_to_j(load, size_t(c.j), o);
         }
         n_wall_sums = wall_contacts<Law>(kw, fb.wall_end, t, ctx, wall_sums, n_wall_sums);
+        if (!bonds_.empty()) add_bond_terms(b0, fb.disc_end);
         // The block's sums are complete. A range that met a fault integrates no more blocks,
         // but goes on with its pairs (the pass then throws the first fault in list order,
         // whatever the blocks and ranges).

@@ -249,6 +249,7 @@ void World::finalize() {
     load_.assign(n, DiscLoad{});
     discs_may_have_escaped_ = true;
 
+    prepare_bonds();
     broad_.init(margin_target(), wall_piece_target(), pos_, radius_, geom_, wall_active_);
     refresh_contacts();
     finalized_ = true;

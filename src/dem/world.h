@@ -12,6 +12,7 @@
 #include "dem/integrate_kernel.h"
 #include "dem/laws/contact_law.h"
 #include "dem/material.h"
+#include "dem/bonds/elastic_bond.h"
 #include "dem/laws/contact_laws.h"
 #include "dem/laws/pair_kernel.h"
 #include "dem/laws/wall_kernel.h"
@@ -67,6 +68,7 @@ struct WorldDef {
     bool avx512 = true;                    // with simd: its law 8 pairs and its integration 8 discs at a time
                                            // when the CPU has AVX-512 (pair_kernel_avx512.cpp,
                                            // integrate_avx512.cpp); the same bits again
+    BondDef bond;                          // the bonds' law (World::add_bond), if any bonds are added
     Prefetch prefetch = Prefetch::Auto;    // the force pass asks for its arrays' lines ahead of use
                                            // (world.cpp, kPrefetchContacts); never changes a result
 };
@@ -94,10 +96,15 @@ struct EnergyReport {
     double dissipated_rotation = 0;   // rolling resistance and rotational damping
     double work_by_walls = 0;         // work done on the discs by moving walls
     double removed_with_walls = 0;    // elastic energy of contacts lost when a wall was removed
+    double bond_elastic = 0;          // elastic energy of the intact bonds (elastic_bond.h, C7)
+    double bond_break_loss = 0;       // energy the bonds held when they broke (C12)
     // Balance: kinetic + potential + elastic + dissipated - work_by_walls should stay constant.
     double balance() const {
-        return kinetic_translation + kinetic_rotation + potential + elastic + dissipated_contacts +
-               dissipated_local + dissipated_rotation + removed_with_walls - work_by_walls;
+        double b = kinetic_translation + kinetic_rotation + potential + elastic + dissipated_contacts +
+                   dissipated_local + dissipated_rotation + removed_with_walls - work_by_walls;
+        // (added only with bonds: a world without them keeps the bits it had)
+        if (bond_elastic != 0.0 || bond_break_loss != 0.0) b += bond_elastic + bond_break_loss;
+        return b;
     }
 };
 
@@ -110,6 +117,10 @@ public:
     int add_material(const MaterialDef& m);
     int add_disc(const DiscDef& d);
     int add_wall(const WallDef& w);
+    // A bond between discs k and l (elastic_bond.h, WorldDef::bond), its rest length the
+    // distance at finalize(). Bonds are persistent: they do not depend on the broad phase,
+    // act at any distance beside the contacts, and are saved in checkpoints.
+    int add_bond(int k, int l);
     // Checks the whole set-up, joins wall ends, builds the broad phase and the first time step.
     void finalize();
 
@@ -134,6 +145,8 @@ public:
     double torque(size_t i) const { return load_[i].torque; }  // contact torque of the last step, N m/m
     const std::vector<DiscContact>& disc_contacts() const { return dd_; }
     const std::vector<WallContact>& wall_contacts() const { return dw_; }
+    const std::vector<Bond>& bonds() const { return bonds_; }                // sorted by (k, l)
+    const std::vector<BondBreakEvent>& bond_breaks() const { return bond_breaks_; }  // in order
     const WallDef& wall_def(int w) const { return walls_[size_t(w)]; }
     const WallGeom& wall_geom(int w) const { return geom_[size_t(w)]; }
     bool wall_active(int w) const { return wall_active_[size_t(w)] != 0; }
@@ -277,6 +290,13 @@ private:
     void add_up_pass();
     void copy_cross_contacts();
     void note_disc_fault(size_t k, double overlap, int chunk);
+    // the bonds (bonds.cpp): rest lengths and each disc's bonds at finalize; every bond's
+    // force into its slot before the ranges; a block's discs' bond terms; the breaks after
+    void prepare_bonds();
+    void compute_bond_forces();
+    void add_bond_terms(size_t d0, size_t d1);
+    void settle_bond_breaks();
+    double bond_elastic_energy() const;
     void note_wall_fault(size_t kw, double overlap, int chunk);
     IntegrateConsts integrate_prepare();
     void integrate_discs(size_t begin, size_t end, int chunk, const IntegrateConsts& k);
@@ -467,6 +487,19 @@ private:
     void forget_clearances();
     std::vector<WallContact> dw_, dw_scratch_;
     long touching_dd_ = 0, touching_dw_ = 0;
+
+    // bonds, sorted by (k, l); each one's force on k this step (l gets the opposite) and
+    // whether it breaks; per disc its bonds (CSR over bond_disc_, entry 2 b + (disc is l))
+    std::vector<Bond> bonds_;
+    struct BondOut {
+        double fx, fy, strain;
+        uint8_t acts, breaks;
+    };
+    std::vector<BondOut> bond_out_;
+    std::vector<uint32_t> bond_disc_start_, bond_disc_;
+    double bond_k0_ = 0.0, bond_k_max_ = 0.0;
+    double bond_break_loss_ = 0.0;
+    std::vector<BondBreakEvent> bond_breaks_;
 
     // energy ledger
     double diss_contacts_ = 0, diss_local_ = 0, diss_rotation_ = 0, work_walls_ = 0, removed_walls_ = 0, last_dt_ = 0;

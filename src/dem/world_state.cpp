@@ -113,6 +113,26 @@ void World::save_state(BinaryWriter& out) const {
     out.put(diss_rotation_);
     out.put(work_walls_);
     out.put(removed_walls_);
+    // the bonds (a world without them writes nothing more: its checkpoints keep their layout)
+    if (!bonds_.empty()) {
+        out.tag("BOND");
+        out.put(uint64_t(bonds_.size()));
+        for (const Bond& b : bonds_) {
+            out.put(b.k);
+            out.put(b.l);
+            out.put(b.rest_length);
+            out.put(b.broken);
+        }
+        out.put(bond_break_loss_);
+        out.put(uint64_t(bond_breaks_.size()));
+        for (const BondBreakEvent& e : bond_breaks_) {
+            out.put(e.t);
+            out.put(e.k);
+            out.put(e.l);
+            out.put(e.strain);
+            out.put(e.energy);
+        }
+    }
 }
 
 namespace {
@@ -206,6 +226,32 @@ void World::load_state(BinaryReader& in) {
     in.get(diss_rotation_);
     in.get(work_walls_);
     in.get(removed_walls_);
+    if (!bonds_.empty()) {
+        // the same bonds as this world's (built from the same set-up), with their state
+        in.expect_tag("BOND");
+        if (in.get<uint64_t>() != bonds_.size()) throw InputError("checkpoint: its bonds are not this set-up's");
+        for (Bond& b : bonds_) {
+            Bond s{};
+            in.get(s.k);
+            in.get(s.l);
+            in.get(s.rest_length);
+            in.get(s.broken);
+            if (s.k != b.k || s.l != b.l) throw InputError("checkpoint: its bonds are not this set-up's");
+            b.rest_length = s.rest_length;
+            b.broken = s.broken;
+        }
+        in.get(bond_break_loss_);
+        const uint64_t breaks = in.get<uint64_t>();
+        if (breaks > bonds_.size()) throw InputError("checkpoint: corrupt bond list");
+        bond_breaks_.resize(size_t(breaks));
+        for (BondBreakEvent& e : bond_breaks_) {
+            in.get(e.t);
+            in.get(e.k);
+            in.get(e.l);
+            in.get(e.strain);
+            in.get(e.energy);
+        }
+    }
 
     // the broad phase from the restored positions, then the histories
     broad_.init(margin_target(), wall_piece_target(), pos_, radius_, geom_, wall_active_);

@@ -1,0 +1,133 @@
+// The world's bonds (elastic_bond.h): a persistent list beside the contact lists. Each step,
+// before the force pass' ranges start, every intact bond's force goes into its own slot (the
+// positions are read before any range integrates); each range then adds its discs' bond terms
+// after their contact terms, in bond-list order, so the sums are the same bits for any thread
+// count; after the pass the bonds that broke are marked in list order and their energy is
+// booked (C12).
+#include <algorithm>
+
+#include "core/error.h"
+#include "core/thread_pool.h"
+#include "core/validate.h"
+#include "dem/world.h"
+
+namespace demlab {
+
+int World::add_bond(int k, int l) {
+    const std::string where = "bond[" + std::to_string(bonds_.size()) + "]";
+    if (finalized_) throw InputError(where + ": bonds must be added before finalize()");
+    const long n = long(pos_.size());
+    if (k < 0 || l < 0 || k >= n || l >= n)
+        throw InputError(where + " = [" + std::to_string(k) + ", " + std::to_string(l) + "]: no such disc (" +
+                         std::to_string(n) + " discs)");
+    if (k == l) throw InputError(where + " = [" + std::to_string(k) + ", " + std::to_string(l) + "]: a bond joins two discs");
+    bonds_.push_back({std::min(k, l), std::max(k, l), 0.0, 0});
+    return int(bonds_.size()) - 1;
+}
+
+void World::prepare_bonds() {
+    if (bonds_.empty()) return;
+    const BondDef& d = def_.bond;
+    require_range("world.bond.modulus", d.modulus, 0.0, 1e12, false, "Pa");
+    if (!(d.modulus > 0.0)) throw InputError("world.bond.modulus = " + format_number(d.modulus) + " Pa: must be > 0");
+    if (!(d.max_strain > 0.0 && d.max_strain <= 0.5))
+        throw InputError("world.bond.max_strain = " + format_number(d.max_strain) + ": must be in (0, 0.5]");
+    require_range("world.bond.min_distance", d.min_distance, 0.0, 1.0, false, "m");
+    std::sort(bonds_.begin(), bonds_.end(), [](const Bond& a, const Bond& b) { return a.k != b.k ? a.k < b.k : a.l < b.l; });
+    for (size_t b = 1; b < bonds_.size(); ++b)
+        if (bonds_[b].k == bonds_[b - 1].k && bonds_[b].l == bonds_[b - 1].l)
+            throw InputError("bond [" + std::to_string(bonds_[b].k) + ", " + std::to_string(bonds_[b].l) + "] is given twice");
+    for (Bond& b : bonds_) {
+        b.rest_length = (pos_[size_t(b.l)] - pos_[size_t(b.k)]).norm();
+        if (!(b.rest_length > d.min_distance))
+            throw InputError("bond [" + std::to_string(b.k) + ", " + std::to_string(b.l) + "]: its discs are " +
+                             format_number(b.rest_length) + " m apart, not more than world.bond.min_distance = " +
+                             format_number(d.min_distance) + " m");
+    }
+    bond_k0_ = ElasticBond::k0(d);
+    bond_k_max_ = ElasticBond::max_stiffness(d, bond_k0_);
+    // each disc's bonds in list order (CSR)
+    const size_t n = pos_.size();
+    bond_disc_start_.assign(n + 1, 0);
+    for (const Bond& b : bonds_) {
+        ++bond_disc_start_[size_t(b.k) + 1];
+        ++bond_disc_start_[size_t(b.l) + 1];
+    }
+    for (size_t i = 0; i < n; ++i) bond_disc_start_[i + 1] += bond_disc_start_[i];
+    bond_disc_.resize(2 * bonds_.size());
+    std::vector<uint32_t> fill(bond_disc_start_.begin(), bond_disc_start_.end() - 1);
+    for (size_t b = 0; b < bonds_.size(); ++b) {
+        bond_disc_[fill[size_t(bonds_[b].k)]++] = uint32_t(2 * b);
+        bond_disc_[fill[size_t(bonds_[b].l)]++] = uint32_t(2 * b + 1);
+    }
+    bond_out_.assign(bonds_.size(), BondOut{0.0, 0.0, 0.0, 0, 0});
+}
+
+void World::compute_bond_forces() {
+    const BondDef& def = def_.bond;
+    const double k0 = bond_k0_;
+    pool_->parallel_for(bonds_.size(), [&](size_t begin, size_t end, int) {
+        for (size_t b = begin; b < end; ++b) {
+            const Bond& bond = bonds_[b];
+            BondOut& o = bond_out_[b];
+            o.acts = o.breaks = 0;
+            if (bond.broken) continue;
+            const Vec2 d = pos_[size_t(bond.l)] - pos_[size_t(bond.k)];
+            const ElasticBond::Eval e = ElasticBond::evaluate(def, k0, bond.rest_length, d);
+            o.strain = e.strain;
+            o.breaks = e.breaks;
+            if (e.skipped || e.breaks) continue;
+            o.acts = 1;
+            o.fx = e.f * d.x();
+            o.fy = e.f * d.y();
+        }
+    });
+}
+
+// The bond terms of discs [d0, d1), after their contact terms: the force, and the bond's
+// largest stiffness for the automatic step (C10; bonds carry no shear, so no k_rot).
+void World::add_bond_terms(size_t d0, size_t d1) {
+    DiscLoad* const load = load_.data();
+    for (size_t i = d0; i < d1; ++i) {
+        for (uint32_t e = bond_disc_start_[i]; e < bond_disc_start_[i + 1]; ++e) {
+            const uint32_t entry = bond_disc_[e];
+            const BondOut& o = bond_out_[entry >> 1];
+            if (bonds_[entry >> 1].broken) continue;
+            DiscLoad& l = load[i];
+            l.k_tran += bond_k_max_;
+            if (!o.acts) continue;
+            if (entry & 1u) {
+                l.force.x() -= o.fx;
+                l.force.y() -= o.fy;
+            } else {
+                l.force.x() += o.fx;
+                l.force.y() += o.fy;
+            }
+        }
+    }
+}
+
+void World::settle_bond_breaks() {
+    for (size_t b = 0; b < bonds_.size(); ++b) {
+        if (!bond_out_[b].breaks || bonds_[b].broken) continue;
+        Bond& bond = bonds_[b];
+        bond.broken = 1;
+        const double u = ElasticBond::energy(def_.bond, bond_k0_, bond.rest_length, bond_out_[b].strain);
+        bond_break_loss_ += u;
+        bond_breaks_.push_back({time_, bond.k, bond.l, bond_out_[b].strain, u});
+    }
+}
+
+// The intact bonds' energy at the current positions, in list order (C7).
+double World::bond_elastic_energy() const {
+    double u = 0.0;
+    for (const Bond& b : bonds_) {
+        if (b.broken) continue;
+        const double length = (pos_[size_t(b.l)] - pos_[size_t(b.k)]).norm();
+        if (length <= def_.bond.min_distance) continue;
+        u += ElasticBond::energy(def_.bond, bond_k0_, b.rest_length, length / b.rest_length - 1.0);
+    }
+    return u;
+}
+
+}  // namespace demlab

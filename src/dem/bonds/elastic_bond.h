@@ -1,0 +1,87 @@
+// Elastic bonds that break (AvaFrame com5SnowSlide's cohesion, docs/spec/COHESION.md): a
+// persistent interaction between two discs, a central spring along the bond that acts at any
+// distance and beside the contact law, removed for good past a maximum strain. This file is
+// the bond's law; the world keeps the bond list (World::add_bond), which survives the broad
+// phase's refreshes, adds each disc's bond terms after its contact terms, books the energy
+// and saves the list in checkpoints.
+//
+//   eps = (L - L0) / L0                                   C1 (> 0: stretched)
+//   F_on_k = -F_on_l = eps A E e_kl, e_kl = (x_l - x_k)/L  C2
+//   A = t L / sqrt(3) ("current") or t L0 / sqrt(3) ("rest"), t = 1 m (PFC2D)   C3'
+//   so with k0 = E t / sqrt(3): |F| = k0 (L - L0) L / L0 ("current"), k0 (L - L0) ("rest")   C6
+//   broken when |eps| > eps_c ("both") or eps > eps_c ("tension"); skipped when L <= d_min  C4
+//   U_b = k0 L0^2 (eps^2/2 + eps^3/3) ("current"), k0 L0^2 eps^2 / 2 ("rest")   C7
+//   the automatic step adds k_b,max = k0 (1 + 2 eps_c) ("current") or k0 to both discs  C10
+#pragma once
+#include <cmath>
+#include <cstdint>
+
+#include "core/vec2.h"
+
+namespace demlab {
+
+enum class BondArea { Current, Rest };
+enum class BondBreak { Both, Tension };
+
+struct BondDef {
+    double modulus = 5.0e4;         // Pa, E (AvaFrame's cohesiveSurfaceTension), > 0
+    double max_strain = 0.2;        // -, eps_c in (0, 0.5]
+    double min_distance = 1.0e-3;   // m, a bond this short or shorter is skipped (no force, no break)
+    BondArea area = BondArea::Current;
+    BondBreak break_mode = BondBreak::Both;
+    double thickness = 1.0;         // m, t: PFC2D's unit thickness
+};
+
+// A bond between discs k < l, rest length L0 (m) taken when the world is finalized.
+struct Bond {
+    int32_t k, l;
+    double rest_length;
+    uint8_t broken;
+};
+
+// A bond that broke: when, which, at what strain, and the energy it took with it (J/m).
+struct BondBreakEvent {
+    double t;
+    int32_t k, l;
+    double strain, energy;
+};
+
+struct ElasticBond {
+    // k0 = E t / sqrt(3), N/m
+    static double k0(const BondDef& d) { return d.modulus * d.thickness / std::sqrt(3.0); }
+
+    // The bond with d = x_l - x_k: whether it is skipped (too short), breaks (no force this
+    // step), or acts with force f d on k and -f d on l (f in N/m per m of d).
+    struct Eval {
+        double f = 0.0;
+        double strain = 0.0;
+        bool skipped = false, breaks = false;
+    };
+    static Eval evaluate(const BondDef& def, double k0_, double rest_length, const Vec2& d) {
+        Eval e;
+        const double length = d.norm();
+        if (length <= def.min_distance) {
+            e.skipped = true;
+            return e;
+        }
+        e.strain = length / rest_length - 1.0;
+        e.breaks = def.break_mode == BondBreak::Both ? std::abs(e.strain) > def.max_strain : e.strain > def.max_strain;
+        if (e.breaks) return e;
+        // eps E A / L: "current" A = t L/sqrt(3) gives eps k0; "rest" eps k0 L0 / L
+        e.f = def.area == BondArea::Current ? e.strain * k0_ : e.strain * k0_ * rest_length / length;
+        return e;
+    }
+
+    static double energy(const BondDef& def, double k0_, double rest_length, double strain) {
+        const double s2 = strain * strain;
+        const double base = k0_ * rest_length * rest_length;
+        return def.area == BondArea::Current ? base * (0.5 * s2 + s2 * strain / 3.0) : base * 0.5 * s2;
+    }
+
+    // the largest tangent stiffness an intact bond reaches, N/m (the automatic step)
+    static double max_stiffness(const BondDef& def, double k0_) {
+        return def.area == BondArea::Current ? k0_ * (1.0 + 2.0 * def.max_strain) : k0_;
+    }
+};
+
+}  // namespace demlab
