@@ -6,6 +6,7 @@
 #include "core/error.h"
 #include "core/machine.h"
 #include "core/validate.h"
+#include "run/solver.h"
 
 namespace demlab {
 
@@ -130,7 +131,7 @@ void RunSeries::sample(const World& w, const MeasureContext& m, RunState& st, Ru
 // more than a step. A runaway caught 1,000 steps later has grown for 2 ms more of simulated
 // time; a state that turns non-finite or a disc that leaves the domain is caught at its step
 // by the integration, and an overlap beyond max_overlap_ratio by the force pass.
-void check_energy_growth(const World& w, double e0, double peak_ke, double& peak_elastic, double max_gain) {
+void check_energy_growth(const Solver& w, double e0, double peak_ke, double& peak_elastic, double max_gain) {
     const EnergyReport e = w.energy();
     peak_elastic = std::max(peak_elastic, e.elastic);
     const double gain = e.balance() - e0;

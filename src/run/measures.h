@@ -58,7 +58,8 @@ private:
 
 // Energy created by the numerics: throws RunError (run.cpp's watch, measures.cpp).
 constexpr long kEnergyWatchSteps = 1000;
-void check_energy_growth(const World& w, double e0, double peak_ke, double& peak_elastic, double max_gain);
+class Solver;
+void check_energy_growth(const Solver& w, double e0, double peak_ke, double& peak_elastic, double max_gain);
 
 // deposit.csv: the deposit's top, normal to the bed, in bins along the path; the run-out and
 // final run-up into the summary.

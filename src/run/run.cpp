@@ -20,6 +20,7 @@
 #include "run/checkpoint_file.h"
 #include "run/measures.h"
 #include "run/snapshot.h"
+#include "run/solver.h"
 #include "setups/release.h"
 #include "setups/setup.h"
 
@@ -182,6 +183,8 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
     const ReleaseMass mass = start_mass(s, *setup, restore.get(), dir, terminal);
     std::vector<int> layer, grid;
     World w = build_world(s, *setup, mass, restore != nullptr, layer, grid);
+    DemSolver dem(w);
+    Solver& solver = dem;
     const size_t n = w.disc_count();
     const std::vector<Vec2> start_pos = w.positions();
     double r_max = 0, total_mass = 0;
@@ -202,7 +205,7 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
     sum.porosity = setup->has_release() ? mass.porosity_settled : -1.0;
     sum.dt_min = INFINITY;
     RunState st;
-    st.e0 = w.energy().balance();
+    st.e0 = solver.energy().balance();
     double wall_seconds_before = 0.0;
     if (restore) {
         // the series files are cut back to what they held at the checkpoint
@@ -214,14 +217,14 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
         std::array<uint64_t, 4> size{};
         for (uint64_t& z : size) restore->get(z);
         series.reopen(size);
-        w.load_state(*restore);
+        solver.load_state(*restore);
         if (!restore->at_end()) throw InputError(checkpoint_path + ": corrupt checkpoint (trailing bytes)");
         restore.reset();
     } else {
         series.open();
     }
-    const long steps_start = w.step_count();
-    Progress progress(s.stop.t_max, "s", w.time(), steps_start);
+    const long steps_start = solver.step_count();
+    Progress progress(s.stop.t_max, "s", solver.time(), steps_start);
     const auto t0 = std::chrono::steady_clock::now();
     auto last_checkpoint = t0;
     auto elapsed = [&] { return wall_seconds_before + std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(); };
@@ -230,7 +233,7 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
     // are flushed first and their lengths recorded, so a resume cuts off what came after.
     auto write_checkpoint = [&]() {
         BinaryWriter out;
-        put_checkpoint_header(out, scenario_text, w.time(), s.stop.t_max, w.step_count(), o);
+        put_checkpoint_header(out, scenario_text, solver.time(), s.stop.t_max, solver.step_count(), o);
         out.tag("RUN ");
         // what rebuilds this world: the discs at the start
         out.put(start_pos);
@@ -245,7 +248,7 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
         out.put(elapsed());
         out.put(snaps ? snaps->times() : std::vector<double>{});
         for (uint64_t z : series.flush()) out.put(z);
-        w.save_state(out);
+        solver.save_state(out);
         write_file_atomic(checkpoint_path, out.bytes());
     };
     auto snapshot = [&]() {
@@ -257,45 +260,45 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
     double candidate_sum = 0, touching_sum = 0;
     long pair_samples = 0;
     while (true) {
-        if (w.time() >= st.next_series - 1e-12) {
+        if (solver.time() >= st.next_series - 1e-12) {
             series.sample(w, measure, st, sum);
             st.next_series += s.output.series_interval;
         }
-        if (snaps && w.time() >= st.next_snap - 1e-12) {
+        if (snaps && solver.time() >= st.next_snap - 1e-12) {
             snapshot();
             st.next_snap += s.output.snapshot_interval;
         }
-        if (w.time() >= s.stop.t_max) break;
-        w.step();
-        sum.dt_min = std::min(sum.dt_min, w.dt());
-        sum.dt_max = std::max(sum.dt_max, w.dt());
-        if (w.step_count() % 10 == 0) {
+        if (solver.time() >= s.stop.t_max) break;
+        solver.step();
+        sum.dt_min = std::min(sum.dt_min, solver.dt());
+        sum.dt_max = std::max(sum.dt_max, solver.dt());
+        if (solver.step_count() % 10 == 0) {
             candidate_sum += double(w.disc_contacts().size());
             touching_sum += double(w.touching_disc_pairs());
             ++pair_samples;
             // summed by the integration, in parallel (a pass over the discs here was 2 % of the
             // calling thread's time on 2 threads, with the other one waiting)
-            const double ke = w.kinetic_energy();
+            const double ke = solver.kinetic_energy();
             st.peak_ke = std::max(st.peak_ke, ke);
-            if (w.step_count() % kEnergyWatchSteps == 0) check_energy_growth(w, st.e0, st.peak_ke, st.peak_elastic, s.stop.max_energy_gain);
+            if (solver.step_count() % kEnergyWatchSteps == 0) check_energy_growth(solver, st.e0, st.peak_ke, st.peak_elastic, s.stop.max_energy_gain);
             if (ke < s.stop.rest_ke_fraction * st.peak_ke) {
-                if (st.rest_since < 0) st.rest_since = w.time();
-                if (w.time() - st.rest_since >= s.stop.rest_duration) {
+                if (st.rest_since < 0) st.rest_since = solver.time();
+                if (solver.time() - st.rest_since >= s.stop.rest_duration) {
                     sum.stop_reason = "rest";
                     break;
                 }
             } else {
                 st.rest_since = -1;
             }
-            progress.update(w.time(), w.step_count());
+            progress.update(solver.time(), solver.step_count());
         }
         if (const int sig = o.handle_signals ? pending_interrupt() : 0) {
             progress.finish();
             write_checkpoint();
-            throw Interrupted("signal " + std::to_string(sig) + " at t = " + format_number(w.time()) + " s (step " +
-                              std::to_string(w.step_count()) + "): checkpoint written; continue with: demlab resume " + dir);
+            throw Interrupted("signal " + std::to_string(sig) + " at t = " + format_number(solver.time()) + " s (step " +
+                              std::to_string(solver.step_count()) + "): checkpoint written; continue with: demlab resume " + dir);
         }
-        if (o.checkpoint_every > 0 && w.step_count() % 10 == 0) {
+        if (o.checkpoint_every > 0 && solver.step_count() % 10 == 0) {
             const auto now = std::chrono::steady_clock::now();
             if (std::chrono::duration<double>(now - last_checkpoint).count() >= o.checkpoint_every) {
                 write_checkpoint();
@@ -306,7 +309,7 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
     progress.finish();
     series.sample(w, measure, st, sum);
     if (snaps) {
-        if (std::abs(w.time() - (st.next_snap - s.output.snapshot_interval)) > 1e-12) snapshot();
+        if (std::abs(solver.time() - (st.next_snap - s.output.snapshot_interval)) > 1e-12) snapshot();
         snaps->finish();
     }
     sum.wall_seconds = elapsed();
@@ -314,7 +317,7 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
     // of this session (a resumed run: since the resume)
     sum.particle_steps_per_second = double(n) * double(sum.steps - steps_start) /
                                     std::max(sum.wall_seconds - wall_seconds_before, 1e-9);
-    const EnergyReport e = w.energy();
+    const EnergyReport e = solver.energy();
     const double dissipated = e.dissipated_contacts + e.dissipated_local + e.dissipated_rotation;
     sum.energy_balance_error = dissipated > 0 ? std::abs(e.balance() - st.e0) / dissipated : 0.0;
     series.close();
