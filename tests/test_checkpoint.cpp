@@ -197,7 +197,7 @@ TEST(Checkpoint, ScenarioFromAnEarlierBuildIsTheSameScenario) {
     const Scenario s = scenario();
     const std::string now = resolved_toml(s);
     EXPECT_TRUE(same_scenario(now, now));
-    // an earlier build's text: without release.space_order (added in session 17)
+    // an earlier build's text: without release.space_order (a key added after the first checkpoints were written)
     const std::string key = "space_order = \"auto\"\n";
     const size_t at = now.find(key);
     ASSERT_NE(at, std::string::npos) << now;

@@ -7,7 +7,7 @@
 using namespace demlab;
 
 namespace {
-// the first two processors of this project's machine in sessions 20-21 (/proc/cpuinfo, cut)
+// the first two processors of an Intel Xeon machine of this project (/proc/cpuinfo, cut)
 const char* const kXeon =
     "processor\t: 0\n"
     "vendor_id\t: GenuineIntel\n"

@@ -72,7 +72,7 @@ void write_vtp_pair(const fs::path& dir, const std::string& points, const std::s
 }
 }  // namespace
 
-// The frame reader parses with std::from_chars (session 16): every value must be the double
+// The frame reader parses with std::from_chars: every value must be the double
 // strtod gives for its text, bit for bit, whatever the number of digits or the exponent.
 TEST(Frame, ReadsTheSnapshotsNumbersExactlyAsStrtod) {
     const fs::path dir = fs::temp_directory_path() / ("demlab-frame-" + std::to_string(::getpid()));

@@ -78,7 +78,7 @@ TimedRun timed_db9k(const std::vector<XyrDisc>& discs, const BenchOptions& o, in
 // What the machine's cores give together: `copies` independent 1-thread runs side by side
 // (one thread each, nothing shared) against one 1-thread run alone. Two cores of a virtual
 // machine need not give twice one core: they share the last-level cache and memory, and the
-// host may run other work on them. Measured here (session 12), two runs side by side each ran
+// host may run other work on them. Measured on the 2-core machine: two runs side by side each ran
 // from 8 % faster to 27 % slower than one alone, so the 2-thread figure is best read against
 // this ceiling.
 struct Ceiling {

@@ -2,7 +2,7 @@
 // taken from a running thread (by the host of a virtual machine, or by the kernel's own
 // interrupts), and for how long. A step that joins its threads every 150 us waits for the
 // gaps of every core it runs on; independent runs each pay only their own
-// (docs/performance.md, session 13). `demlab bench jitter` prints them.
+// (docs/performance.md). `demlab bench jitter` prints them.
 #pragma once
 #include <vector>
 

@@ -1,8 +1,7 @@
 // What machine a figure was measured on: the processor as Linux names it, the CPUs this
 // process may use, and CPU 0's caches. `bench` and summary.json print it beside every speed,
-// because the project's machine kind is not one processor: sessions 5-19 measured on an AMD
-// EPYC (Zen 4), sessions 20-21 on an Intel Xeon (family 6, model 207) that runs DB-9k a third
-// slower, which session 20 took for a slow day (docs/performance.md, session 21).
+// because machines of the same kind differ: an AMD EPYC (Zen 4) and an Intel Xeon (family 6,
+// model 207) with the same core count run DB-9k a third apart (docs/performance.md).
 #pragma once
 #include <cstddef>
 #include <string>

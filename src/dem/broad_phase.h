@@ -17,7 +17,7 @@
 // candidates in proportion to m, each costing c_p per step (the kernel's first pass: a few
 // ns). The sum is least for m^2 = (c_r / c_p) (|v| dt) (r / beta), beta the candidates per
 // disc a pad of one radius adds; L = kReachRadii r_min stands for (c_r / c_p) (r / beta),
-// measured on DB-9k (docs/performance.md, session 8). A still disc keeps the margin; a fast
+// measured on DB-9k (docs/performance.md). A still disc keeps the margin; a fast
 // one waits longer before it escapes. The candidates do not change any result (may_touch).
 //
 // Candidate pairs: every pair of discs (and disc-wall) whose fat boxes overlap, less the disc
@@ -133,10 +133,10 @@ private:
     // times the first box in x and y, up to kQueryGroup of them: one walk of the tree for the
     // union, then each disc takes the hits that overlap its own box (the tree's own test on
     // the same float boxes, so the candidates are the same). A walk cost about 1.3 us, most of
-    // it the descent through a tree of about a megabyte (docs/performance.md, session 10).
+    // it the descent through a tree of about a megabyte (docs/performance.md).
     static constexpr size_t kQueryGroup = 8;
     // A list update also re-inserts every disc that has used more than this share of its
-    // pad. Measured (session 14; the candidates do not change, the bits neither): at 0.5,
+    // pad. Measured (the candidates do not change, the bits neither): at 0.5,
     // DB-9k made 100 updates with 305k re-insertions in 0.56-0.61 s on 1 thread, at 0.35 55
     // updates with 363k in 0.48-0.50 s; geometry A to t = 0.3 s on 2 threads 3,984 updates in
     // 2.31 s at 0.5, 3,752 in 1.85 / 1.78 / 1.91 / 1.98 s at 0.4 / 0.35 / 0.3 / 0.25.
@@ -152,7 +152,7 @@ private:
     // trees shared out so that each thread gets about as many escaped discs: on 2 threads the
     // re-insertions were the largest serial part of a list update. With two trees, half the
     // indices each, DB-9k's escapes fell 39/61 % between them; with eight the worse thread gets
-    // 51 % (docs/performance.md, session 14). A query walks every tree; a tree whose discs lie
+    // 51 % (docs/performance.md). A query walks every tree; a tree whose discs lie
     // elsewhere costs it the root's test. Which tree holds a disc changes no candidate: the
     // lists are the overlap tests' answers, sorted.
     //

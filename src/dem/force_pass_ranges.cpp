@@ -23,7 +23,7 @@ namespace demlab {
 // 2 %, DB-9k 1 % of the candidates on 2 threads). A world in random order (the release
 // generator's, before its mass is ordered in space) has half its pairs crossing: the first
 // range then waits for the second to compute them all before its first pair, and 2 threads
-// took 131 s where 1 thread took 89 s for the release of geometry A (session 11). Above
+// took 131 s where 1 thread took 89 s for the release of geometry A. Above
 // max_cross_share_ of the candidates crossing, the pass runs as one range on the calling
 // thread: the same bits, at the 1-thread speed. The limit, 10 %, is where 2 ranges stopped
 // beating one on DB-9k with part of its discs swapped at random (ns per particle-step,

@@ -32,7 +32,7 @@ bool rebalance_shares(double* share, Seconds seconds, size_t r, double tolerance
 
 // Whether the pass would have gone faster as one range over the last window: the r ranges
 // worked `busy` seconds in all, in passes of `wall` seconds. One range does the same work in
-// about `busy` seconds (the ranges split it without loss: docs/performance.md, session 12), so
+// about `busy` seconds (the ranges split it without loss: docs/performance.md), so
 // it is faster when busy < wall, i.e. when the ranges worked less than 1 / r of the threads'
 // time (r wall). On an idle machine they work about 0.95 of it (DB-9k, geometry A, 2 threads).
 // It falls when another process takes a core: the operating system then stops one range for

@@ -199,7 +199,7 @@ public:
     // share of the threads' time in them that the ranges spent working (1 - the share they
     // waited: at the join for the slowest range, for another range's cross contacts, and for
     // the hand-over). 1 when no pass was shared out. The step-to-step balance on a machine
-    // whose cores' speeds vary (docs/performance.md, session 12).
+    // whose cores' speeds vary (docs/performance.md).
     double force_pass_shared_seconds() const { return shared_pass_seconds_; }
     double force_pass_busy_share() const;
     void set_cross_share_limit(double share);
@@ -416,7 +416,7 @@ private:
     // The range pass goes block by block, a block being kFuseBlock discs (whole ledger
     // blocks) and the contacts whose first disc is in it; each block is integrated as soon as
     // its pairs and wall contacts are done (compute_forces). Measured on the flume and DB-9k:
-    // docs/performance.md, session 10.
+    // docs/performance.md.
     static constexpr size_t kFuseBlock = 256;
     struct FuseBlock {
         size_t disc_end;     // its discs end here (they start where the last block ended)
@@ -464,7 +464,7 @@ private:
     std::vector<Fault> dd_fault_, dw_fault_;
     // What each chunk's integration found in this step (integrate_note), a cache line per
     // chunk: the threads write theirs after every block. (It replaced five vectors whose
-    // shared lines both threads wrote; no measurable speed-up, docs/performance.md session 12,
+    // shared lines both threads wrote; no measurable speed-up,
     // but one record and one reset.)
     struct alignas(64) ChunkNote {
         size_t fault = SIZE_MAX;    // the first disc that left the domain or went non-finite

@@ -26,7 +26,7 @@ void write_png(const std::string& path, const Image& img) {
     // No row filter: the frames are flat colours, which deflate finds as runs of equal bytes;
     // libpng's default tried all five filters on every row, and the differences they make
     // compress worse. Measured on geometry A's 120 frames: 2 s less to write them, and 5.1
-    // instead of 9.1 MB (docs/performance.md, session 16).
+    // instead of 9.1 MB (docs/performance.md).
     png_set_filter(png, PNG_FILTER_TYPE_BASE, PNG_FILTER_NONE);
     png_write_info(png, info);
     for (int y = 0; y < img.height; ++y) png_write_row(png, const_cast<png_bytep>(img.at(0, y)));

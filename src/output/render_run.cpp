@@ -109,7 +109,7 @@ int render_run(const RenderRunOptions& o) {
     // in one thread only) and takes every threads-th frame. A frame's bytes do not depend on
     // which renderer drew it, so the files are the same for any thread count (test
     // SmallRun.ReplayIsTheSameBytesForAnyThreadCount). Geometry A's 120 frames: 5.1 s on one
-    // thread, 3.0 s on two (docs/performance.md, session 16).
+    // thread, 3.0 s on two (docs/performance.md).
     const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
     const size_t threads = std::min(chosen.size(), size_t(o.threads > 0 ? unsigned(o.threads) : std::min(cores, 8u)));
     std::vector<Image> tiles(o.strip.empty() ? 0 : chosen.size());

@@ -53,7 +53,7 @@ struct LinearContactForce {
 
 // c ? a : b without a branch (the bits of a or b exactly). The dashpot modes' conditions
 // (tension, sliding) flip from step to step in a flow, and as branches they were mispredicted
-// often enough to show in perf (docs/performance.md, session 4).
+// often enough to show in perf (docs/performance.md).
 inline double select(bool c, double a, double b) {
     const uint64_t m = uint64_t(0) - uint64_t(c);
     return std::bit_cast<double>((std::bit_cast<uint64_t>(a) & m) | (std::bit_cast<uint64_t>(b) & ~m));

@@ -57,7 +57,7 @@ using PairPassParams = PairPassParamsT<PairMaterial>;
 // radius (or the centres coincide): a blown-up run, which the caller reports.
 // Inlined by force: GCC kept it out of line (it has two callers), and the PairOut then went
 // through the stack, with a call per candidate; perf put a third of the range pass on the
-// return and on reloading the result (docs/performance.md, session 4).
+// return and on reloading the result (docs/performance.md).
 template <typename Law = LinearLaw>
 [[gnu::always_inline]] inline bool disc_pair_force(const DiscArrays& d, const PairPassParamsT<typename Law::Params>& p,
                                                    DiscContact& c, PairOut& out, double& overlap) {
@@ -126,7 +126,7 @@ struct alignas(64) DiscLoad {
 // becomes -0 (round to nearest); x + (-0) is x for every x. So the sums are the bits the
 // scalar pass gets by skipping the open pairs. (i's force is added as -f: x + (-f) is x - f.)
 struct PairBatch {
-    static constexpr size_t kSize = 128;  // pairs; the batch stays in L1 between kernel and sums (64: 2-3 % slower, 256: slower again, session 10)
+    static constexpr size_t kSize = 128;  // pairs; the batch stays in L1 between kernel and sums (64: 2-3 % slower, 256: slower again)
     size_t count = 0;                          // results in the batch
     alignas(32) uint32_t index[kSize + 8];     // result b is contact index[b] of the batch
     alignas(32) uint32_t check[kSize + 4];     // the contacts the clearance test did not skip
