@@ -15,6 +15,7 @@
 #include <sstream>
 #include <thread>
 
+#include "core/crc32c.h"
 #include "core/error.h"
 #include "files.h"
 #include "core/interrupt.h"
@@ -153,7 +154,7 @@ TEST(Checkpoint, ResumedRunIsByteIdentical) {
 }
 
 // A resume is refused with a clear message when its scenario was edited, or when the
-// checkpoint was cut short (a full disk, a copy that did not finish).
+// checkpoint was cut short (a full disk, a copy that did not finish) or has a flipped byte.
 TEST(Checkpoint, EditedScenarioAndTruncatedCheckpointAreRefused) {
     Scenario s = scenario();
     const fs::path dir = temp_dir("ck-edit");
@@ -177,8 +178,24 @@ TEST(Checkpoint, EditedScenarioAndTruncatedCheckpointAreRefused) {
         const fs::path ck = dir / kCheckpointFile;
         const std::string whole = read_file(ck);
         std::ofstream(ck, std::ios::binary | std::ios::trunc) << whole.substr(0, whole.size() / 2);
-        expect_refused(s, "truncated checkpoint");
+        expect_refused(s, "corrupt checkpoint");
         std::ofstream(ck, std::ios::binary | std::ios::trunc) << whole;
+    }
+    {
+        // one flipped bit in the middle (a disc's state), in the world's tail, in the checksum
+        // itself: refused before anything is restored, naming the file
+        SCOPED_TRACE("flipped");
+        const fs::path ck = dir / kCheckpointFile;
+        const std::string whole = read_file(ck);
+        for (const size_t at : {whole.size() / 2, whole.size() - 40, whole.size() - 2}) {
+            std::string bad = whole;
+            bad[at] = char(bad[at] ^ 0x10);
+            std::ofstream(ck, std::ios::binary | std::ios::trunc) << bad;
+            expect_refused(s, "CRC-32C does not match");
+            EXPECT_THROW(read_checkpoint_info(dir.string()), InputError);
+        }
+        std::ofstream(ck, std::ios::binary | std::ios::trunc) << whole;
+        EXPECT_NO_THROW(read_checkpoint_info(dir.string()));
     }
     {
         SCOPED_TRACE("edited");
@@ -261,4 +278,15 @@ TEST(Checkpoint, KilledAndSignalledProcessesResumeToTheSameBytes) {
         expect_same_outputs(ref, stopped);
     }
     for (const fs::path& p : {ref, killed, stopped}) fs::remove_all(p);
+}
+
+// The checkpoints' checksum has the standard CRC-32C check value, and a closed terminal
+// (SIGHUP) is caught like SIGTERM: without the handler it would end this test process.
+TEST(Checkpoint, Crc32cCheckValueAndSighupIsCaught) {
+    EXPECT_EQ(crc32c("123456789"), 0xE3069283u);
+    EXPECT_EQ(crc32c(""), 0u);
+    EXPECT_EQ(crc32c("6789", crc32c("12345")), 0xE3069283u);  // in pieces
+    InterruptScope scope;
+    std::raise(SIGHUP);
+    EXPECT_EQ(pending_interrupt(), SIGHUP);
 }

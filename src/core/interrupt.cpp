@@ -22,11 +22,14 @@ InterruptScope::InterruptScope() {
     clear_interrupt();
     previous_[0] = std::signal(SIGINT, on_signal);
     previous_[1] = std::signal(SIGTERM, on_signal);
+    // a closed terminal or SSH session: checkpoint and stop, as for SIGTERM
+    previous_[2] = std::signal(SIGHUP, on_signal);
 }
 
 InterruptScope::~InterruptScope() {
     std::signal(SIGINT, previous_[0]);
     std::signal(SIGTERM, previous_[1]);
+    std::signal(SIGHUP, previous_[2]);
     clear_interrupt();  // handled: the next run in this process starts afresh
 }
 

@@ -1,4 +1,4 @@
-// SIGINT and SIGTERM during a run: the handler only records the signal; the run loop sees it
+// SIGINT, SIGTERM and SIGHUP during a run: the handler only records the signal; the run loop sees it
 // at the end of the step, writes a final checkpoint and throws Interrupted, which the
 // executable turns into exit code 4 (kExitInterrupted) with the command that resumes.
 // The handler re-arms the default action, so a second signal ends the process at once.
@@ -29,7 +29,7 @@ public:
 
 private:
     using Handler = void (*)(int);
-    Handler previous_[2];
+    Handler previous_[3];  // SIGINT, SIGTERM, SIGHUP
 };
 
 }  // namespace demlab

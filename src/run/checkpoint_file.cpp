@@ -4,6 +4,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "core/crc32c.h"
 #include "core/error.h"
 #include "scenario/scenario.h"
 
@@ -11,7 +12,8 @@ namespace demlab {
 
 namespace {
 constexpr char kMagic[8] = {'D', 'E', 'M', 'L', 'A', 'B', 'C', 'K'};
-constexpr uint32_t kCheckpointVersion = 1;
+// 2: the file ends with the CRC-32C of all that comes before it; 1 (earlier builds): no checksum
+constexpr uint32_t kCheckpointVersion = 2;
 constexpr uint32_t kByteOrder = 0x01020304;
 
 // The scenario's settings: its text without the comment lines (the header names the file the
@@ -44,7 +46,8 @@ CheckpointHeader get_checkpoint_header(BinaryReader& in, const std::string& path
     char magic[8];
     in.get(magic);
     if (std::memcmp(magic, kMagic, 8) != 0) throw InputError(path + ": not a demlab checkpoint");
-    if (in.get<uint32_t>() != kCheckpointVersion) throw InputError(path + ": written by another version of demlab");
+    const uint32_t version = in.get<uint32_t>();
+    if (version != kCheckpointVersion && version != 1) throw InputError(path + ": written by another version of demlab");
     if (in.get<uint32_t>() != kByteOrder || in.get<uint32_t>() != sizeof(double))
         throw InputError(path + ": written on a machine of another architecture (byte order or number size)");
     CheckpointHeader h;
@@ -56,6 +59,28 @@ CheckpointHeader get_checkpoint_header(BinaryReader& in, const std::string& path
     h.info.frames = in.get<uint8_t>() != 0;
     h.info.plots = in.get<uint8_t>() != 0;
     return h;
+}
+
+std::string seal_checkpoint(const std::string& bytes) {
+    std::string out = bytes;
+    const uint32_t crc = crc32c(bytes);
+    for (int k = 0; k < 4; ++k) out.push_back(char((crc >> (8 * k)) & 0xFFu));
+    return out;
+}
+
+std::string read_checkpoint_file(const std::string& path) {
+    std::string bytes = read_whole(path);
+    uint32_t version = 0;
+    if (bytes.size() >= 12 && std::memcmp(bytes.data(), kMagic, 8) == 0) std::memcpy(&version, bytes.data() + 8, 4);
+    if (version != kCheckpointVersion) return bytes;  // an earlier build's (no checksum), or not a checkpoint: the header says
+    if (bytes.size() < 16) throw InputError(path + ": corrupt checkpoint (truncated)");
+    uint32_t stored = 0;
+    for (int k = 0; k < 4; ++k) stored |= uint32_t(uint8_t(bytes[bytes.size() - 4 + size_t(k)])) << (8 * k);
+    bytes.resize(bytes.size() - 4);
+    if (crc32c(bytes) != stored)
+        throw InputError(path + ": corrupt checkpoint (its CRC-32C does not match its content): it cannot be resumed; "
+                         "run the scenario again");
+    return bytes;
 }
 
 std::string read_whole(const std::string& path) {
@@ -79,7 +104,7 @@ bool same_scenario(const std::string& stored, const std::string& resolved_now) {
 
 CheckpointInfo read_checkpoint_info(const std::string& run_dir) {
     const std::string path = run_dir + "/" + kCheckpointFile;
-    BinaryReader in(read_whole(path), path);
+    BinaryReader in(read_checkpoint_file(path), path);
     return get_checkpoint_header(in, path).info;
 }
 

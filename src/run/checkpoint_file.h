@@ -18,6 +18,12 @@ void put_checkpoint_header(BinaryWriter& out, const std::string& scenario_text, 
                            const RunOptions& o);
 CheckpointHeader get_checkpoint_header(BinaryReader& in, const std::string& path);
 
+// The file's bytes with the CRC-32C of all of them appended (written last), and a checkpoint
+// file read back without it: InputError (exit 2) naming the file when the sum does not match.
+// A checkpoint of an earlier build, without a sum, is read as it is.
+std::string seal_checkpoint(const std::string& bytes);
+std::string read_checkpoint_file(const std::string& path);
+
 // A whole file's bytes (InputError naming it when it cannot be read).
 std::string read_whole(const std::string& path);
 

@@ -135,7 +135,7 @@ std::unique_ptr<BinaryReader> open_run_folder(const RunOptions& o, const std::st
         write_file_atomic(dir + "/scenario.toml", scenario_text);
         return nullptr;
     }
-    auto restore = std::make_unique<BinaryReader>(read_whole(checkpoint_path), checkpoint_path);
+    auto restore = std::make_unique<BinaryReader>(read_checkpoint_file(checkpoint_path), checkpoint_path);
     if (!same_scenario(get_checkpoint_header(*restore, checkpoint_path).scenario_text, scenario_text))
         throw InputError(dir + "/scenario.toml differs from the scenario the checkpoint was written with "
                          "(was it edited?); a resumed run must continue the same scenario");
@@ -249,7 +249,7 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
         out.put(snaps ? snaps->times() : std::vector<double>{});
         for (uint64_t z : series.flush()) out.put(z);
         solver.save_state(out);
-        write_file_atomic(checkpoint_path, out.bytes());
+        write_file_atomic(checkpoint_path, seal_checkpoint(out.bytes()));
     };
     auto snapshot = [&]() {
         snaps->write(w);
