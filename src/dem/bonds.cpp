@@ -107,6 +107,12 @@ void World::add_bond_terms(size_t d0, size_t d1) {
     }
 }
 
+// Constant forces on discs (DiscDef::force), after the contact and bond terms.
+void World::add_external_forces(size_t d0, size_t d1) {
+    DiscLoad* const load = load_.data();
+    for (size_t i = d0; i < d1; ++i) load[i].force += external_force_[i];
+}
+
 void World::settle_bond_breaks() {
     for (size_t b = 0; b < bonds_.size(); ++b) {
         if (!bond_out_[b].breaks || bonds_[b].broken) continue;

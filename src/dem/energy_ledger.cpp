@@ -31,6 +31,8 @@ EnergyReport World::energy_with() const {
                 s.kinetic_rotation += 0.5 * inertia_[i] * omega_[i] * omega_[i];
                 // at t - dt/2: the mean of x(t) and x(t - dt) = x(t) - v(t - dt/2) dt
                 s.potential -= mass_[i] * g.dot(pos_[i] - 0.5 * last_dt_ * vel_[i]);
+                // a constant force's potential, -F . x, at the same time level
+                if (any_external_force_) s.potential -= external_force_[i].dot(pos_[i] - 0.5 * last_dt_ * vel_[i]);
             }
             return;
         }

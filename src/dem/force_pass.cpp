@@ -386,6 +386,7 @@ void World::range_pass(int t, const PassContext<Law>& ctx) {
         }
         n_wall_sums = wall_contacts<Law>(kw, fb.wall_end, t, ctx, wall_sums, n_wall_sums);
         if (!bonds_.empty()) add_bond_terms(b0, fb.disc_end);
+        if (any_external_force_) add_external_forces(b0, fb.disc_end);
         // The block's sums are complete. A range that met a fault integrates no more blocks,
         // but goes on with its pairs (the pass then throws the first fault in list order,
         // whatever the blocks and ranges).

@@ -74,6 +74,9 @@ int World::add_disc(const DiscDef& d) {
     angle_.push_back(d.angle);
     omega_.push_back(def_.rotation.model == 1 ? 0.0 : d.omega);
     material_.push_back(d.material);
+    require_finite(where + ".force", d.force, "N/m");
+    external_force_.push_back(d.force);
+    any_external_force_ = any_external_force_ || d.force.squaredNorm() > 0.0;
     return int(pos_.size()) - 1;
 }
 

@@ -82,6 +82,7 @@ struct DiscDef {
     double omega = 0.0;                    // rad/s, counter-clockwise
     double angle = 0.0;                    // rad
     int material = 0;                      // index returned by add_material
+    Vec2 force{0.0, 0.0};                  // N/m, a constant force added every step (tests, loads)
 };
 
 // Energies of the current state and what was dissipated so far, J per metre of thickness.
@@ -295,6 +296,7 @@ private:
     void prepare_bonds();
     void compute_bond_forces();
     void add_bond_terms(size_t d0, size_t d1);
+    void add_external_forces(size_t d0, size_t d1);
     void settle_bond_breaks();
     double bond_elastic_energy() const;
     void note_wall_fault(size_t kw, double overlap, int chunk);
@@ -496,6 +498,9 @@ private:
         uint8_t acts, breaks;
     };
     std::vector<BondOut> bond_out_;
+    // constant forces on discs (DiscDef::force), N/m; any_external_force_: some disc has one
+    std::vector<Vec2> external_force_;
+    bool any_external_force_ = false;
     std::vector<uint32_t> bond_disc_start_, bond_disc_;
     double bond_k0_ = 0.0, bond_k_max_ = 0.0;
     double bond_break_loss_ = 0.0;

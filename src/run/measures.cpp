@@ -36,7 +36,8 @@ void RunSeries::open() {
                      "ix_slope,iy_slope,ix_arc,iy_arc,ix_barrier,iy_barrier,ix_total,iy_total,fx_gate,fy_gate,ix_gate,iy_gate\n";
     energy_.open(dir_ + "/energy.csv");
     energy_.out() << "t,kinetic_translation,kinetic_rotation,potential,elastic,dissipated_contacts,dissipated_local,"
-                     "dissipated_rotation,work_by_walls,removed_with_walls,balance\n";
+                     "dissipated_rotation,work_by_walls,removed_with_walls,balance"
+                  << (has_bonds_ ? ",bond_elastic,bond_break_loss,bonds_intact_fraction" : "") << '\n';
     if (has_front_) {
         front_.open(dir_ + "/front.csv");
         front_.out() << "t,s_front,displacement\n";
@@ -89,7 +90,12 @@ void RunSeries::sample(const World& w, const MeasureContext& m, RunState& st, Ru
     energy_.out() << t << ',' << e.kinetic_translation << ',' << e.kinetic_rotation << ',' << e.potential << ','
                   << e.elastic << ',' << e.dissipated_contacts << ',' << e.dissipated_local << ','
                   << e.dissipated_rotation << ',' << e.work_by_walls << ',' << e.removed_with_walls << ','
-                  << e.balance() << '\n';
+                  << e.balance();
+    if (has_bonds_) {
+        const size_t total = w.bonds().size(), broken = w.bond_breaks().size();
+        energy_.out() << ',' << e.bond_elastic << ',' << e.bond_break_loss << ',' << double(total - broken) / double(total);
+    }
+    energy_.out() << '\n';
     if (m.path) {
         const BedPath& path = *m.path;
         const size_t n = w.disc_count();
@@ -182,6 +188,13 @@ SlopeAngles write_envelope(const World& w, double gap, double length, const std:
     return angles;
 }
 
+void write_bond_breaks(const World& w, const std::string& dir) {
+    std::ostringstream o;
+    o << "t_s,k,l,strain,energy_J_per_m\n";
+    for (const BondBreakEvent& e : w.bond_breaks()) o << e.t << ',' << e.k << ',' << e.l << ',' << e.strain << ',' << e.energy << '\n';
+    write_file_atomic(dir + "/bonds_broken.csv", o.str());
+}
+
 void write_summary(const std::string& path, const Scenario& s, const RunSummary& sum, const ReleaseFigures& release,
                    const SlopeAngles* angles) {
     const bool r = release.generated;
@@ -220,6 +233,7 @@ void write_summary(const std::string& path, const Scenario& s, const RunSummary&
       << "  \"force_pass_one_range_cuts\": " << sum.force_pass_one_range_cuts << ",\n"
       << "  \"force_pass_busy_share\": " << json_number(sum.force_pass_busy_share) << ",\n"
       << "  \"force_pass_busy_fallbacks\": " << sum.force_pass_busy_fallbacks;
+    if (sum.bonds >= 0) j << ",\n  \"bonds\": " << sum.bonds << ",\n  \"bonds_broken\": " << sum.bonds_broken;
     if (angles) {
         j << ",\n  \"gamma_ges\": " << json_number(angles->gamma_ges);
         for (int i = 0; i < 5; ++i) j << ",\n  \"gamma_" << i + 1 << "\": " << json_number(angles->gamma[i]);

@@ -43,7 +43,8 @@ struct RunState {
 // forces.csv, energy.csv, front.csv (with a bed path), track.csv (with tracers).
 class RunSeries {
 public:
-    RunSeries(std::string dir, bool front, bool track) : dir_(std::move(dir)), has_front_(front), has_track_(track) {}
+    RunSeries(std::string dir, bool front, bool track, bool bonds)
+        : dir_(std::move(dir)), has_front_(front), has_track_(track), has_bonds_(bonds) {}
     void open();                                        // new files with their headers
     void reopen(const std::array<uint64_t, 4>& sizes);  // a resumed run's, cut back to these sizes
     std::array<uint64_t, 4> flush();                    // their sizes now
@@ -52,7 +53,7 @@ public:
 
 private:
     std::string dir_;
-    bool has_front_, has_track_;
+    bool has_front_, has_track_, has_bonds_;
     SeriesFile forces_, energy_, front_, track_;
 };
 
@@ -66,6 +67,9 @@ void check_energy_growth(const Solver& w, double e0, double peak_ke, double& pea
 void write_deposit(const World& w, const MeasureContext& m, const std::string& dir, RunSummary& sum);
 // envelope.csv and the slope angles of a dam break's deposit over [0, length].
 SlopeAngles write_envelope(const World& w, double gap, double length, const std::string& dir, RunSummary& sum);
+
+// bonds_broken.csv: t_s, k, l, strain, energy_J_per_m of each bond that broke, in order.
+void write_bond_breaks(const World& w, const std::string& dir);
 
 // summary.json.
 struct ReleaseFigures {

@@ -21,6 +21,7 @@
 #include "run/measures.h"
 #include "run/snapshot.h"
 #include "run/solver.h"
+#include "setups/lattice_release.h"
 #include "setups/release.h"
 #include "setups/setup.h"
 
@@ -43,6 +44,11 @@ ReleaseMass start_mass(const Scenario& s, const Setup& setup, BinaryReader* rest
         restore->get(mass.settle_time);
         restore->get(mass.wall_seconds);
         return mass;
+    }
+    if (s.lattice_release.enabled) {
+        std::vector<WallDef> walls = setup.walls();
+        walls.insert(walls.end(), s.walls.begin(), s.walls.end());
+        return lattice_mass(s, walls);
     }
     if (!setup.has_release()) return mass;
     const std::vector<WallDef> box_walls = setup.release_box().walls;
@@ -76,12 +82,38 @@ ReleaseMass start_mass(const Scenario& s, const Setup& setup, BinaryReader* rest
     return mass;
 }
 
+// Cohesive bonds at t = 0 (COHESION.md section 4.1): the explicit pairs, or the filtered
+// Delaunay edges of the disc centres. A cohesive scenario without a bond is refused.
+void add_bonds(const Scenario& s, World& w) {
+    const long n = long(w.disc_count());
+    if (!s.cohesion.bonds.empty()) {
+        for (const auto& [k, l] : s.cohesion.bonds) {
+            if (k >= n || l >= n)
+                throw InputError(s.source + ": cohesion.bonds: [" + std::to_string(k) + ", " + std::to_string(l) +
+                                 "] names a disc that does not exist (" + std::to_string(n) + " discs)");
+            w.add_bond(int(k), int(l));
+        }
+        return;
+    }
+    BondBuildDef build = s.cohesion.build;
+    double r_min = INFINITY;
+    for (double r : w.radii()) r_min = std::min(r_min, r);
+    if (build.max_gap == 0.0) build.max_gap = 0.25 * r_min;
+    BondBuildReport report;
+    const auto bonds = delaunay_bonds(w.positions(), w.radii(), build, &report);
+    if (bonds.empty())
+        throw InputError(s.source + ": cohesion.enabled = true, but the triangulation of the " + std::to_string(n) +
+                         " disc centres gave no bond with cohesion.filter's rule");
+    for (const auto& [k, l] : bonds) w.add_bond(k, l);
+}
+
 // The world: the release mass, then the explicit discs (a checkpoint's mass holds them
 // already), the set-up's walls, then the explicit ones; the domain is their box padded by
 // 0.5 m (a disc leaving it stops the run).
 World build_world(const Scenario& s, const Setup& setup, const ReleaseMass& mass, bool restored, std::vector<int>& layer,
                   std::vector<int>& grid) {
     WorldDef def = s.world;
+    def.bond = s.cohesion.bond;
     Vec2 lo(INFINITY, INFINITY), hi(-INFINITY, -INFINITY);
     auto grow = [&](const Vec2& p) {
         lo = lo.cwiseMin(p);
@@ -116,6 +148,7 @@ World build_world(const Scenario& s, const Setup& setup, const ReleaseMass& mass
         }
     for (const WallDef& wd : setup_walls) w.add_wall(wd);
     for (WallDef wd : s.walls) w.add_wall(wd);
+    if (s.cohesion.enabled) add_bonds(s, w);
     w.finalize();
     const size_t n = w.disc_count();
     if (n == 0) throw InputError(s.source + ": the scenario has no discs");
@@ -196,7 +229,7 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
     const MeasureContext measure{s, path.get(), path ? setup->barrier(*path) : BarrierMarks{}, setup->force_walls(),
                                  s.output.front_neighbour_gap > 0 ? s.output.front_neighbour_gap : r_max, start_pos};
 
-    RunSeries series(dir, path != nullptr, !s.output.track.empty());
+    RunSeries series(dir, path != nullptr, !s.output.track.empty(), !w.bonds().empty());
     std::unique_ptr<SnapshotWriter> snaps;
     if (s.output.snapshot_interval > 0) snaps = std::make_unique<SnapshotWriter>(dir + "/snapshots", layer, grid);
     RunSummary sum;
@@ -325,6 +358,11 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
     if (path) write_deposit(w, measure, dir, sum);
     SlopeAngles angles{};
     if (setup->measures_envelope()) angles = write_envelope(w, measure.front_gap, setup->envelope_length(), dir, sum);
+    if (!w.bonds().empty()) {
+        write_bond_breaks(w, dir);
+        sum.bonds = long(w.bonds().size());
+        sum.bonds_broken = long(w.bond_breaks().size());
+    }
     write_summary(dir + "/summary.json", s, sum,
                   ReleaseFigures{setup->has_release(), mass.porosity_generated, mass.settle_time, mass.wall_seconds},
                   setup->measures_envelope() ? &angles : nullptr);

@@ -72,6 +72,8 @@ struct RunSummary {
     long force_pass_one_range_cuts = 0;       // list updates whose force pass ran as one range (discs out of space order)
     double force_pass_busy_share = 1;         // of the threads' time in the shared force passes, the share the ranges worked (World)
     long force_pass_busy_fallbacks = 0;       // times the pass fell back to one range for a busy machine (World)
+    long bonds = -1;                    // cohesive bonds at the start (-1: none)
+    long bonds_broken = 0;              // of which broken by the end
 };
 
 RunSummary run_scenario(const Scenario& s, const RunOptions& o);

@@ -205,6 +205,72 @@ void add_dynamics_keys(std::vector<Key>& k) {
     k.push_back(real("world.max_overlap_ratio", "-", "an overlap beyond this fraction of the smaller radius stops the run (blow-up)", [](Scenario& s) -> double& { return s.world.max_overlap_ratio; }, 0, 2, true));
 }
 
+// An array of points [[x, y], ...] (m).
+Key polygon(std::string name, std::string accepted, std::string doc, std::vector<Vec2>& (*ref)(Scenario&)) {
+    Key key{name, "m", std::move(accepted), std::move(doc), nullptr, nullptr};
+    key.set = [=](Scenario& s, const toml::node& n, const std::string& where) {
+        const toml::array* a = n.as_array();
+        if (!a) throw InputError(where + " = " + node_text(n) + ": must be an array of points [x, y] (m)");
+        std::vector<Vec2>& v = ref(s);
+        v.clear();
+        for (const auto& e : *a) v.push_back(read_vec2(e, where, "m"));
+    };
+    key.get = [=](const Scenario& s) {
+        const std::vector<Vec2>& v = ref(const_cast<Scenario&>(s));
+        std::string out = "[";
+        for (size_t i = 0; i < v.size(); ++i) out += (i ? ", [" : "[") + toml_number(v[i].x()) + ", " + toml_number(v[i].y()) + "]";
+        return out + "]";
+    };
+    return key;
+}
+
+void add_cohesion_keys(std::vector<Key>& k) {
+    // cohesion (docs/spec/COHESION.md section 3; AvaFrame's names in brackets)
+    k.push_back(boolean("cohesion.enabled", "elastic bonds that break between neighbouring discs, built at t = 0 of the run [snowSlide]", [](Scenario& s) -> bool& { return s.cohesion.enabled; }));
+    k.push_back(real("cohesion.modulus", "Pa", "bond modulus E: a bond pulls with eps E A, A = t L / sqrt(3) [cohesiveSurfaceTension]; the network's plane modulus is 2E/3", [](Scenario& s) -> double& { return s.cohesion.bond.modulus; }, 0, 1e12, true));
+    k.push_back(real("cohesion.max_strain", "-", "a bond strained beyond this breaks for good [cohesionMaxStrain]", [](Scenario& s) -> double& { return s.cohesion.bond.max_strain; }, 0, 0.5, true));
+    k.push_back(real("cohesion.min_distance", "m", "a bond this short or shorter is skipped for the step: no force, no break [minDistCohesion]", [](Scenario& s) -> double& { return s.cohesion.bond.min_distance; }, 0, 1));
+    k.push_back(choice<BondArea>("cohesion.area", "the bond's face A = t L/sqrt(3) with the current length L (AvaFrame) or the rest length (a linear spring)", [](Scenario& s) -> BondArea& { return s.cohesion.bond.area; }, {{"current", BondArea::Current}, {"rest", BondArea::Rest}}));
+    k.push_back(choice<BondBreak>("cohesion.break_mode", "bonds break past max_strain in tension and compression (AvaFrame), or in tension only", [](Scenario& s) -> BondBreak& { return s.cohesion.bond.break_mode; }, {{"both", BondBreak::Both}, {"tension", BondBreak::Tension}}));
+    k.push_back(boolean("cohesion.predict", "AvaFrame's lengths from positions predicted one step (C5); not built: true is refused", [](Scenario& s) -> bool& { return s.cohesion.predict; }));
+    k.push_back(choice<BondFilter>("cohesion.filter", "which Delaunay triangles give bonds: triangular (longest side <= max_edge_factor times the shortest such), length (<= max_bond_length), gap (every side's gap <= max_gap), none", [](Scenario& s) -> BondFilter& { return s.cohesion.build.filter; }, {{"triangular", BondFilter::Triangular}, {"length", BondFilter::Length}, {"gap", BondFilter::Gap}, {"none", BondFilter::None}}));
+    k.push_back(real("cohesion.max_edge_factor", "-", "filter triangular: AvaFrame's 1.1", [](Scenario& s) -> double& { return s.cohesion.build.max_edge_factor; }, 1.0, 3.0));
+    k.push_back(real("cohesion.max_bond_length", "m", "filter length: the longest side a kept triangle may have; 0 is refused with that filter", [](Scenario& s) -> double& { return s.cohesion.build.max_bond_length; }, 0, 100));
+    k.push_back(real("cohesion.max_gap", "m", "filter gap: the largest gap L - r_k - r_l of a kept triangle's sides; 0 = 0.25 r_min", [](Scenario& s) -> double& { return s.cohesion.build.max_gap; }, 0, 10));
+    {
+        Key bonds{"cohesion.bonds", "-", "array of [k, l], k != l, ids of discs", "explicit bonds (tests); when given, no triangulation", nullptr, nullptr};
+        bonds.set = [](Scenario& s, const toml::node& n, const std::string& where) {
+            const toml::array* a = n.as_array();
+            if (!a) throw InputError(where + " = " + node_text(n) + ": must be an array of disc-id pairs, e.g. [[0, 1], [1, 2]]");
+            s.cohesion.bonds.clear();
+            for (const auto& e : *a) {
+                const toml::array* p = e.as_array();
+                auto k0 = p && p->size() == 2 ? (*p)[0].value_exact<int64_t>() : std::nullopt;
+                auto k1 = p && p->size() == 2 ? (*p)[1].value_exact<int64_t>() : std::nullopt;
+                if (!k0 || !k1 || *k0 < 0 || *k1 < 0)
+                    throw InputError(where + ": entry " + node_text(e) + " must be a pair [k, l] of disc ids >= 0");
+                if (*k0 == *k1) throw InputError(where + ": entry " + node_text(e) + ": a bond joins two different discs");
+                s.cohesion.bonds.emplace_back(long(*k0), long(*k1));
+            }
+        };
+        bonds.get = [](const Scenario& s) {
+            std::string out = "[";
+            for (size_t i = 0; i < s.cohesion.bonds.size(); ++i)
+                out += (i ? ", [" : "[") + std::to_string(s.cohesion.bonds[i].first) + ", " + std::to_string(s.cohesion.bonds[i].second) + "]";
+            return out + "]";
+        };
+        k.push_back(bonds);
+    }
+    // lattice release (COHESION.md section 3)
+    k.push_back(polygon("lattice_release.region", "array of >= 3 points [x, y], a simple polygon", "the polygon the lattice's discs fill (a centre inside it and at least r from every wall makes a disc)", [](Scenario& s) -> std::vector<Vec2>& { return s.lattice_release.region; }));
+    k.push_back(vec2("lattice_release.origin", "m", "a node of the lattice (required)", [](Scenario& s) -> Vec2& { return s.lattice_release.origin; }));
+    k.push_back(real("lattice_release.angle_deg", "deg", "direction of the rows, counter-clockwise from +x", [](Scenario& s) -> double& { return s.lattice_release.angle_deg; }, -180, 180));
+    k.push_back(real("lattice_release.spacing", "m", "distance between neighbouring nodes; 0 = 2 r_max", [](Scenario& s) -> double& { return s.lattice_release.spacing; }, 0, 100));
+    k.push_back(real("lattice_release.r_min", "m", "smallest radius (required, > 0)", [](Scenario& s) -> double& { return s.lattice_release.r_min; }, 0, 10));
+    k.push_back(real("lattice_release.r_max", "m", "largest radius; 0 = r_min (radii uniform in [r_min, r_max] from scenario.seed)", [](Scenario& s) -> double& { return s.lattice_release.r_max; }, 0, 10));
+    k.push_back(boolean("lattice_release.settle", "settle the lattice under gravity before t = 0; not built: true is refused", [](Scenario& s) -> bool& { return s.lattice_release.settle; }));
+}
+
 void add_setups_keys(std::vector<Key>& k) {
     // flume
     k.push_back(vec2("flume.w1_start", "m", "slope W1, upper end (Table 2)", [](Scenario& s) -> Vec2& { return s.flume.w1_p0; }));
@@ -299,6 +365,7 @@ const std::vector<Key>& registry() {
         add_scenario_and_material_keys(k);
         add_dynamics_keys(k);
         add_setups_keys(k);
+        add_cohesion_keys(k);
         add_run_keys(k);
         return k;
     }();

@@ -93,7 +93,7 @@ WallDef read_wall(const toml::table& t, const std::string& file, size_t index) {
 DiscDef read_disc(const toml::table& t, const std::string& file, size_t index) {
     DiscDef d;
     bool has_pos = false, has_r = false;
-    const std::vector<std::string> names = {"position", "radius", "velocity", "omega", "angle"};
+    const std::vector<std::string> names = {"position", "radius", "velocity", "omega", "angle", "force"};
     for (const auto& [k, node] : t) {
         const std::string key(k.str());
         const std::string where = where_of(file, node, "discs[" + std::to_string(index) + "]." + key);
@@ -107,6 +107,7 @@ DiscDef read_disc(const toml::table& t, const std::string& file, size_t index) {
         } else if (key == "velocity") d.vel = read_vec2(node, where, "m/s");
         else if (key == "omega") d.omega = read_number(node, where, "rad/s");
         else if (key == "angle") d.angle = read_number(node, where, "rad");
+        else if (key == "force") d.force = read_vec2(node, where, "N/m");
         else unknown_key(where, key, names);
     }
     const std::string where = file + ": discs[" + std::to_string(index) + "]";
@@ -133,6 +134,8 @@ void read_table(Scenario& s, const toml::table& t, const std::string& prefix, co
         if (key == "flume") s.flume.enabled = true;
         if (key == "dam_break") s.dam_break.enabled = true;
         if (key == "terrain") s.terrain.enabled = true;
+        if (key == "cohesion") s.cohesion.given = true;
+        if (key == "lattice_release") s.lattice_release.enabled = true;
         if (const toml::table* sub = node.as_table()) {
             read_table(s, *sub, key, file);
             continue;
@@ -186,6 +189,8 @@ void apply_override(Scenario& s, const std::string& assignment) {
     if (key.rfind("flume.", 0) == 0) s.flume.enabled = true;
     if (key.rfind("dam_break.", 0) == 0) s.dam_break.enabled = true;
     if (key.rfind("terrain.", 0) == 0) s.terrain.enabled = true;
+    if (key.rfind("cohesion.", 0) == 0) s.cohesion.given = true;
+    if (key.rfind("lattice_release.", 0) == 0) s.lattice_release.enabled = true;
 }
 
 // The profile read and the release polygon checked: a convex polygon of >= 3 corners that
@@ -229,6 +234,63 @@ void finish_terrain(Scenario& s) {
                          format_number(size) + " m across): at most " + format_number(size / 8) + " m");
 }
 
+// The bonds' keys together (COHESION.md section 7's choices; predict not built).
+void finish_cohesion(Scenario& s) {
+    const std::string where = s.source + ": ";
+    const CohesionDef& c = s.cohesion;
+    if (!c.enabled) return;
+    if (c.predict)
+        throw InputError(where + "cohesion.predict = true: AvaFrame's predicted lengths (C5) are not built in this version; "
+                         "use false (the default: the bond is conservative and the ledger closes)");
+    // with explicit discs only, their count is known now: a bond naming a missing disc is
+    // refused before any output (with generated discs, when the world is built)
+    if (!has_release(s) && !s.lattice_release.enabled)
+        for (const auto& [k, l] : c.bonds)
+            if (size_t(std::max(k, l)) >= s.discs.size())
+                throw InputError(where + "cohesion.bonds: [" + std::to_string(k) + ", " + std::to_string(l) +
+                                 "] names a disc that does not exist (" + std::to_string(s.discs.size()) + " discs)");
+    if (c.build.filter == BondFilter::Length && c.bonds.empty() && !(c.build.max_bond_length > 0.0))
+        throw InputError(where + "cohesion.filter = \"length\" needs cohesion.max_bond_length > 0 m (it is " +
+                         format_number(c.build.max_bond_length) + ")");
+}
+
+// The lattice's keys together: a region and an origin, radii, a spacing that keeps discs apart.
+void finish_lattice(Scenario& s) {
+    const std::string where = s.source + ": ";
+    LatticeReleaseDef& l = s.lattice_release;
+    if (!l.enabled) return;
+    if (s.flume.enabled || s.dam_break.enabled || (s.terrain.enabled && !s.terrain.release.empty()))
+        throw InputError(where + "[lattice_release] fills its own region: it cannot go with a [flume], a [dam_break] "
+                         "or a terrain.release (they generate a release mass)");
+    if (l.settle)
+        throw InputError(where + "lattice_release.settle = true: settling the lattice before t = 0 is not built in this "
+                         "version; use false (the discs start on their nodes)");
+    if (l.region.size() < 3)
+        throw InputError(where + "lattice_release.region: " + std::to_string(l.region.size()) +
+                         " points; a polygon needs at least 3 ([[x, y], ...] in m)");
+    const size_t n = l.region.size();
+    for (size_t a = 0; a < n; ++a)
+        for (size_t b = a + 1; b < n; ++b) {
+            if (b == a + 1 || (a == 0 && b == n - 1)) continue;  // neighbours share a corner
+            const Vec2 p = l.region[a], q = l.region[(a + 1) % n], r = l.region[b], t = l.region[(b + 1) % n];
+            const double d1 = cross(q - p, r - p), d2 = cross(q - p, t - p), d3 = cross(t - r, p - r), d4 = cross(t - r, q - r);
+            if (((d1 > 0) != (d2 > 0)) && ((d3 > 0) != (d4 > 0)) && d1 != 0 && d2 != 0 && d3 != 0 && d4 != 0)
+                throw InputError(where + "lattice_release.region: edges " + std::to_string(a) + " and " + std::to_string(b) +
+                                 " cross: the polygon must be simple");
+        }
+    if (!std::isfinite(l.origin.x()) || !std::isfinite(l.origin.y()))
+        throw InputError(where + "lattice_release.origin: required, a lattice node [x, y] in m");
+    if (!(l.r_min > 0.0)) throw InputError(where + "lattice_release.r_min: required, > 0 m");
+    if (l.r_max == 0.0) l.r_max = l.r_min;
+    if (l.r_max < l.r_min)
+        throw InputError(where + "lattice_release.r_max = " + format_number(l.r_max) + " m must be >= r_min = " +
+                         format_number(l.r_min) + " m");
+    if (l.spacing == 0.0) l.spacing = 2.0 * l.r_max;
+    if (l.spacing < 2.0 * l.r_max)
+        throw InputError(where + "lattice_release.spacing = " + format_number(l.spacing) + " m must be >= 2 r_max = " +
+                         format_number(2.0 * l.r_max) + " m: neighbouring discs would overlap");
+}
+
 void finish_scenario(Scenario& s) {
     const std::string where = s.source + ": ";
     s.disc.friction = std::tan(deg_to_rad(s.disc_friction_deg));
@@ -238,14 +300,16 @@ void finish_scenario(Scenario& s) {
     if (int(s.flume.enabled) + int(s.dam_break.enabled) + int(s.terrain.enabled) > 1)
         throw InputError(where + "a scenario is one of [flume], [dam_break] and [terrain], not several");
     if (s.terrain.enabled) finish_terrain(s);
+    finish_lattice(s);
+    finish_cohesion(s);
     if (has_release(s) && !(r.r_min <= r.r_max))
         throw InputError(where + "release.r_min = " + format_number(r.r_min) + " m must be <= release.r_max = " +
                          format_number(r.r_max) + " m");
     if (s.stop.rest_duration >= s.stop.t_max)
         throw InputError(where + "stop.rest_duration = " + format_number(s.stop.rest_duration) +
                          " s must be shorter than stop.t_max = " + format_number(s.stop.t_max) + " s");
-    if (!has_release(s) && s.discs.empty())
-        throw InputError(where + "no discs: give a [flume] or [dam_break] (its release mass is generated), a [terrain] with a release polygon, or [[discs]]");
+    if (!has_release(s) && s.discs.empty() && !s.lattice_release.enabled)
+        throw InputError(where + "no discs: give a [flume] or [dam_break] (its release mass is generated), a [terrain] with a release polygon, a [lattice_release], or [[discs]]");
     if (s.dam_break.enabled) {
         const DamBreakDef& d = s.dam_break;
         if (2.0 * r.r_max > 0.25 * std::min(d.width, d.height))
@@ -293,6 +357,8 @@ static bool section_in_use(const Scenario& s, const std::string& sec) {
     if (sec == "flume") return s.flume.enabled;
     if (sec == "dam_break") return s.dam_break.enabled;
     if (sec == "terrain") return s.terrain.enabled;
+    if (sec == "cohesion") return s.cohesion.given;
+    if (sec == "lattice_release") return s.lattice_release.enabled;
     return true;
 }
 
@@ -332,7 +398,8 @@ std::string resolved_toml(const Scenario& s) {
     for (const DiscDef& d : s.discs)
         o << "\n[[discs]]\nposition = [" << toml_number(d.pos.x()) << ", " << toml_number(d.pos.y())
           << "]\nradius = " << toml_number(d.radius) << "\nvelocity = [" << toml_number(d.vel.x()) << ", "
-          << toml_number(d.vel.y()) << "]\nomega = " << toml_number(d.omega) << "\nangle = " << toml_number(d.angle) << "\n";
+          << toml_number(d.vel.y()) << "]\nomega = " << toml_number(d.omega) << "\nangle = " << toml_number(d.angle) << "\n"
+          << (d.force.squaredNorm() > 0.0 ? "force = [" + toml_number(d.force.x()) + ", " + toml_number(d.force.y()) + "]\n" : std::string());
     return o.str();
 }
 
@@ -369,7 +436,8 @@ std::string scenario_reference_markdown() {
          "| `radius` | m | required | > 0 |\n"
          "| `velocity` | m/s | [0, 0] | initial velocity |\n"
          "| `omega` | rad/s | 0 | initial angular velocity (counter-clockwise) |\n"
-         "| `angle` | rad | 0 | initial angle |\n";
+         "| `angle` | rad | 0 | initial angle |\n"
+         "| `force` | N/m | [0, 0] | a constant force added every step (its work is in the ledger's potential) |\n";
     return o.str();
 }
 

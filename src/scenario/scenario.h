@@ -2,10 +2,12 @@
 // default and an accepted range in one registry (scenario_keys.cpp), which also writes the
 // reference page docs/scenario-reference.md and the resolved scenario of a run.
 #pragma once
+#include <cmath>
 #include <string>
 #include <vector>
 
 #include "dem/material.h"
+#include "dem/bonds/bond_builder.h"
 #include "geometry/wall.h"
 #include "dem/world.h"
 
@@ -39,6 +41,29 @@ struct TerrainDef {
     std::string profile;                   // CSV file of x,y rows (m), x increasing
     std::vector<Vec2> release;             // m, a convex polygon the release mass fills; empty: [[discs]]
     std::vector<Vec2> points;              // m, the profile as read (finish_scenario)
+};
+
+// Cohesive bonds (docs/spec/COHESION.md; dem/bonds/): the bond law, how the bonds are built
+// at t = 0 of the run (a Delaunay triangulation of the disc centres, or explicit pairs).
+struct CohesionDef {
+    bool enabled = false;                  // a [cohesion] table with enabled = true
+    bool given = false;                    // a [cohesion] table was given (it is then written back)
+    BondDef bond;                          // modulus, max_strain, min_distance, area, break_mode
+    bool predict = false;                  // C5 (AvaFrame's predicted positions): refused, not built
+    BondBuildDef build;                    // filter, max_edge_factor, max_bond_length, max_gap
+    std::vector<std::pair<long, long>> bonds;  // explicit [k, l] pairs; when given, no triangulation
+};
+
+// Discs on a triangular lattice inside a polygon (COHESION.md section 3), at an angle.
+struct LatticeReleaseDef {
+    bool enabled = false;                  // a [lattice_release] table was given
+    std::vector<Vec2> region;              // m, a simple polygon of >= 3 corners
+    Vec2 origin{NAN, NAN};                 // m, a lattice node (required)
+    double angle_deg = 0.0;                // deg, the rows' direction, ccw from +x
+    double spacing = 0.0;                  // m, between neighbours; 0 = 2 r_max
+    double r_min = 0.0;                    // m, > 0 (required)
+    double r_max = 0.0;                    // m; 0 = r_min (radii uniform in [r_min, r_max] from the seed)
+    bool settle = false;                   // settle before t = 0: refused, not built
 };
 
 struct ReleaseDef {
@@ -87,6 +112,8 @@ struct Scenario {
     FlumeDef flume;
     DamBreakDef dam_break;
     TerrainDef terrain;
+    CohesionDef cohesion;
+    LatticeReleaseDef lattice_release;
     ReleaseDef release;
     StopDef stop;
     OutputDef output;
