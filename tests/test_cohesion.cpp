@@ -179,3 +179,31 @@ TEST(Cohesion, BadInputIsRefusedWithTheKey) {
     expect_refused([&] { load("[flume]\n[lattice_release]\nregion = [[0, 0], [1, 0], [0, 1]]\norigin = [0, 0]\nr_min = 0.1\n"); },
                    {"[lattice_release]"});
 }
+
+// The shipped demonstration (scenarios/snow-slide-2d.toml), to t = 5 s: the bonded slab
+// slides down the slope whole (no bond breaks before its front reaches the toe, about 3.1 s)
+// and breaks up at the slope break (more than 5 % of its bonds by 5 s; 12.5 % when measured).
+TEST(Cohesion, ShippedSnowSlideSlidesWholeThenBreaksAtTheSlopeBreak) {
+    Scenario s = load_scenario(std::string(DEMLAB_SOURCE_DIR) + "/scenarios/snow-slide-2d.toml");
+    apply_override(s, "stop.t_max=5.0");
+    apply_override(s, "output.snapshot_interval=0");
+    s.world.threads = 2;
+    finish_scenario(s);
+    const fs::path dir = temp_dir("snow-slide");
+    const RunSummary r = run_scenario(s, {dir.string(), false, {}});
+    EXPECT_EQ(r.n_discs, 1388);
+    EXPECT_EQ(r.bonds, 3802);
+    std::ifstream in(dir / "bonds_broken.csv");
+    std::string line;
+    std::getline(in, line);
+    double first = INFINITY;
+    long broken = 0;
+    while (std::getline(in, line)) {
+        first = std::min(first, std::stod(line.substr(0, line.find(','))));
+        ++broken;
+    }
+    EXPECT_GT(first, 2.9);
+    EXPECT_GT(double(broken), 0.05 * 3802);
+    EXPECT_LT(r.energy_balance_error, 0.01);
+    fs::remove_all(dir);
+}
