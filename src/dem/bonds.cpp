@@ -5,6 +5,7 @@
 // count; after the pass the bonds that broke are marked in list order and their energy is
 // booked (C12).
 #include <algorithm>
+#include <cmath>
 
 #include "core/error.h"
 #include "core/thread_pool.h"
@@ -60,27 +61,45 @@ void World::prepare_bonds() {
         bond_disc_[fill[size_t(bonds_[b].k)]++] = uint32_t(2 * b);
         bond_disc_[fill[size_t(bonds_[b].l)]++] = uint32_t(2 * b + 1);
     }
-    bond_out_.assign(bonds_.size(), BondOut{0.0, 0.0, 0.0, 0, 0});
+    bond_out_.assign(bonds_.size(), BondOut{0.0, 0.0, 0.0, 0.0, 0});
+    bond_inv_rest_.resize(bonds_.size());
+    for (size_t b = 0; b < bonds_.size(); ++b) bond_inv_rest_[b] = 1.0 / bonds_[b].rest_length;
 }
 
 void World::compute_bond_forces() {
     const BondDef& def = def_.bond;
-    const double k0 = bond_k0_;
-    pool_->parallel_for(bonds_.size(), [&](size_t begin, size_t end, int) {
+    const double k0 = bond_k0_, k_max = bond_k_max_, eps_c = def.max_strain, d_min_sq = def.min_distance * def.min_distance;
+    const bool current = def.area == BondArea::Current, both = def.break_mode == BondBreak::Both;
+    bond_chunk_broke_.assign(size_t(pool_->size()), 0);
+    pool_->parallel_for(bonds_.size(), [&](size_t begin, size_t end, int chunk) {
+        uint8_t broke = 0;
         for (size_t b = begin; b < end; ++b) {
             const Bond& bond = bonds_[b];
             BondOut& o = bond_out_[b];
-            o.acts = o.breaks = 0;
-            if (bond.broken) continue;
+            o.fx = o.fy = 0.0;
+            o.breaks = 0;
+            if (bond.broken) {
+                o.k_tran = 0.0;
+                continue;
+            }
+            o.k_tran = k_max;
             const Vec2 d = pos_[size_t(bond.l)] - pos_[size_t(bond.k)];
-            const ElasticBond::Eval e = ElasticBond::evaluate(def, k0, bond.rest_length, d);
-            o.strain = e.strain;
-            o.breaks = e.breaks;
-            if (e.skipped || e.breaks) continue;
-            o.acts = 1;
-            o.fx = e.f * d.x();
-            o.fy = e.f * d.y();
+            const double length_sq = d.squaredNorm();
+            if (length_sq <= d_min_sq) continue;  // C4: skipped this step
+            const double length = std::sqrt(length_sq);
+            // ElasticBond::evaluate, with 1 / L0 taken once per bond
+            const double strain = length * bond_inv_rest_[b] - 1.0;
+            o.strain = strain;
+            if (both ? std::abs(strain) > eps_c : strain > eps_c) {
+                o.breaks = 1;
+                broke = 1;
+                continue;
+            }
+            const double f = current ? strain * k0 : strain * k0 * bond.rest_length / length;
+            o.fx = f * d.x();
+            o.fy = f * d.y();
         }
+        if (broke) bond_chunk_broke_[size_t(chunk)] = 1;
     });
 }
 
@@ -88,22 +107,29 @@ void World::compute_bond_forces() {
 // largest stiffness for the automatic step (C10; bonds carry no shear, so no k_rot).
 void World::add_bond_terms(size_t d0, size_t d1) {
     DiscLoad* const load = load_.data();
+    const BondOut* const out = bond_out_.data();
+    const uint32_t* const start = bond_disc_start_.data();
+    const uint32_t* const entries = bond_disc_.data();
     for (size_t i = d0; i < d1; ++i) {
-        for (uint32_t e = bond_disc_start_[i]; e < bond_disc_start_[i + 1]; ++e) {
-            const uint32_t entry = bond_disc_[e];
-            const BondOut& o = bond_out_[entry >> 1];
-            if (bonds_[entry >> 1].broken) continue;
-            DiscLoad& l = load[i];
-            l.k_tran += bond_k_max_;
-            if (!o.acts) continue;
-            if (entry & 1u) {
-                l.force.x() -= o.fx;
-                l.force.y() -= o.fy;
-            } else {
-                l.force.x() += o.fx;
-                l.force.y() += o.fy;
-            }
+        const uint32_t e0 = start[i], e1 = start[i + 1];
+        if (e0 == e1) continue;
+        // the disc's bond terms summed in list order, then added to its contact sums once (in
+        // registers: the sums' record may alias the slots, so adding term by term went through
+        // memory each time)
+        double fx = 0.0, fy = 0.0, k = 0.0;
+        for (uint32_t e = e0; e < e1; ++e) {
+            const uint32_t entry = entries[e];
+            const BondOut& o = out[entry >> 1];
+            // k gets +f, l gets -f: the sign from the entry's low bit, without a branch
+            const double sign = 1.0 - 2.0 * double(entry & 1u);
+            fx += sign * o.fx;
+            fy += sign * o.fy;
+            k += o.k_tran;
         }
+        DiscLoad& l = load[i];
+        l.force.x() += fx;
+        l.force.y() += fy;
+        l.k_tran += k;
     }
 }
 
@@ -114,6 +140,8 @@ void World::add_external_forces(size_t d0, size_t d1) {
 }
 
 void World::settle_bond_breaks() {
+    // (a scan of every bond only in a step where one broke)
+    if (std::find(bond_chunk_broke_.begin(), bond_chunk_broke_.end(), uint8_t(1)) == bond_chunk_broke_.end()) return;
     for (size_t b = 0; b < bonds_.size(); ++b) {
         if (!bond_out_[b].breaks || bonds_[b].broken) continue;
         Bond& bond = bonds_[b];

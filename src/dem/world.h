@@ -493,9 +493,14 @@ private:
     // bonds, sorted by (k, l); each one's force on k this step (l gets the opposite) and
     // whether it breaks; per disc its bonds (CSR over bond_disc_, entry 2 b + (disc is l))
     std::vector<Bond> bonds_;
+    std::vector<double> bond_inv_rest_;   // 1 / L0 per bond, 1/m (a division per bond and step saved)
+    std::vector<uint8_t> bond_chunk_broke_;  // per chunk of the bond pass: some bond breaks this step
+    // A bond's terms this step: the force on k (l gets the opposite; zero when it does not
+    // act) and its stiffness for the step (zero once broken), so the sums add them without a
+    // branch (x + 0 is x for every sum that starts at +0); strain and breaks for the settling.
     struct BondOut {
-        double fx, fy, strain;
-        uint8_t acts, breaks;
+        double fx, fy, k_tran, strain;
+        uint8_t breaks;
     };
     std::vector<BondOut> bond_out_;
     // constant forces on discs (DiscDef::force), N/m; any_external_force_: some disc has one
