@@ -191,9 +191,10 @@ double AngleResult::mean(const std::string& key) const {
     return n ? s / n : NAN;
 }
 
-CalibrationResult calibrate(const CalibrationConfig& c, const CalibrationOptions& o) {
-    const auto t0 = std::chrono::steady_clock::now();
-    // the folder: new, or one made for this same configuration (resume)
+namespace {
+
+// The folder: new, or one made for this same configuration (resume).
+void open_calibration_folder(const CalibrationConfig& c, const CalibrationOptions& o) {
     std::ostringstream cfg;
     cfg << "scenario = " << c.scenario << "\nseeds = " << c.seeds << "\nscale = " << c.scale << "\n";
     const std::string marker = o.out + "/calibration.id";
@@ -208,141 +209,131 @@ CalibrationResult calibrate(const CalibrationConfig& c, const CalibrationOptions
     fs::create_directories(o.out + "/runs");
     write_file_atomic(marker, cfg.str());
 
-    const int jobs = o.jobs > 0 ? o.jobs : std::max(1, int(std::thread::hardware_concurrency()));
-    CalibrationResult res;
+}
+
+// Runs the dam break for each (angle, seed) not yet finished, `jobs` at a time, and gathers
+// each angle's objective over its seeds.
+std::vector<AngleResult> evaluate_angles(const CalibrationConfig& c, const CalibrationOptions& o, int jobs,
+                                         const std::vector<double>& angles, CalibrationResult& res) {
     std::mutex mu;
-    g_progress_muted = true;
-
-    // runs the dam break for each (angle, seed) not yet finished, `jobs` at a time
-    const auto evaluate = [&](const std::vector<double>& angles) {
-        struct Job {
-            double angle;
-            int seed;
-        };
-        std::vector<Job> todo;
-        for (double a : angles)
-            for (int k = 0; k < c.seeds; ++k) todo.push_back({a, k});
-        std::map<std::pair<double, int>, std::map<std::string, double>> done;
-        size_t next = 0;
-        std::string error;
-        const auto worker = [&] {
-            while (true) {
-                Job job;
-                {
-                    std::lock_guard<std::mutex> lock(mu);
-                    if (next >= todo.size() || !error.empty()) return;
-                    job = todo[next++];
-                }
-                const std::string dir = o.out + "/runs/" + angle_tag(job.angle) + "-seed" + std::to_string(job.seed + 1);
-                try {
-                    bool reused = fs::exists(dir + "/summary.json");
-                    if (!reused) {
-                        fs::remove_all(dir);  // an unfinished run of our own
-                        Scenario s = load_scenario(c.scenario);
-                        apply_override(s, "material.friction_disc_deg=" + format_number(job.angle));
-                        if (c.scale) apply_override(s, "release.scale=" + std::to_string(c.scale));
-                        apply_override(s, "scenario.seed=" + std::to_string(s.seed + unsigned(job.seed)));
-                        finish_scenario(s);
-                        if (make_setup(s)->kind() != "dam_break") throw InputError(c.scenario + ": not a [dam_break] scenario");
-                        RunOptions ro;
-                        ro.out_dir = dir;
-                        run_scenario(s, ro);
-                    }
-                    auto summary = read_summary(dir + "/summary.json");
-                    // the angles from the saved envelope with this configuration's sections:
-                    // changing them needs no rerun
-                    const SlopeAngles a = slope_angles(read_envelope_csv(dir + "/envelope.csv"), 0.1, c.wall_gap);
-                    summary["gamma_ges"] = a.gamma_ges;
-                    for (int i = 0; i < 5; ++i) summary["gamma_" + std::to_string(i + 1)] = a.gamma[i];
-                    if (!fs::exists(dir + "/deposit.png")) render_deposit(dir, summary, c.wall_gap);
-                    std::lock_guard<std::mutex> lock(mu);
-                    done[{job.angle, job.seed}] = summary;
-                    (reused ? res.runs_reused : res.runs_done) += 1;
-                    std::printf("  %s seed %d: objective %.2f deg%s\n", angle_tag(job.angle).c_str(), job.seed + 1,
-                                objective_of(summary, c), reused ? " (reused)" : "");
-                    std::fflush(stdout);
-                } catch (const std::exception& e) {
-                    std::lock_guard<std::mutex> lock(mu);
-                    error = dir + ": " + e.what();
-                }
-            }
-        };
-        std::vector<std::thread> pool;
-        for (int k = 0; k < std::min<int>(jobs, int(todo.size())); ++k) pool.emplace_back(worker);
-        for (auto& th : pool) th.join();
-        if (!error.empty()) throw RunError("calibration run failed: " + error);
-        std::vector<AngleResult> out;
-        for (double a : angles) {
-            AngleResult r;
-            r.angle = a;
-            std::vector<double> obj;
-            for (int k = 0; k < c.seeds; ++k) {
-                r.runs.push_back(done[{a, k}]);
-                obj.push_back(objective_of(done[{a, k}], c));
-            }
-            double sum = 0;
-            for (double v : obj) sum += v;
-            r.objective_mean = sum / double(obj.size());
-            r.objective_min = *std::min_element(obj.begin(), obj.end());
-            r.objective_max = *std::max_element(obj.begin(), obj.end());
-            out.push_back(r);
-        }
-        return out;
+    struct Job {
+        double angle;
+        int seed;
     };
-
-    std::printf("grid: %zu angles x %d seed(s), %d job(s) at a time\n", c.angles.size(), c.seeds, jobs);
-    res.grid = evaluate(c.angles);
-    size_t best = 0;
-    for (size_t k = 1; k < res.grid.size(); ++k)
-        if (res.grid[k].objective_mean < res.grid[best].objective_mean) best = k;
-    res.best_angle = res.grid[best].angle;
-    res.best_objective = res.grid[best].objective_mean;
-
-    if (c.refine && res.grid.size() >= 2) {
-        // golden section on the bracket around the best grid angle
-        double lo = res.grid[best == 0 ? 0 : best - 1].angle;
-        double hi = res.grid[std::min(best + 1, res.grid.size() - 1)].angle;
-        const double g = 0.5 * (std::sqrt(5.0) - 1.0);
-        const auto eval = [&](double a) {
-            a = std::round(a * 100.0) / 100.0;
-            for (const AngleResult& r : res.refined)
-                if (r.angle == a) return r.objective_mean;
-            for (const AngleResult& r : res.grid)
-                if (r.angle == a) return r.objective_mean;
-            std::printf("refine: %.2f deg\n", a);
-            AngleResult r = evaluate({a}).front();
-            res.refined.push_back(r);
-            if (r.objective_mean < res.best_objective) {
-                res.best_objective = r.objective_mean;
-                res.best_angle = r.angle;
+    std::vector<Job> todo;
+    for (double a : angles)
+        for (int k = 0; k < c.seeds; ++k) todo.push_back({a, k});
+    std::map<std::pair<double, int>, std::map<std::string, double>> done;
+    size_t next = 0;
+    std::string error;
+    const auto worker = [&] {
+        while (true) {
+            Job job;
+            {
+                std::lock_guard<std::mutex> lock(mu);
+                if (next >= todo.size() || !error.empty()) return;
+                job = todo[next++];
             }
-            return r.objective_mean;
-        };
-        double x1 = hi - g * (hi - lo), x2 = lo + g * (hi - lo);
-        double f1 = eval(x1), f2 = eval(x2);
-        while (hi - lo > c.tolerance) {
-            if (f1 <= f2) {
-                hi = x2;
-                x2 = x1;
-                f2 = f1;
-                x1 = hi - g * (hi - lo);
-                f1 = eval(x1);
-            } else {
-                lo = x1;
-                x1 = x2;
-                f1 = f2;
-                x2 = lo + g * (hi - lo);
-                f2 = eval(x2);
+            const std::string dir = o.out + "/runs/" + angle_tag(job.angle) + "-seed" + std::to_string(job.seed + 1);
+            try {
+                bool reused = fs::exists(dir + "/summary.json");
+                if (!reused) {
+                    fs::remove_all(dir);  // an unfinished run of our own
+                    Scenario s = load_scenario(c.scenario);
+                    apply_override(s, "material.friction_disc_deg=" + format_number(job.angle));
+                    if (c.scale) apply_override(s, "release.scale=" + std::to_string(c.scale));
+                    apply_override(s, "scenario.seed=" + std::to_string(s.seed + unsigned(job.seed)));
+                    finish_scenario(s);
+                    if (make_setup(s)->kind() != "dam_break") throw InputError(c.scenario + ": not a [dam_break] scenario");
+                    RunOptions ro;
+                    ro.out_dir = dir;
+                    run_scenario(s, ro);
+                }
+                auto summary = read_summary(dir + "/summary.json");
+                // the angles from the saved envelope with this configuration's sections:
+                // changing them needs no rerun
+                const SlopeAngles a = slope_angles(read_envelope_csv(dir + "/envelope.csv"), 0.1, c.wall_gap);
+                summary["gamma_ges"] = a.gamma_ges;
+                for (int i = 0; i < 5; ++i) summary["gamma_" + std::to_string(i + 1)] = a.gamma[i];
+                if (!fs::exists(dir + "/deposit.png")) render_deposit(dir, summary, c.wall_gap);
+                std::lock_guard<std::mutex> lock(mu);
+                done[{job.angle, job.seed}] = summary;
+                (reused ? res.runs_reused : res.runs_done) += 1;
+                std::printf("  %s seed %d: objective %.2f deg%s\n", angle_tag(job.angle).c_str(), job.seed + 1,
+                            objective_of(summary, c), reused ? " (reused)" : "");
+                std::fflush(stdout);
+            } catch (const std::exception& e) {
+                std::lock_guard<std::mutex> lock(mu);
+                error = dir + ": " + e.what();
             }
+        }
+    };
+    std::vector<std::thread> pool;
+    for (int k = 0; k < std::min<int>(jobs, int(todo.size())); ++k) pool.emplace_back(worker);
+    for (auto& th : pool) th.join();
+    if (!error.empty()) throw RunError("calibration run failed: " + error);
+    std::vector<AngleResult> out;
+    for (double a : angles) {
+        AngleResult r;
+        r.angle = a;
+        std::vector<double> obj;
+        for (int k = 0; k < c.seeds; ++k) {
+            r.runs.push_back(done[{a, k}]);
+            obj.push_back(objective_of(done[{a, k}], c));
+        }
+        double sum = 0;
+        for (double v : obj) sum += v;
+        r.objective_mean = sum / double(obj.size());
+        r.objective_min = *std::min_element(obj.begin(), obj.end());
+        r.objective_max = *std::max_element(obj.begin(), obj.end());
+        out.push_back(r);
+    }
+    return out;
+}
+
+// Golden-section search on the bracket around the best grid angle, to c.tolerance.
+void refine_best_angle(const CalibrationConfig& c, const CalibrationOptions& o, int jobs, CalibrationResult& res, size_t best) {
+    // golden section on the bracket around the best grid angle
+    double lo = res.grid[best == 0 ? 0 : best - 1].angle;
+    double hi = res.grid[std::min(best + 1, res.grid.size() - 1)].angle;
+    const double g = 0.5 * (std::sqrt(5.0) - 1.0);
+    const auto eval = [&](double a) {
+        a = std::round(a * 100.0) / 100.0;
+        for (const AngleResult& r : res.refined)
+            if (r.angle == a) return r.objective_mean;
+        for (const AngleResult& r : res.grid)
+            if (r.angle == a) return r.objective_mean;
+        std::printf("refine: %.2f deg\n", a);
+        AngleResult r = evaluate_angles(c, o, jobs, {a}, res).front();
+        res.refined.push_back(r);
+        if (r.objective_mean < res.best_objective) {
+            res.best_objective = r.objective_mean;
+            res.best_angle = r.angle;
+        }
+        return r.objective_mean;
+    };
+    double x1 = hi - g * (hi - lo), x2 = lo + g * (hi - lo);
+    double f1 = eval(x1), f2 = eval(x2);
+    while (hi - lo > c.tolerance) {
+        if (f1 <= f2) {
+            hi = x2;
+            x2 = x1;
+            f2 = f1;
+            x1 = hi - g * (hi - lo);
+            f1 = eval(x1);
+        } else {
+            lo = x1;
+            x1 = x2;
+            f1 = f2;
+            x2 = lo + g * (hi - lo);
+            f2 = eval(x2);
         }
     }
-    g_progress_muted = false;
-    res.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
 
-    // ---- the Table-7-like report
-    std::vector<AngleResult> all = res.grid;
-    all.insert(all.end(), res.refined.begin(), res.refined.end());
-    std::sort(all.begin(), all.end(), [](const AngleResult& a, const AngleResult& b) { return a.angle > b.angle; });
+// table.csv and table.md: the Table-7 layout, every angle's mean section angles and objective.
+void write_calibration_table(const CalibrationConfig& c, const CalibrationOptions& o, const CalibrationResult& res,
+                             const std::vector<AngleResult>& all) {
     const char* rows[6] = {"gamma_ges", "gamma_1", "gamma_2", "gamma_3", "gamma_4", "gamma_5"};
     std::ostringstream csv, md;
     csv << "angle,lab";
@@ -389,7 +380,11 @@ CalibrationResult calibrate(const CalibrationConfig& c, const CalibrationOptions
     write_file_atomic(o.out + "/table.csv", csv.str());
     write_file_atomic(o.out + "/table.md", md.str());
 
-    // envelopes.png: the lab profile (section angles integrated from the toe at 0.5 m) and each run's envelope
+}
+
+// envelopes.png: the lab profile (section angles integrated from the toe at 0.5 m) and each
+// run's envelope.
+void plot_envelopes(const CalibrationConfig& c, const CalibrationOptions& o, const std::vector<AngleResult>& all) {
     if (gnuplot_available()) {
         std::ostringstream lab;
         lab << "x,y\n";
@@ -413,6 +408,31 @@ CalibrationResult calibrate(const CalibrationConfig& c, const CalibrationOptions
         if (std::system(("gnuplot '" + o.out + "/envelopes.gp' 2>/dev/null").c_str()) != 0)
             std::fprintf(stderr, "demlab: warning: gnuplot failed on envelopes.gp\n");
     }
+}
+
+}  // namespace
+
+CalibrationResult calibrate(const CalibrationConfig& c, const CalibrationOptions& o) {
+    const auto t0 = std::chrono::steady_clock::now();
+    open_calibration_folder(c, o);
+    const int jobs = o.jobs > 0 ? o.jobs : std::max(1, int(std::thread::hardware_concurrency()));
+    CalibrationResult res;
+    g_progress_muted = true;
+    std::printf("grid: %zu angles x %d seed(s), %d job(s) at a time\n", c.angles.size(), c.seeds, jobs);
+    res.grid = evaluate_angles(c, o, jobs, c.angles, res);
+    size_t best = 0;
+    for (size_t k = 1; k < res.grid.size(); ++k)
+        if (res.grid[k].objective_mean < res.grid[best].objective_mean) best = k;
+    res.best_angle = res.grid[best].angle;
+    res.best_objective = res.grid[best].objective_mean;
+    if (c.refine && res.grid.size() >= 2) refine_best_angle(c, o, jobs, res, best);
+    g_progress_muted = false;
+    res.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    std::vector<AngleResult> all = res.grid;
+    all.insert(all.end(), res.refined.begin(), res.refined.end());
+    std::sort(all.begin(), all.end(), [](const AngleResult& a, const AngleResult& b) { return a.angle > b.angle; });
+    write_calibration_table(c, o, res, all);
+    plot_envelopes(c, o, all);
     return res;
 }
 

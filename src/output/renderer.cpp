@@ -181,7 +181,7 @@ void filled_circle(UnitCircles& unit, const Vec2& c, double r, int segments) {
 }
 }  // namespace
 
-Image Renderer::render(const Frame& f) {
+Renderer::Window Renderer::set_up_view(const Frame& f) {
     Impl& im = *impl_;
     if (!OSMesaMakeCurrent(im.ctx, im.buffer.data(), GL_UNSIGNED_BYTE, im.w, im.h))
         throw RunError("OSMesa could not bind the frame buffer");
@@ -206,6 +206,11 @@ Image Renderer::render(const Frame& f) {
     glClearColor(float(kBackground.r), float(kBackground.g), float(kBackground.b), 1.0f);
     glClear(GL_COLOR_BUFFER_BIT);
 
+    return {lo, hi, size, px_per_m};
+}
+
+void Renderer::draw_discs(const Frame& f, double px_per_m) {
+    Impl& im = *impl_;
     // discs: the same fans as glBegin(GL_TRIANGLE_FAN) per disc, from arrays in one call (the
     // immediate mode's call per vertex was most of OSMesa's time for a flume's 9,101 discs)
     im.xy.clear();
@@ -248,9 +253,12 @@ Image Renderer::render(const Frame& f) {
             thick_segment(f.pos[i], tip, std::max(0.75 * style_.supersample / px_per_m, 0.08 * f.radius[i]));
         }
     }
+}
+
+void Renderer::draw_walls_and_overlays(const Frame& f, double wall_half) {
+    Impl& im = *impl_;
     // walls, 3 px wide, with round joints
     colour(kWall);
-    const double wall_half = 1.5 * style_.supersample / px_per_m;
     for (const auto& line : f.walls) {
         for (size_t k = 0; k + 1 < line.size(); ++k) thick_segment(line[k], line[k + 1], wall_half);
         for (const Vec2& p : line) filled_circle(im.circles, p, wall_half, 12);
@@ -260,9 +268,13 @@ Image Renderer::render(const Frame& f) {
         glColor3d(ov.r, ov.g, ov.b);
         for (size_t k = 0; k + 1 < ov.line.size(); ++k) thick_segment(ov.line[k], ov.line[k + 1], 0.66 * wall_half);
     }
-    // 10 cm marks along W1, arc, W3 (walls 0, 1, 2), on the solid side; longer every 0.5 m
+}
+
+// 10 cm marks along W1, arc, W3 (walls 0, 1, 2), on the solid side; longer every 0.5 m. Returns
+// the labels to write once the image is read back.
+std::vector<std::pair<Vec2, std::string>> Renderer::draw_flume_marks(const Frame& f, double wall_half) {
     std::vector<std::pair<Vec2, std::string>> labels;
-    if (style_.flume_marks) {
+    {
         std::vector<Vec2> path;
         for (int id = 0; id < 3; ++id)
             for (size_t k = 0; k < f.wall_id.size(); ++k)
@@ -290,8 +302,11 @@ Image Renderer::render(const Frame& f) {
             s += len;
         }
     }
-    glFinish();
+    return labels;
+}
 
+Image Renderer::read_back_downsampled() {
+    Impl& im = *impl_;
     // box filter down to the output size; OpenGL rows run bottom to top. The ss rows of an
     // output row are summed first, byte by byte along the whole row (a loop the compiler
     // vectorises), then each pixel's ss columns; the rounded means come from a table. Per
@@ -324,6 +339,14 @@ Image Renderer::render(const Frame& f) {
         }
     }
 
+    return img;
+}
+
+// The labels, notes, time and speed bar, in pixels.
+void Renderer::annotate(Image& img, const Frame& f, const std::vector<std::pair<Vec2, std::string>>& labels,
+                        const Window& win) {
+    Impl& im = *impl_;
+    const Vec2 lo = win.lo, hi = win.hi, size = win.size;
     const int font_px = std::max(10, style_.height / 28);
     const auto to_pixel = [&](const Vec2& p) {
         return std::pair<int, int>(int((p.x() - lo.x()) / size.x() * img.width),
@@ -360,6 +383,17 @@ Image Renderer::render(const Frame& f) {
         im.text(img, top, x0 - font_px / 2, y0 - font_px / 3, font_px * 2 / 3, {0, 0, 0});
         im.text(img, "0", x0 + bar_w / 4, y0 + bar_h + font_px, font_px * 2 / 3, {0, 0, 0});
     }
+}
+
+Image Renderer::render(const Frame& f) {
+    const Window win = set_up_view(f);
+    draw_discs(f, win.px_per_m);
+    const double wall_half = 1.5 * style_.supersample / win.px_per_m;
+    draw_walls_and_overlays(f, wall_half);
+    const auto labels = style_.flume_marks ? draw_flume_marks(f, wall_half) : std::vector<std::pair<Vec2, std::string>>{};
+    glFinish();
+    Image img = read_back_downsampled();
+    annotate(img, f, labels, win);
     return img;
 }
 

@@ -5,6 +5,7 @@
 // Text (time, colour bar) comes from FreeType with DejaVu Sans.
 #pragma once
 #include <memory>
+#include <utility>
 #include <string>
 
 #include "output/frame.h"
@@ -41,6 +42,17 @@ public:
 
 private:
     struct Impl;
+    // the window: the view widened to the image's aspect ratio, and its scale
+    struct Window {
+        Vec2 lo, hi, size;
+        double px_per_m;
+    };
+    Window set_up_view(const Frame& f);
+    void draw_discs(const Frame& f, double px_per_m);
+    void draw_walls_and_overlays(const Frame& f, double wall_half);
+    std::vector<std::pair<Vec2, std::string>> draw_flume_marks(const Frame& f, double wall_half);
+    Image read_back_downsampled();
+    void annotate(Image& img, const Frame& f, const std::vector<std::pair<Vec2, std::string>>& labels, const Window& win);
     RenderStyle style_;
     std::unique_ptr<Impl> impl_;
 };
