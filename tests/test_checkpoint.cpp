@@ -3,6 +3,7 @@
 // final names. Geometry A at scale 20 (364 discs) to t = 1.2 s: past the barrier impact.
 #include <gtest/gtest.h>
 #include <fcntl.h>
+#include <sys/file.h>
 #include <signal.h>
 #include <spawn.h>
 #include <sys/wait.h>
@@ -289,4 +290,33 @@ TEST(Checkpoint, Crc32cCheckValueAndSighupIsCaught) {
     InterruptScope scope;
     std::raise(SIGHUP);
     EXPECT_EQ(pending_interrupt(), SIGHUP);
+}
+
+// A second process on a running folder is refused (the run holds flock on RUN_DIR/.demlab.lock),
+// and a finished run removes the lock file.
+TEST(Checkpoint, ALockedRunFolderIsRefused) {
+    const Scenario s = scenario();
+    const fs::path dir = temp_dir("ck-lock");
+    RunOptions ro{dir.string(), false, [](const std::string&, const std::string&, int index) {
+                      if (index == 1) request_interrupt(SIGINT);
+                  }};
+    ro.handle_signals = true;
+    EXPECT_THROW(run_scenario(s, ro), Interrupted);
+    // another process takes the lock (as a running `demlab resume` would)
+    const int fd = ::open((dir / ".demlab.lock").c_str(), O_RDWR | O_CREAT, 0644);
+    ASSERT_GE(fd, 0);
+    ASSERT_EQ(::flock(fd, LOCK_EX | LOCK_NB), 0);
+    RunOptions rr{dir.string(), false, {}};
+    rr.resume = true;
+    try {
+        run_scenario(s, rr);
+        ADD_FAILURE() << "resumed a folder another process holds";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("another demlab process is running in this folder"), std::string::npos) << e.what();
+    }
+    EXPECT_TRUE(fs::exists(dir / kCheckpointFile)) << "the refused resume touched nothing";
+    ::close(fd);  // the other process ends: its lock goes with it
+    run_scenario(s, rr);
+    EXPECT_FALSE(fs::exists(dir / ".demlab.lock"));
+    fs::remove_all(dir);
 }

@@ -81,7 +81,7 @@ TEST(TerrainProfile, BadCsvIsRefusedWithFileAndLine) {
     expect_refused([&] { read_profile_csv(text); }, {":3:", "two numbers"});
     const std::string one = write_temp("profile-one.csv", "0,1\n");
     expect_refused([&] { read_profile_csv(one); }, {"at least 2 points"});
-    expect_refused([] { read_profile_csv("/nonexistent/profile.csv"); }, {"cannot read"});
+    expect_refused([] { read_profile_csv("/nonexistent/profile.csv"); }, {"cannot open", "no such file"});
 }
 
 TEST(TerrainProfile, ScenarioRefusesWhatCannotRun) {

@@ -1,9 +1,15 @@
 // Bad input is refused with a message that names the parameter and the accepted range.
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
 #include <functional>
 #include <limits>
 
+#include "run/run.h"
+#include "scenario/scenario.h"
 #include "setups/db9k.h"
 #include "helpers.h"
 
@@ -133,4 +139,19 @@ TEST(BlowUp, TooLargeATimeStepStopsWithADiagnosis) {
         EXPECT_NE(msg.find("disc"), std::string::npos) << msg;
         EXPECT_NE(msg.find("step"), std::string::npos) << msg;
     }
+}
+
+// Input files are refused before they are read when they are not regular files or are too
+// large: /dev/zero as a scenario read 23 GB before the kernel stopped it.
+TEST(Validation, UnboundedOrOddInputFilesAreRefused) {
+    expect_refused([] { load_scenario("/dev/zero"); }, {"/dev/zero", "not a regular file"});
+    expect_refused([] { load_scenario("/tmp"); }, {"not a regular file"});
+    expect_refused([] { load_scenario("/nonexistent/scenario.toml"); }, {"no such file"});
+    const std::string big = (std::filesystem::temp_directory_path() / ("demlab-big-" + std::to_string(::getpid()) + ".toml")).string();
+    {
+        std::ofstream(big) << "# a comment\n";
+        std::filesystem::resize_file(big, (uint64_t(16) << 20) + 1);  // sparse: 16 MiB and a byte
+    }
+    expect_refused([&] { load_scenario(big); }, {"more than the 16 MiB"});
+    std::filesystem::remove(big);
 }

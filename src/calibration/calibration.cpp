@@ -36,7 +36,7 @@ CalibrationConfig load_calibration(const std::string& path) {
     c.source = path;
     toml::table t;
     try {
-        t = toml::parse_file(path);
+        t = toml::parse(read_input_file(path, kMaxScenarioBytes, "calibration file"), path);
     } catch (const toml::parse_error& e) {
         throw InputError(path + ":" + std::to_string(e.source().begin.line) + ": TOML syntax error: " +
                          std::string(e.description()));

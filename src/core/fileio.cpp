@@ -21,6 +21,25 @@ void write_file_atomic(const std::string& path, const std::string& content) {
     if (ec) throw RunError("cannot rename " + tmp + " to " + path + ": " + ec.message());
 }
 
+std::string read_input_file(const std::string& path, uint64_t max_bytes, const std::string& what) {
+    namespace fs = std::filesystem;
+    std::error_code ec;
+    const fs::file_status st = fs::status(path, ec);
+    if (ec || !fs::exists(st)) throw InputError(path + ": cannot open the " + what + " (no such file)");
+    if (!fs::is_regular_file(st)) throw InputError(path + ": the " + what + " is not a regular file");
+    const uint64_t size = fs::file_size(path, ec);
+    if (ec) throw InputError(path + ": cannot read the " + what + " (" + ec.message() + ")");
+    if (size > max_bytes)
+        throw InputError(path + ": the " + what + " has " + std::to_string(size) + " bytes, more than the " +
+                         std::to_string(max_bytes >> 20) + " MiB such a file may have");
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw InputError(path + ": cannot open the " + what);
+    std::string text(size_t(size), '\0');
+    in.read(text.data(), std::streamsize(size));
+    if (uint64_t(in.gcount()) != size) throw InputError(path + ": cannot read the " + what + " whole");
+    return text;
+}
+
 void SeriesFile::open(const std::string& path) {
     path_ = path;
     out_.open(path + ".part", std::ios::trunc);

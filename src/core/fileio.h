@@ -9,6 +9,15 @@ namespace demlab {
 
 void write_file_atomic(const std::string& path, const std::string& content);
 
+// An input file read whole: refused (InputError, exit 2, naming the file and `what` it is)
+// when it is missing, not a regular file (a directory, /dev/zero, a pipe) or larger than
+// max_bytes, before a byte of it is read.
+std::string read_input_file(const std::string& path, uint64_t max_bytes, const std::string& what);
+// The limits, in bytes
+inline constexpr uint64_t kMaxScenarioBytes = uint64_t(16) << 20;     // scenario, calibration: 16 MiB
+inline constexpr uint64_t kMaxTableBytes = uint64_t(1) << 30;         // release mass, terrain profile: 1 GiB
+inline constexpr uint64_t kMaxCheckpointBytes = uint64_t(64) << 30;   // checkpoint: 64 GiB
+
 // `text` as a JSON string literal, in quotes: quotes, backslashes and control characters
 // escaped (summary.json's free text, such as the machine's name).
 std::string json_string(const std::string& text);

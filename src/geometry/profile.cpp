@@ -6,13 +6,13 @@
 #include <sstream>
 
 #include "core/error.h"
+#include "core/fileio.h"
 #include "core/validate.h"
 
 namespace demlab {
 
 std::vector<Vec2> read_profile_csv(const std::string& path) {
-    std::ifstream in(path);
-    if (!in) throw InputError(path + ": cannot read the terrain profile (terrain.profile)");
+    std::istringstream in(read_input_file(path, kMaxTableBytes, "terrain profile (terrain.profile)"));
     std::vector<Vec2> pts;
     std::string line;
     int no = 0;

@@ -6,6 +6,7 @@
 
 #include "core/crc32c.h"
 #include "core/error.h"
+#include "core/fileio.h"
 #include "scenario/scenario.h"
 
 namespace demlab {
@@ -83,13 +84,7 @@ std::string read_checkpoint_file(const std::string& path) {
     return bytes;
 }
 
-std::string read_whole(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw InputError("cannot read " + path);
-    std::ostringstream b;
-    b << in.rdbuf();
-    return b.str();
-}
+std::string read_whole(const std::string& path) { return read_input_file(path, kMaxCheckpointBytes, "checkpoint or run file"); }
 
 bool same_scenario(const std::string& stored, const std::string& resolved_now) {
     if (without_comments(stored) == without_comments(resolved_now)) return true;

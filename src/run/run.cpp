@@ -3,6 +3,8 @@
 // and on a signal, and the run folder's files at the end (run.h lists them).
 #include "run/run.h"
 
+#include <fcntl.h>
+#include <sys/file.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -157,17 +159,55 @@ World build_world(const Scenario& s, const Setup& setup, const ReleaseMass& mass
     return w;
 }
 
+// The run folder's lock (flock on RUN_DIR/.demlab.lock, held while the run lives): a second
+// process resuming or forcing the same folder is refused instead of writing over the first.
+// The kernel drops the lock when the process ends, however it ends; a finished run removes
+// the file.
+class RunFolderLock {
+public:
+    explicit RunFolderLock(const std::string& dir) : path_(dir + "/.demlab.lock") {
+        fd_ = ::open(path_.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+        if (fd_ < 0) throw InputError(path_ + ": cannot create the run folder's lock");
+        if (::flock(fd_, LOCK_EX | LOCK_NB) != 0) {
+            ::close(fd_);
+            fd_ = -1;
+            throw InputError(dir + ": another demlab process is running in this folder (it holds " + path_ +
+                             "); wait for it to finish, or choose another --out");
+        }
+    }
+    ~RunFolderLock() {
+        if (fd_ >= 0) ::close(fd_);
+    }
+    RunFolderLock(const RunFolderLock&) = delete;
+    RunFolderLock& operator=(const RunFolderLock&) = delete;
+    void release_and_remove() {
+        std::filesystem::remove(path_);
+        if (fd_ >= 0) ::close(fd_);
+        fd_ = -1;
+    }
+
+private:
+    std::string path_;
+    int fd_ = -1;
+};
+
 // The run folder: a new one (refused if it exists, unless forced) with the resolved scenario,
-// or the checkpoint of the one to resume, checked against it.
-std::unique_ptr<BinaryReader> open_run_folder(const RunOptions& o, const std::string& scenario_text) {
+// or the checkpoint of the one to resume, checked against it; locked either way.
+std::unique_ptr<BinaryReader> open_run_folder(const RunOptions& o, const std::string& scenario_text,
+                                              std::unique_ptr<RunFolderLock>& lock) {
     const std::string& dir = o.out_dir;
     const std::string checkpoint_path = dir + "/" + kCheckpointFile;
     if (!o.resume) {
+        // a folder that exists is locked before it is touched (a forced run over a running one)
+        if (o.force && std::filesystem::is_directory(dir)) lock = std::make_unique<RunFolderLock>(dir);
         prepare_output_dir(o.out_dir, o.force);
+        if (!lock) lock = std::make_unique<RunFolderLock>(dir);
         std::filesystem::remove(checkpoint_path);  // a stale one of a replaced run
         write_file_atomic(dir + "/scenario.toml", scenario_text);
         return nullptr;
     }
+    if (!std::filesystem::is_directory(dir)) throw InputError(dir + ": no such run folder to resume");
+    lock = std::make_unique<RunFolderLock>(dir);
     auto restore = std::make_unique<BinaryReader>(read_checkpoint_file(checkpoint_path), checkpoint_path);
     if (!same_scenario(get_checkpoint_header(*restore, checkpoint_path).scenario_text, scenario_text))
         throw InputError(dir + "/scenario.toml differs from the scenario the checkpoint was written with "
@@ -207,7 +247,8 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
     const std::string dir = o.out_dir;
     const std::string checkpoint_path = dir + "/" + kCheckpointFile;
     const std::string scenario_text = resolved_toml(s);
-    std::unique_ptr<BinaryReader> restore = open_run_folder(o, scenario_text);
+    std::unique_ptr<RunFolderLock> lock;
+    std::unique_ptr<BinaryReader> restore = open_run_folder(o, scenario_text, lock);
     const bool terminal = isatty(STDERR_FILENO) != 0;
     std::unique_ptr<InterruptScope> interrupts;
     if (o.handle_signals) interrupts = std::make_unique<InterruptScope>();
@@ -367,6 +408,7 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
                   ReleaseFigures{setup->has_release(), mass.porosity_generated, mass.settle_time, mass.wall_seconds},
                   setup->measures_envelope() ? &angles : nullptr);
     std::filesystem::remove(checkpoint_path);  // the run is complete: nothing to resume
+    lock->release_and_remove();
     return sum;
 }
 

@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "core/error.h"
+#include "core/fileio.h"
 #include "core/validate.h"
 #include "geometry/profile.h"
 #include "scenario/key_registry.h"
@@ -163,11 +164,7 @@ Scenario parse_scenario(const std::string& text, const std::string& path) {
 }
 
 Scenario load_scenario(const std::string& path) {
-    std::ifstream in(path);
-    if (!in) throw InputError(path + ": cannot open the scenario file");
-    std::stringstream buf;
-    buf << in.rdbuf();
-    return parse_scenario(buf.str(), path);
+    return parse_scenario(read_input_file(path, kMaxScenarioBytes, "scenario file"), path);
 }
 
 void apply_override(Scenario& s, const std::string& assignment) {

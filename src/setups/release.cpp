@@ -310,8 +310,7 @@ void save_release(const ReleaseMass& m, const std::string& path) {
 }
 
 ReleaseMass load_release(const std::string& path) {
-    std::ifstream in(path);
-    if (!in) throw InputError(path + ": cannot open the release mass file");
+    std::istringstream in(read_input_file(path, kMaxTableBytes, "release mass file"));
     ReleaseMass m;
     std::string line;
     long lineno = 0;
