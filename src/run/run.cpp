@@ -333,10 +333,14 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
     sum.stop_reason = "t_max";
     double candidate_sum = 0, touching_sum = 0;
     long pair_samples = 0;
+    // whether the series were sampled at the current time (the last row is not written twice
+    // when the run ends at a sample time)
+    bool sampled_now = false;
     while (true) {
         if (solver.time() >= st.next_series - 1e-12) {
             series.sample(w, measure, st, sum);
             st.next_series += s.output.series_interval;
+            sampled_now = true;
         }
         if (snaps && solver.time() >= st.next_snap - 1e-12) {
             snapshot();
@@ -344,6 +348,7 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
         }
         if (solver.time() >= s.stop.t_max) break;
         solver.step();
+        sampled_now = false;
         sum.dt_min = std::min(sum.dt_min, solver.dt());
         sum.dt_max = std::max(sum.dt_max, solver.dt());
         if (solver.step_count() % 10 == 0) {
@@ -381,7 +386,7 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
         }
     }
     progress.finish();
-    series.sample(w, measure, st, sum);
+    if (!sampled_now) series.sample(w, measure, st, sum);
     if (snaps) {
         if (std::abs(solver.time() - (st.next_snap - s.output.snapshot_interval)) > 1e-12) snapshot();
         snaps->finish();
