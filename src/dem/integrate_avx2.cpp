@@ -131,6 +131,174 @@ DEMLAB_AVX2 double lane_of(__m256d a, int l) {
     return (l & 1) ? _mm_cvtsd_f64(_mm_unpackhi_pd(h, h)) : _mm_cvtsd_f64(h);
 }
 
+// The critical step of a group (World::critical_step_squared_at; std::min(best, t) is
+// min_pd(t, best)) into best_sq.
+struct StepConsts {
+    __m256d zero, phi_sq, phi_t_sq, widen, smallest_normal, def_tran_one, def_rot_one;
+    bool one_material, rotation_free;
+    const int32_t* material;
+    const double* default_k_tran;
+    const double* default_k_rot;
+};
+DEMLAB_AVX2 void critical_step_group(const LoadLanes& ld, __m256d mass, __m256d inertia, __m256d radius, size_t i0,
+                                     size_t n, const StepConsts& k, __m256d& best_sq) {
+    const __m256d zero = k.zero, phi_sq = k.phi_sq, phi_t_sq = k.phi_t_sq, widen = k.widen;
+    const __m256d smallest_normal = k.smallest_normal, def_tran_one = k.def_tran_one, def_rot_one = k.def_rot_one;
+    const bool one_material = k.one_material, rotation_free = k.rotation_free;
+    const int32_t* const material = k.material;
+    const double* const default_k_tran = k.default_k_tran;
+    const double* const default_k_rot = k.default_k_rot;
+    __m256d def_tran = def_tran_one, def_rot = def_rot_one;
+    if (!one_material) {
+        const int32_t* m = material;
+        def_tran = _mm256_set_pd(default_k_tran[m[lane(i0, n, 3)]], default_k_tran[m[lane(i0, n, 2)]],
+                                 default_k_tran[m[lane(i0, n, 1)]], default_k_tran[m[i0]]);
+        def_rot = _mm256_set_pd(default_k_rot[m[lane(i0, n, 3)]], default_k_rot[m[lane(i0, n, 2)]],
+                                default_k_rot[m[lane(i0, n, 1)]], default_k_rot[m[i0]]);
+    }
+    const __m256d kt = blend(_mm256_cmp_pd(ld.k_tran, zero, _CMP_GT_OQ), ld.k_tran, def_tran);
+    const __m256d kr = blend(_mm256_cmp_pd(ld.k_rot, zero, _CMP_GT_OQ), ld.k_rot, def_rot);
+    const __m256d a_t = _mm256_mul_pd(phi_t_sq, mass);
+    const __m256d a_r = _mm256_mul_pd(phi_sq, inertia), b_r = _mm256_mul_pd(_mm256_mul_pd(kr, radius), radius);
+    // Only the smallest quotient counts, and the divisions (two per group, 13 cycles
+    // each) were where this loop's time piled up (perf). A lane's quotient a / b cannot
+    // go below its best so far, T, when a >= T b; and fl(a / b) >= T then, rounding
+    // being monotonic. P = fl(T b) is within 2^-53 of T b when it is a normal number,
+    // so a >= fl(P (1 + 2^-51)) proves a >= T b. A group none of whose lanes can win
+    // skips the divisions; the others divide as always, so the bits are the same.
+    // (A NaN or infinite T or quotient fails the test and is divided.)
+    const __m256d p_t = _mm256_mul_pd(best_sq, kt);
+    __m256d cannot_win = _mm256_and_pd(_mm256_cmp_pd(a_t, _mm256_mul_pd(p_t, widen), _CMP_GE_OQ),
+                                       _mm256_cmp_pd(p_t, smallest_normal, _CMP_GE_OQ));
+    if (rotation_free) {
+        const __m256d p_r = _mm256_mul_pd(best_sq, b_r);
+        cannot_win = _mm256_and_pd(cannot_win, _mm256_and_pd(_mm256_cmp_pd(a_r, _mm256_mul_pd(p_r, widen), _CMP_GE_OQ),
+                                                             _mm256_cmp_pd(p_r, smallest_normal, _CMP_GE_OQ)));
+    }
+    if (_mm256_movemask_pd(cannot_win) != 15) {
+        __m256d t2 = _mm256_div_pd(a_t, kt);
+        if (rotation_free) {
+            const __m256d r2 = _mm256_div_pd(a_r, b_r);
+            t2 = blend(_mm256_cmp_pd(r2, t2, _CMP_LT_OQ), r2, t2);
+        }
+        best_sq = _mm256_min_pd(t2, best_sq);
+    }
+}
+
+// The rotation of a group (World::integrate_discs' models 2 and 3): the new spin and angle
+// stored, the local damping's rotational work into diss_local, the rotational kinetic energy
+// into kinetic; returns the rotation rules' dissipation.
+struct RotationConsts {
+    __m256d dt, zero, half, alpha, minus_alpha, g_abs, mu_br;
+    bool local, rolling_literal;
+    int rotation_model;
+};
+DEMLAB_AVX2 __m256d rotate_group(const LoadLanes& ld, double* omega_a, double* angle_a, const double* inv_inertia_a,
+                                 const double* rr_factor_a, size_t i0, size_t n, __m256d inv_mass, __m256d inertia,
+                                 const RotationConsts& k, __m256d& diss_local, __m256d& kinetic) {
+    const __m256d dt = k.dt, zero = k.zero, half = k.half, alpha = k.alpha, minus_alpha = k.minus_alpha;
+    const __m256d g_abs = k.g_abs, mu_br = k.mu_br;
+    const bool local = k.local, rolling_literal = k.rolling_literal;
+    const int rotation_model = k.rotation_model;
+    __m256d diss_rot = zero;
+    const __m256d tq = ld.torque;
+    const __m256d w_old = load_lanes(omega_a, i0, n);
+    __m256d tq_damped = tq, td = zero;
+    if (local) {
+        td = local_damping(w_old, tq, alpha, minus_alpha);
+        tq_damped = _mm256_add_pd(tq, td);
+    }
+    const __m256d w_free =
+        _mm256_add_pd(w_old, _mm256_mul_pd(_mm256_mul_pd(tq_damped, load_lanes(inv_inertia_a, i0, n)), dt));
+    if (local)
+        diss_local = _mm256_sub_pd(diss_local, _mm256_mul_pd(_mm256_mul_pd(_mm256_mul_pd(half, td), _mm256_add_pd(w_old, w_free)), dt));
+    __m256d w = w_free;
+    // Model 2/3: rolling resistance for a disc touching a wall (reduce_towards_zero)
+    const __m256d rr = load_lanes(rr_factor_a, i0, n);
+    const __m256d rolling = _mm256_and_pd(touches_wall(ld.counts), _mm256_cmp_pd(rr, zero, _CMP_GT_OQ));
+    if (_mm256_movemask_pd(rolling) != 0) {
+        const __m256d g_eff = rolling_literal ? g_abs : _mm256_mul_pd(ld.wall_normal, inv_mass);
+        const __m256d delta = _mm256_mul_pd(_mm256_mul_pd(g_eff, rr), dt);
+        const __m256d reduced =
+            blend(_mm256_cmp_pd(w, delta, _CMP_GT_OQ), _mm256_sub_pd(w, delta),
+                  blend(_mm256_cmp_pd(w, neg(delta), _CMP_LT_OQ), _mm256_add_pd(w, delta), zero));
+        w = blend(rolling, reduced, w);
+    }
+    // Model 3: rotational damping of a disc touching another (per disc)
+    if (rotation_model == 3) w = blend(touches_disc(ld.counts), _mm256_mul_pd(w, mu_br), w);
+    const __m256d taken = _mm256_mul_pd(_mm256_mul_pd(half, inertia),
+                                        _mm256_sub_pd(_mm256_mul_pd(w_free, w_free), _mm256_mul_pd(w, w)));
+    const __m256d torque_work = _mm256_mul_pd(_mm256_mul_pd(_mm256_mul_pd(half, tq), dt), _mm256_sub_pd(w_free, w));
+    diss_rot = _mm256_add_pd(zero, _mm256_sub_pd(taken, torque_work));
+    kinetic = _mm256_add_pd(kinetic, _mm256_mul_pd(_mm256_mul_pd(half, inertia), _mm256_mul_pd(w, w)));
+    store_lanes(omega_a, i0, n, w);
+    store_lanes(angle_a, i0, n, _mm256_add_pd(load_lanes(angle_a, i0, n), _mm256_mul_pd(w, dt)));
+    return diss_rot;
+}
+
+// The ledger's terms of a group: the contacts' dissipation and the rotation rules' terms,
+// added disc by disc; a block's sums are written when its last disc is added.
+struct LedgerSums {
+    double sum_contacts, sum_rotation, sum_local;
+    __m256d kinetic_lanes;
+    size_t block, block_end;
+};
+DEMLAB_AVX2 void ledger_group(const LoadLanes& ld, __m256d diss_rot, __m256d diss_local, __m256d kinetic, size_t i0,
+                              size_t n, bool local, size_t end, size_t block_size, LedgerBlock* blocks, LedgerSums& L) {
+    double& sum_contacts = L.sum_contacts;
+    double& sum_rotation = L.sum_rotation;
+    double& sum_local = L.sum_local;
+    __m256d& kinetic_lanes = L.kinetic_lanes;
+    size_t& block = L.block;
+    size_t& block_end = L.block_end;
+    // the ledger: the contacts' dissipation and the rotation rules' terms, added disc by
+    // disc; a block's sums are written when its last disc is added
+    if (n == 4 && i0 + 4 < block_end) {
+        kinetic_lanes = _mm256_add_pd(kinetic_lanes, kinetic);
+        sum_contacts += lane_of(ld.dissipated, 0);
+        sum_rotation += lane_of(diss_rot, 0);
+        sum_contacts += lane_of(ld.dissipated, 1);
+        sum_rotation += lane_of(diss_rot, 1);
+        sum_contacts += lane_of(ld.dissipated, 2);
+        sum_rotation += lane_of(diss_rot, 2);
+        sum_contacts += lane_of(ld.dissipated, 3);
+        sum_rotation += lane_of(diss_rot, 3);
+        if (local) {
+            sum_local += lane_of(diss_local, 0);
+            sum_local += lane_of(diss_local, 1);
+            sum_local += lane_of(diss_local, 2);
+            sum_local += lane_of(diss_local, 3);
+        }
+    } else {
+        // (a block ends inside a group only at the range's end: the lanes after it are
+        // beyond n, and add +0)
+        const __m256d valid_l = _mm256_castsi256_pd(
+            _mm256_cmpgt_epi64(_mm256_set1_epi64x(int64_t(n)), _mm256_setr_epi64x(0, 1, 2, 3)));
+        kinetic_lanes = _mm256_add_pd(kinetic_lanes, _mm256_and_pd(valid_l, kinetic));
+        alignas(32) double diss_terms[4], rot_terms[4], local_terms[4];
+        _mm256_store_pd(diss_terms, ld.dissipated);
+        _mm256_store_pd(rot_terms, diss_rot);
+        _mm256_store_pd(local_terms, diss_local);
+        for (size_t l = 0; l < n; ++l) {
+            sum_contacts += diss_terms[l];
+            sum_rotation += rot_terms[l];
+            sum_local += local_terms[l];
+            if (i0 + l + 1 == block_end) {
+                LedgerBlock& b = blocks[block];
+                b.contacts = sum_contacts;
+                b.local = sum_local;
+                b.rotation = sum_rotation;
+                b.kinetic = (lane_of(kinetic_lanes, 0) + lane_of(kinetic_lanes, 1)) +
+                            (lane_of(kinetic_lanes, 2) + lane_of(kinetic_lanes, 3));
+                kinetic_lanes = _mm256_setzero_pd();
+                sum_contacts = sum_rotation = sum_local = 0.0;
+                ++block;
+                block_end = std::min(block_end + block_size, end);
+            }
+        }
+    }
+}
+
 }  // namespace
 
 [[gnu::target("avx2")]] IntegrateOut integrate_avx2(const IntegrateArrays& a, const IntegrateParams& p, size_t begin,
@@ -150,24 +318,21 @@ DEMLAB_AVX2 double lane_of(__m256d a, int l) {
     const __m256d sign = _mm256_set1_pd(-0.0);
     __m256d speed_l1 = zero, extent_l1 = zero;  // (a NaN is caught by the domain test)
     IntegrateOut out{INFINITY, SIZE_MAX, false, 0.0, 0.0, 0};
-    // The ledger's sums, disc by disc in order as the scalar loops add them (two chains of
-    // additions that run beside the vector work; as passes of their own after the loop they
-    // cost 3 % of DB-9k's step, docs/performance.md)
-    double sum_contacts = 0.0, sum_rotation = 0.0, sum_local = 0.0;
     // local damping (eq. 2.51), as the scalar loop: F_d = -alpha |F| sign(v) per degree of freedom
     const bool local = p.alpha > 0.0;
     const __m256d alpha = _mm256_set1_pd(p.alpha), minus_alpha = _mm256_set1_pd(-p.alpha);
-    // the kinetic energy, per lane (disc i in lane i % 4: the groups start at multiples of 4)
-    // and added up at the block's end: no chain of additions for it (IntegrateKernel's
-    // microbenchmark: the ledger's chains were a sixth of this loop's time)
-    __m256d kinetic_lanes = _mm256_setzero_pd();
     // the touching disc-disc contacts, n_disc summed as 64-bit integers (any order gives the
     // same count)
     __m256i touching = _mm256_setzero_si256();
-    // the block being summed and the disc after its last (a running count: `% block_size`
-    // with a run-time divisor was four 64-bit divisions per group)
-    size_t block = begin / block_size;
-    size_t block_end = std::min((block + 1) * block_size, end);
+    // The ledger's sums, disc by disc in order as the scalar loops add them (two chains of
+    // additions that run beside the vector work; as passes of their own after the loop they
+    // cost 3 % of DB-9k's step). The kinetic energy per lane (disc i in lane i % 4: the groups
+    // start at multiples of 4), added up at the block's end: no chain of additions for it (the
+    // ledger's chains were a sixth of this loop's time). The block being summed and the disc
+    // after its last, as a running count (`% block_size` with a run-time divisor was four
+    // 64-bit divisions per group).
+    LedgerSums ledger{0.0, 0.0, 0.0, _mm256_setzero_pd(), begin / block_size,
+                      std::min((begin / block_size + 1) * block_size, end)};
 
     // the parameters and arrays as locals: the stores below may alias anything reached
     // through a reference, and GCC would reload them every group
@@ -179,6 +344,10 @@ DEMLAB_AVX2 double lane_of(__m256d a, int l) {
     Vec2 *const vel_a = a.vel, *const pos_a = a.pos;
     double *const omega_a = a.omega, *const angle_a = a.angle;
     const Vec2 *const fat_lo_a = a.fat_lo, *const fat_hi_a = a.fat_hi;
+    const StepConsts step_consts{zero,         phi_sq,        phi_t_sq,          widen,           smallest_normal,
+                                 def_tran_one, def_rot_one,   one_material,      rotation_free,   a.material,
+                                 a.default_k_tran, a.default_k_rot};
+    const RotationConsts rotation_consts{dt, zero, half, alpha, minus_alpha, g_abs, mu_br, local, rolling_literal, rotation_model};
 
     // One group of four discs from i0 (n < 4 only for the range's last group: its missing
     // lanes repeat its last disc and are not stored). Full groups and the last one are two
@@ -190,44 +359,7 @@ DEMLAB_AVX2 double lane_of(__m256d a, int l) {
         const __m256d mass = load_lanes(mass_a, i0, n), inv_mass = load_lanes(inv_mass_a, i0, n);
         const __m256d inertia = load_lanes(inertia_a, i0, n), radius = load_lanes(radius_a, i0, n);
 
-        // the critical step (World::critical_step_squared_at; std::min(best, t) is min_pd(t, best))
-        if (auto_dt) {
-            __m256d def_tran = def_tran_one, def_rot = def_rot_one;
-            if (!one_material) {
-                const int32_t* m = a.material;
-                def_tran = _mm256_set_pd(a.default_k_tran[m[lane(i0, n, 3)]], a.default_k_tran[m[lane(i0, n, 2)]],
-                                         a.default_k_tran[m[lane(i0, n, 1)]], a.default_k_tran[m[i0]]);
-                def_rot = _mm256_set_pd(a.default_k_rot[m[lane(i0, n, 3)]], a.default_k_rot[m[lane(i0, n, 2)]],
-                                        a.default_k_rot[m[lane(i0, n, 1)]], a.default_k_rot[m[i0]]);
-            }
-            const __m256d kt = blend(_mm256_cmp_pd(ld.k_tran, zero, _CMP_GT_OQ), ld.k_tran, def_tran);
-            const __m256d kr = blend(_mm256_cmp_pd(ld.k_rot, zero, _CMP_GT_OQ), ld.k_rot, def_rot);
-            const __m256d a_t = _mm256_mul_pd(phi_t_sq, mass);
-            const __m256d a_r = _mm256_mul_pd(phi_sq, inertia), b_r = _mm256_mul_pd(_mm256_mul_pd(kr, radius), radius);
-            // Only the smallest quotient counts, and the divisions (two per group, 13 cycles
-            // each) were where this loop's time piled up (perf). A lane's quotient a / b cannot
-            // go below its best so far, T, when a >= T b; and fl(a / b) >= T then, rounding
-            // being monotonic. P = fl(T b) is within 2^-53 of T b when it is a normal number,
-            // so a >= fl(P (1 + 2^-51)) proves a >= T b. A group none of whose lanes can win
-            // skips the divisions; the others divide as always, so the bits are the same.
-            // (A NaN or infinite T or quotient fails the test and is divided.)
-            const __m256d p_t = _mm256_mul_pd(best_sq, kt);
-            __m256d cannot_win = _mm256_and_pd(_mm256_cmp_pd(a_t, _mm256_mul_pd(p_t, widen), _CMP_GE_OQ),
-                                               _mm256_cmp_pd(p_t, smallest_normal, _CMP_GE_OQ));
-            if (rotation_free) {
-                const __m256d p_r = _mm256_mul_pd(best_sq, b_r);
-                cannot_win = _mm256_and_pd(cannot_win, _mm256_and_pd(_mm256_cmp_pd(a_r, _mm256_mul_pd(p_r, widen), _CMP_GE_OQ),
-                                                                     _mm256_cmp_pd(p_r, smallest_normal, _CMP_GE_OQ)));
-            }
-            if (_mm256_movemask_pd(cannot_win) != 15) {
-                __m256d t2 = _mm256_div_pd(a_t, kt);
-                if (rotation_free) {
-                    const __m256d r2 = _mm256_div_pd(a_r, b_r);
-                    t2 = blend(_mm256_cmp_pd(r2, t2, _CMP_LT_OQ), r2, t2);
-                }
-                best_sq = _mm256_min_pd(t2, best_sq);
-            }
-        }
+        if (auto_dt) critical_step_group(ld, mass, inertia, radius, i0, n, step_consts, best_sq);
 
         // translation: v += (F + m g) / m dt, x += v dt
         __m256d fx = _mm256_add_pd(ld.fx, _mm256_mul_pd(mass, gx));
@@ -266,86 +398,10 @@ DEMLAB_AVX2 double lane_of(__m256d a, int l) {
 
         // rotation
         __m256d diss_rot = zero;
-        if (rotation_model != 1) {
-            const __m256d tq = ld.torque;
-            const __m256d w_old = load_lanes(omega_a, i0, n);
-            __m256d tq_damped = tq, td = zero;
-            if (local) {
-                td = local_damping(w_old, tq, alpha, minus_alpha);
-                tq_damped = _mm256_add_pd(tq, td);
-            }
-            const __m256d w_free =
-                _mm256_add_pd(w_old, _mm256_mul_pd(_mm256_mul_pd(tq_damped, load_lanes(inv_inertia_a, i0, n)), dt));
-            if (local)
-                diss_local = _mm256_sub_pd(diss_local, _mm256_mul_pd(_mm256_mul_pd(_mm256_mul_pd(half, td), _mm256_add_pd(w_old, w_free)), dt));
-            __m256d w = w_free;
-            // Model 2/3: rolling resistance for a disc touching a wall (reduce_towards_zero)
-            const __m256d rr = load_lanes(rr_factor_a, i0, n);
-            const __m256d rolling = _mm256_and_pd(touches_wall(ld.counts), _mm256_cmp_pd(rr, zero, _CMP_GT_OQ));
-            if (_mm256_movemask_pd(rolling) != 0) {
-                const __m256d g_eff = rolling_literal ? g_abs : _mm256_mul_pd(ld.wall_normal, inv_mass);
-                const __m256d delta = _mm256_mul_pd(_mm256_mul_pd(g_eff, rr), dt);
-                const __m256d reduced =
-                    blend(_mm256_cmp_pd(w, delta, _CMP_GT_OQ), _mm256_sub_pd(w, delta),
-                          blend(_mm256_cmp_pd(w, neg(delta), _CMP_LT_OQ), _mm256_add_pd(w, delta), zero));
-                w = blend(rolling, reduced, w);
-            }
-            // Model 3: rotational damping of a disc touching another (per disc)
-            if (rotation_model == 3) w = blend(touches_disc(ld.counts), _mm256_mul_pd(w, mu_br), w);
-            const __m256d taken = _mm256_mul_pd(_mm256_mul_pd(half, inertia),
-                                                _mm256_sub_pd(_mm256_mul_pd(w_free, w_free), _mm256_mul_pd(w, w)));
-            const __m256d torque_work = _mm256_mul_pd(_mm256_mul_pd(_mm256_mul_pd(half, tq), dt), _mm256_sub_pd(w_free, w));
-            diss_rot = _mm256_add_pd(zero, _mm256_sub_pd(taken, torque_work));
-            kinetic = _mm256_add_pd(kinetic, _mm256_mul_pd(_mm256_mul_pd(half, inertia), _mm256_mul_pd(w, w)));
-            store_lanes(omega_a, i0, n, w);
-            store_lanes(angle_a, i0, n, _mm256_add_pd(load_lanes(angle_a, i0, n), _mm256_mul_pd(w, dt)));
-        }
-        // the ledger: the contacts' dissipation and the rotation rules' terms, added disc by
-        // disc; a block's sums are written when its last disc is added
-        if (n == 4 && i0 + 4 < block_end) {
-            kinetic_lanes = _mm256_add_pd(kinetic_lanes, kinetic);
-            sum_contacts += lane_of(ld.dissipated, 0);
-            sum_rotation += lane_of(diss_rot, 0);
-            sum_contacts += lane_of(ld.dissipated, 1);
-            sum_rotation += lane_of(diss_rot, 1);
-            sum_contacts += lane_of(ld.dissipated, 2);
-            sum_rotation += lane_of(diss_rot, 2);
-            sum_contacts += lane_of(ld.dissipated, 3);
-            sum_rotation += lane_of(diss_rot, 3);
-            if (local) {
-                sum_local += lane_of(diss_local, 0);
-                sum_local += lane_of(diss_local, 1);
-                sum_local += lane_of(diss_local, 2);
-                sum_local += lane_of(diss_local, 3);
-            }
-        } else {
-            // (a block ends inside a group only at the range's end: the lanes after it are
-            // beyond n, and add +0)
-            const __m256d valid_l = _mm256_castsi256_pd(
-                _mm256_cmpgt_epi64(_mm256_set1_epi64x(int64_t(n)), _mm256_setr_epi64x(0, 1, 2, 3)));
-            kinetic_lanes = _mm256_add_pd(kinetic_lanes, _mm256_and_pd(valid_l, kinetic));
-            alignas(32) double diss_terms[4], rot_terms[4], local_terms[4];
-            _mm256_store_pd(diss_terms, ld.dissipated);
-            _mm256_store_pd(rot_terms, diss_rot);
-            _mm256_store_pd(local_terms, diss_local);
-            for (size_t l = 0; l < n; ++l) {
-                sum_contacts += diss_terms[l];
-                sum_rotation += rot_terms[l];
-                sum_local += local_terms[l];
-                if (i0 + l + 1 == block_end) {
-                    LedgerBlock& b = blocks[block];
-                    b.contacts = sum_contacts;
-                    b.local = sum_local;
-                    b.rotation = sum_rotation;
-                    b.kinetic = (lane_of(kinetic_lanes, 0) + lane_of(kinetic_lanes, 1)) +
-                                (lane_of(kinetic_lanes, 2) + lane_of(kinetic_lanes, 3));
-                    kinetic_lanes = _mm256_setzero_pd();
-                    sum_contacts = sum_rotation = sum_local = 0.0;
-                    ++block;
-                    block_end = std::min(block_end + block_size, end);
-                }
-            }
-        }
+        if (rotation_model != 1)
+            diss_rot = rotate_group(ld, omega_a, angle_a, inv_inertia_a, rr_factor_a, i0, n, inv_mass, inertia,
+                                    rotation_consts, diss_local, kinetic);
+        ledger_group(ld, diss_rot, diss_local, kinetic, i0, n, local, end, block_size, blocks, ledger);
         // the lanes beyond n repeat the last disc: not counted
         const __m256i valid_lanes = _mm256_cmpgt_epi64(_mm256_set1_epi64x(int64_t(n)), _mm256_setr_epi64x(0, 1, 2, 3));
         touching = _mm256_add_epi64(touching, _mm256_and_si256(valid_lanes, _mm256_and_si256(ld.counts, _mm256_set1_epi64x(0xffffffffLL))));

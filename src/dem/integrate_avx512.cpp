@@ -137,6 +137,165 @@ DEMLAB_AVX512 __mmask8 touches_wall(__m512i counts) {
     return _mm512_cmpgt_epi64_mask(counts, _mm512_set1_epi64(0xffffffffLL));
 }
 
+// The critical step of a group (integrate_avx2.cpp: a group none of whose lanes can win
+// skips the divisions) into best_sq.
+struct StepConsts {
+    __m512d zero, phi_sq, phi_t_sq, widen, smallest_normal, def_tran_one, def_rot_one;
+    bool one_material, rotation_free;
+    const int32_t* material;
+    const double* default_k_tran;
+    const double* default_k_rot;
+};
+DEMLAB_AVX512 void critical_step_group(const LoadLanes& ld, __m512d mass, __m512d inertia, __m512d radius, size_t i0,
+                                       size_t n, const StepConsts& k, __m512d& best_sq) {
+    const __m512d zero = k.zero, phi_sq = k.phi_sq, phi_t_sq = k.phi_t_sq, widen = k.widen;
+    const __m512d smallest_normal = k.smallest_normal, def_tran_one = k.def_tran_one, def_rot_one = k.def_rot_one;
+    const bool one_material = k.one_material, rotation_free = k.rotation_free;
+    const int32_t* const material = k.material;
+    const double* const default_k_tran = k.default_k_tran;
+    const double* const default_k_rot = k.default_k_rot;
+    __m512d def_tran = def_tran_one, def_rot = def_rot_one;
+    if (!one_material) {
+        const int32_t* m = material;
+        alignas(64) double t[8], r[8];
+        for (size_t l = 0; l < 8; ++l) {
+            t[l] = default_k_tran[m[lane(i0, n, l)]];
+            r[l] = default_k_rot[m[lane(i0, n, l)]];
+        }
+        def_tran = _mm512_load_pd(t);
+        def_rot = _mm512_load_pd(r);
+    }
+    const __m512d kt = blend(_mm512_cmp_pd_mask(ld.k_tran, zero, _CMP_GT_OQ), ld.k_tran, def_tran);
+    const __m512d kr = blend(_mm512_cmp_pd_mask(ld.k_rot, zero, _CMP_GT_OQ), ld.k_rot, def_rot);
+    const __m512d a_t = _mm512_mul_pd(phi_t_sq, mass);
+    const __m512d a_r = _mm512_mul_pd(phi_sq, inertia), b_r = _mm512_mul_pd(_mm512_mul_pd(kr, radius), radius);
+    const __m512d p_t = _mm512_mul_pd(best_sq, kt);
+    __mmask8 cannot_win = _mm512_cmp_pd_mask(a_t, _mm512_mul_pd(p_t, widen), _CMP_GE_OQ) &
+                          _mm512_cmp_pd_mask(p_t, smallest_normal, _CMP_GE_OQ);
+    if (rotation_free) {
+        const __m512d p_r = _mm512_mul_pd(best_sq, b_r);
+        cannot_win = __mmask8(cannot_win & _mm512_cmp_pd_mask(a_r, _mm512_mul_pd(p_r, widen), _CMP_GE_OQ) &
+                              _mm512_cmp_pd_mask(p_r, smallest_normal, _CMP_GE_OQ));
+    }
+    if (cannot_win != 0xFF) {
+        __m512d t2 = _mm512_div_pd(a_t, kt);
+        if (rotation_free) {
+            const __m512d r2 = _mm512_div_pd(a_r, b_r);
+            t2 = blend(_mm512_cmp_pd_mask(r2, t2, _CMP_LT_OQ), r2, t2);
+        }
+        best_sq = _mm512_min_pd(t2, best_sq);
+    }
+}
+
+// The rotation of a group (integrate_avx2.cpp's rotate_group, eight lanes).
+struct RotationConsts {
+    __m512d dt, zero, half, alpha, minus_alpha, g_abs, mu_br;
+    bool local, rolling_literal;
+    int rotation_model;
+};
+DEMLAB_AVX512 __m512d rotate_group(const LoadLanes& ld, double* omega_a, double* angle_a, const double* inv_inertia_a,
+                                   const double* rr_factor_a, size_t i0, size_t n, __m512d inv_mass, __m512d inertia,
+                                   const RotationConsts& k, __m512d& diss_local, __m512d& kinetic) {
+    const __m512d dt = k.dt, zero = k.zero, half = k.half, alpha = k.alpha, minus_alpha = k.minus_alpha;
+    const __m512d g_abs = k.g_abs, mu_br = k.mu_br;
+    const bool local = k.local, rolling_literal = k.rolling_literal;
+    const int rotation_model = k.rotation_model;
+    __m512d diss_rot = zero;
+    const __m512d tq = ld.torque;
+    const __m512d w_old = load_lanes(omega_a, i0, n);
+    __m512d tq_damped = tq, td = zero;
+    if (local) {
+        td = local_damping(w_old, tq, alpha, minus_alpha);
+        tq_damped = _mm512_add_pd(tq, td);
+    }
+    const __m512d w_free =
+        _mm512_add_pd(w_old, _mm512_mul_pd(_mm512_mul_pd(tq_damped, load_lanes(inv_inertia_a, i0, n)), dt));
+    if (local)
+        diss_local = _mm512_sub_pd(diss_local, _mm512_mul_pd(_mm512_mul_pd(_mm512_mul_pd(half, td), _mm512_add_pd(w_old, w_free)), dt));
+    __m512d w = w_free;
+    const __m512d rr = load_lanes(rr_factor_a, i0, n);
+    const __mmask8 rolling = touches_wall(ld.counts) & _mm512_cmp_pd_mask(rr, zero, _CMP_GT_OQ);
+    if (rolling != 0) {
+        const __m512d g_eff = rolling_literal ? g_abs : _mm512_mul_pd(ld.wall_normal, inv_mass);
+        const __m512d delta = _mm512_mul_pd(_mm512_mul_pd(g_eff, rr), dt);
+        const __m512d reduced =
+            blend(_mm512_cmp_pd_mask(w, delta, _CMP_GT_OQ), _mm512_sub_pd(w, delta),
+                  blend(_mm512_cmp_pd_mask(w, neg(delta), _CMP_LT_OQ), _mm512_add_pd(w, delta), zero));
+        w = blend(rolling, reduced, w);
+    }
+    if (rotation_model == 3) w = blend(touches_disc(ld.counts), _mm512_mul_pd(w, mu_br), w);
+    const __m512d taken =
+        _mm512_mul_pd(_mm512_mul_pd(half, inertia), _mm512_sub_pd(_mm512_mul_pd(w_free, w_free), _mm512_mul_pd(w, w)));
+    const __m512d torque_work = _mm512_mul_pd(_mm512_mul_pd(_mm512_mul_pd(half, tq), dt), _mm512_sub_pd(w_free, w));
+    diss_rot = _mm512_add_pd(zero, _mm512_sub_pd(taken, torque_work));
+    kinetic = _mm512_add_pd(kinetic, _mm512_mul_pd(_mm512_mul_pd(half, inertia), _mm512_mul_pd(w, w)));
+    store_lanes(omega_a, i0, n, w);
+    store_lanes(angle_a, i0, n, _mm512_add_pd(load_lanes(angle_a, i0, n), _mm512_mul_pd(w, dt)));
+    return diss_rot;
+}
+
+// The ledger's terms of a group, disc by disc; a block's sums are written when its last disc
+// is added. The kinetic energy: the group's first four discs, then its last four, as two
+// groups of the AVX2 loop (the lanes beyond n add +0: the lanes hold +0 or more, so no bit
+// changes).
+struct LedgerSums {
+    double sum_contacts, sum_rotation, sum_local;
+    __m256d kinetic_lanes;
+    size_t block, block_end;
+};
+DEMLAB_AVX512 void ledger_group(const LoadLanes& ld, __m512d diss_rot, __m512d diss_local, __m512d kinetic, size_t i0,
+                                size_t n, __mmask8 valid, bool local, size_t end, size_t block_size, LedgerBlock* blocks,
+                                LedgerSums& L) {
+    double& sum_contacts = L.sum_contacts;
+    double& sum_rotation = L.sum_rotation;
+    double& sum_local = L.sum_local;
+    __m256d& kinetic_lanes = L.kinetic_lanes;
+    size_t& block = L.block;
+    size_t& block_end = L.block_end;
+    // the ledger: the contacts' dissipation and the rotation rules' terms, disc by disc; a
+    // block's sums are written when its last disc is added. The kinetic energy: the
+    // group's first four discs, then its last four, as two groups of the AVX2 loop (the
+    // lanes beyond n add +0: the lanes hold +0 or more, so no bit changes)
+    alignas(64) double diss_terms[8], rot_terms[8], local_terms[8];
+    _mm512_store_pd(diss_terms, ld.dissipated);
+    _mm512_store_pd(rot_terms, diss_rot);
+    _mm512_store_pd(local_terms, diss_local);
+    const __m512d kinetic_valid = _mm512_maskz_mov_pd(valid, kinetic);
+    if (n == 8 && i0 + 8 < block_end) {
+        kinetic_lanes = _mm256_add_pd(kinetic_lanes, _mm512_castpd512_pd256(kinetic_valid));
+        kinetic_lanes = _mm256_add_pd(kinetic_lanes, _mm512_extractf64x4_pd(kinetic_valid, 1));
+        for (size_t l = 0; l < 8; ++l) {
+            sum_contacts += diss_terms[l];
+            sum_rotation += rot_terms[l];
+        }
+        if (local)
+            for (size_t l = 0; l < 8; ++l) sum_local += local_terms[l];
+    } else {
+        for (size_t half_start = 0; half_start < n; half_start += 4) {
+            kinetic_lanes = _mm256_add_pd(kinetic_lanes, half_start == 0 ? _mm512_castpd512_pd256(kinetic_valid)
+                                                                         : _mm512_extractf64x4_pd(kinetic_valid, 1));
+            for (size_t l = half_start; l < std::min(n, half_start + 4); ++l) {
+                sum_contacts += diss_terms[l];
+                sum_rotation += rot_terms[l];
+                sum_local += local_terms[l];
+                if (i0 + l + 1 == block_end) {
+                    LedgerBlock& b = blocks[block];
+                    b.contacts = sum_contacts;
+                    b.local = sum_local;
+                    b.rotation = sum_rotation;
+                    alignas(32) double k[4];
+                    _mm256_store_pd(k, kinetic_lanes);
+                    b.kinetic = (k[0] + k[1]) + (k[2] + k[3]);
+                    kinetic_lanes = _mm256_setzero_pd();
+                    sum_contacts = sum_rotation = sum_local = 0.0;
+                    ++block;
+                    block_end = std::min(block_end + block_size, end);
+                }
+            }
+        }
+    }
+}
+
 }  // namespace
 
 [[gnu::target("avx2,avx512f,avx512dq,avx512vl")]] IntegrateOut integrate_avx512(const IntegrateArrays& a,
@@ -157,16 +316,15 @@ DEMLAB_AVX512 __mmask8 touches_wall(__m512i counts) {
     const __m512d sign = _mm512_set1_pd(-0.0);
     __m512d speed_l1 = zero, extent_l1 = zero;
     IntegrateOut out{INFINITY, SIZE_MAX, false, 0.0, 0.0, 0};
-    double sum_contacts = 0.0, sum_rotation = 0.0, sum_local = 0.0;
     // local damping (eq. 2.51), as the scalar loop: F_d = -alpha |F| sign(v) per degree of freedom
     const bool local = p.alpha > 0.0;
     const __m512d alpha = _mm512_set1_pd(p.alpha), minus_alpha = _mm512_set1_pd(-p.alpha);
-    // the kinetic energy in four lanes, disc i in lane i % 4, as the AVX2 loop has it: a
-    // group's first four discs are added, then its last four (begin is a multiple of 4)
-    __m256d kinetic_lanes = _mm256_setzero_pd();
+    // the ledger's sums; the kinetic energy in four lanes, disc i in lane i % 4, as the AVX2
+    // loop has it: a group's first four discs are added, then its last four (begin is a
+    // multiple of 4)
+    LedgerSums ledger{0.0, 0.0, 0.0, _mm256_setzero_pd(), begin / block_size,
+                      std::min((begin / block_size + 1) * block_size, end)};
     __m512i touching = _mm512_setzero_si512();
-    size_t block = begin / block_size;
-    size_t block_end = std::min((block + 1) * block_size, end);
 
     const bool auto_dt = p.auto_dt, rotation_free = p.rotation_free, rolling_literal = p.rolling_literal;
     const int rotation_model = p.rotation_model;
@@ -176,6 +334,10 @@ DEMLAB_AVX512 __mmask8 touches_wall(__m512i counts) {
     Vec2 *const vel_a = a.vel, *const pos_a = a.pos;
     double *const omega_a = a.omega, *const angle_a = a.angle;
     const Vec2 *const fat_lo_a = a.fat_lo, *const fat_hi_a = a.fat_hi;
+    const StepConsts step_consts{zero,         phi_sq,        phi_t_sq,          widen,           smallest_normal,
+                                 def_tran_one, def_rot_one,   one_material,      rotation_free,   a.material,
+                                 a.default_k_tran, a.default_k_rot};
+    const RotationConsts rotation_consts{dt, zero, half, alpha, minus_alpha, g_abs, mu_br, local, rolling_literal, rotation_model};
 
     auto group = [&](size_t i0, size_t n) DEMLAB_AVX512_LAMBDA {
         const DiscLoad* rows[8];
@@ -184,41 +346,7 @@ DEMLAB_AVX512 __mmask8 touches_wall(__m512i counts) {
         const __m512d mass = load_lanes(mass_a, i0, n), inv_mass = load_lanes(inv_mass_a, i0, n);
         const __m512d inertia = load_lanes(inertia_a, i0, n), radius = load_lanes(radius_a, i0, n);
 
-        // the critical step (integrate_avx2.cpp: a group none of whose lanes can win skips
-        // the divisions)
-        if (auto_dt) {
-            __m512d def_tran = def_tran_one, def_rot = def_rot_one;
-            if (!one_material) {
-                const int32_t* m = a.material;
-                alignas(64) double t[8], r[8];
-                for (size_t l = 0; l < 8; ++l) {
-                    t[l] = a.default_k_tran[m[lane(i0, n, l)]];
-                    r[l] = a.default_k_rot[m[lane(i0, n, l)]];
-                }
-                def_tran = _mm512_load_pd(t);
-                def_rot = _mm512_load_pd(r);
-            }
-            const __m512d kt = blend(_mm512_cmp_pd_mask(ld.k_tran, zero, _CMP_GT_OQ), ld.k_tran, def_tran);
-            const __m512d kr = blend(_mm512_cmp_pd_mask(ld.k_rot, zero, _CMP_GT_OQ), ld.k_rot, def_rot);
-            const __m512d a_t = _mm512_mul_pd(phi_t_sq, mass);
-            const __m512d a_r = _mm512_mul_pd(phi_sq, inertia), b_r = _mm512_mul_pd(_mm512_mul_pd(kr, radius), radius);
-            const __m512d p_t = _mm512_mul_pd(best_sq, kt);
-            __mmask8 cannot_win = _mm512_cmp_pd_mask(a_t, _mm512_mul_pd(p_t, widen), _CMP_GE_OQ) &
-                                  _mm512_cmp_pd_mask(p_t, smallest_normal, _CMP_GE_OQ);
-            if (rotation_free) {
-                const __m512d p_r = _mm512_mul_pd(best_sq, b_r);
-                cannot_win = __mmask8(cannot_win & _mm512_cmp_pd_mask(a_r, _mm512_mul_pd(p_r, widen), _CMP_GE_OQ) &
-                                      _mm512_cmp_pd_mask(p_r, smallest_normal, _CMP_GE_OQ));
-            }
-            if (cannot_win != 0xFF) {
-                __m512d t2 = _mm512_div_pd(a_t, kt);
-                if (rotation_free) {
-                    const __m512d r2 = _mm512_div_pd(a_r, b_r);
-                    t2 = blend(_mm512_cmp_pd_mask(r2, t2, _CMP_LT_OQ), r2, t2);
-                }
-                best_sq = _mm512_min_pd(t2, best_sq);
-            }
-        }
+        if (auto_dt) critical_step_group(ld, mass, inertia, radius, i0, n, step_consts, best_sq);
 
         // translation: v += (F + m g) / m dt, x += v dt
         __m512d fx = _mm512_add_pd(ld.fx, _mm512_mul_pd(mass, gx));
@@ -254,81 +382,11 @@ DEMLAB_AVX512 __mmask8 touches_wall(__m512i counts) {
 
         // rotation
         __m512d diss_rot = zero;
-        if (rotation_model != 1) {
-            const __m512d tq = ld.torque;
-            const __m512d w_old = load_lanes(omega_a, i0, n);
-            __m512d tq_damped = tq, td = zero;
-            if (local) {
-                td = local_damping(w_old, tq, alpha, minus_alpha);
-                tq_damped = _mm512_add_pd(tq, td);
-            }
-            const __m512d w_free =
-                _mm512_add_pd(w_old, _mm512_mul_pd(_mm512_mul_pd(tq_damped, load_lanes(inv_inertia_a, i0, n)), dt));
-            if (local)
-                diss_local = _mm512_sub_pd(diss_local, _mm512_mul_pd(_mm512_mul_pd(_mm512_mul_pd(half, td), _mm512_add_pd(w_old, w_free)), dt));
-            __m512d w = w_free;
-            const __m512d rr = load_lanes(rr_factor_a, i0, n);
-            const __mmask8 rolling = touches_wall(ld.counts) & _mm512_cmp_pd_mask(rr, zero, _CMP_GT_OQ);
-            if (rolling != 0) {
-                const __m512d g_eff = rolling_literal ? g_abs : _mm512_mul_pd(ld.wall_normal, inv_mass);
-                const __m512d delta = _mm512_mul_pd(_mm512_mul_pd(g_eff, rr), dt);
-                const __m512d reduced =
-                    blend(_mm512_cmp_pd_mask(w, delta, _CMP_GT_OQ), _mm512_sub_pd(w, delta),
-                          blend(_mm512_cmp_pd_mask(w, neg(delta), _CMP_LT_OQ), _mm512_add_pd(w, delta), zero));
-                w = blend(rolling, reduced, w);
-            }
-            if (rotation_model == 3) w = blend(touches_disc(ld.counts), _mm512_mul_pd(w, mu_br), w);
-            const __m512d taken =
-                _mm512_mul_pd(_mm512_mul_pd(half, inertia), _mm512_sub_pd(_mm512_mul_pd(w_free, w_free), _mm512_mul_pd(w, w)));
-            const __m512d torque_work = _mm512_mul_pd(_mm512_mul_pd(_mm512_mul_pd(half, tq), dt), _mm512_sub_pd(w_free, w));
-            diss_rot = _mm512_add_pd(zero, _mm512_sub_pd(taken, torque_work));
-            kinetic = _mm512_add_pd(kinetic, _mm512_mul_pd(_mm512_mul_pd(half, inertia), _mm512_mul_pd(w, w)));
-            store_lanes(omega_a, i0, n, w);
-            store_lanes(angle_a, i0, n, _mm512_add_pd(load_lanes(angle_a, i0, n), _mm512_mul_pd(w, dt)));
-        }
-        // the ledger: the contacts' dissipation and the rotation rules' terms, disc by disc; a
-        // block's sums are written when its last disc is added. The kinetic energy: the
-        // group's first four discs, then its last four, as two groups of the AVX2 loop (the
-        // lanes beyond n add +0: the lanes hold +0 or more, so no bit changes)
-        alignas(64) double diss_terms[8], rot_terms[8], local_terms[8];
-        _mm512_store_pd(diss_terms, ld.dissipated);
-        _mm512_store_pd(rot_terms, diss_rot);
-        _mm512_store_pd(local_terms, diss_local);
+        if (rotation_model != 1)
+            diss_rot = rotate_group(ld, omega_a, angle_a, inv_inertia_a, rr_factor_a, i0, n, inv_mass, inertia,
+                                    rotation_consts, diss_local, kinetic);
         const __mmask8 valid = first_lanes(n);
-        const __m512d kinetic_valid = _mm512_maskz_mov_pd(valid, kinetic);
-        if (n == 8 && i0 + 8 < block_end) {
-            kinetic_lanes = _mm256_add_pd(kinetic_lanes, _mm512_castpd512_pd256(kinetic_valid));
-            kinetic_lanes = _mm256_add_pd(kinetic_lanes, _mm512_extractf64x4_pd(kinetic_valid, 1));
-            for (size_t l = 0; l < 8; ++l) {
-                sum_contacts += diss_terms[l];
-                sum_rotation += rot_terms[l];
-            }
-            if (local)
-                for (size_t l = 0; l < 8; ++l) sum_local += local_terms[l];
-        } else {
-            for (size_t half_start = 0; half_start < n; half_start += 4) {
-                kinetic_lanes = _mm256_add_pd(kinetic_lanes, half_start == 0 ? _mm512_castpd512_pd256(kinetic_valid)
-                                                                             : _mm512_extractf64x4_pd(kinetic_valid, 1));
-                for (size_t l = half_start; l < std::min(n, half_start + 4); ++l) {
-                    sum_contacts += diss_terms[l];
-                    sum_rotation += rot_terms[l];
-                    sum_local += local_terms[l];
-                    if (i0 + l + 1 == block_end) {
-                        LedgerBlock& b = blocks[block];
-                        b.contacts = sum_contacts;
-                        b.local = sum_local;
-                        b.rotation = sum_rotation;
-                        alignas(32) double k[4];
-                        _mm256_store_pd(k, kinetic_lanes);
-                        b.kinetic = (k[0] + k[1]) + (k[2] + k[3]);
-                        kinetic_lanes = _mm256_setzero_pd();
-                        sum_contacts = sum_rotation = sum_local = 0.0;
-                        ++block;
-                        block_end = std::min(block_end + block_size, end);
-                    }
-                }
-            }
-        }
+        ledger_group(ld, diss_rot, diss_local, kinetic, i0, n, valid, local, end, block_size, blocks, ledger);
         touching = _mm512_add_epi64(touching, _mm512_maskz_and_epi64(valid, ld.counts, _mm512_set1_epi64(0xffffffffLL)));
 
         // outside the domain or not a number; left the fat box

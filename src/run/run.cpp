@@ -235,6 +235,40 @@ void finish_summary(const World& w, RunSummary& sum, double candidate_sum, doubl
     sum.dt = w.dt();
 }
 
+// The loop's state from a checkpoint (after the world's set-up part): the measurements so
+// far, the timings, the snapshots' times, the series files cut back to what they held, and
+// the solver's state.
+void restore_run(BinaryReader& in, const std::string& checkpoint_path, RunState& st, RunSummary& sum,
+                 double& wall_seconds_before, SnapshotWriter* snaps, RunSeries& series, Solver& solver) {
+    st.fields(in, [](BinaryReader& r, double& v) { r.get(v); }, sum);
+    in.get(wall_seconds_before);
+    std::vector<double> snap_times;
+    in.get(snap_times);
+    if (snaps) snaps->restore_times(std::move(snap_times));
+    std::array<uint64_t, 4> size{};
+    for (uint64_t& z : size) in.get(z);
+    series.reopen(size);
+    solver.load_state(in);
+    if (!in.at_end()) throw InputError(checkpoint_path + ": corrupt checkpoint (trailing bytes)");
+}
+
+// The files of a finished run: the deposit along the bed path, the dam break's envelope, the
+// bonds that broke, and the summary.
+void write_results(const Scenario& s, const Setup& setup, const World& w, const MeasureContext& measure,
+                   const ReleaseMass& mass, const std::string& dir, RunSummary& sum) {
+    if (measure.path) write_deposit(w, measure, dir, sum);
+    SlopeAngles angles{};
+    if (setup.measures_envelope()) angles = write_envelope(w, measure.front_gap, setup.envelope_length(), dir, sum);
+    if (!w.bonds().empty()) {
+        write_bond_breaks(w, dir);
+        sum.bonds = long(w.bonds().size());
+        sum.bonds_broken = long(w.bond_breaks().size());
+    }
+    write_summary(dir + "/summary.json", s, sum,
+                  ReleaseFigures{setup.has_release(), mass.porosity_generated, mass.settle_time, mass.wall_seconds},
+                  setup.measures_envelope() ? &angles : nullptr);
+}
+
 }  // namespace
 
 std::string setup_kind_of_run(const std::string& run_dir) {
@@ -282,17 +316,7 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
     st.e0 = solver.energy().balance();
     double wall_seconds_before = 0.0;
     if (restore) {
-        // the series files are cut back to what they held at the checkpoint
-        st.fields(*restore, [](BinaryReader& in, double& v) { in.get(v); }, sum);
-        restore->get(wall_seconds_before);
-        std::vector<double> snap_times;
-        restore->get(snap_times);
-        if (snaps) snaps->restore_times(std::move(snap_times));
-        std::array<uint64_t, 4> size{};
-        for (uint64_t& z : size) restore->get(z);
-        series.reopen(size);
-        solver.load_state(*restore);
-        if (!restore->at_end()) throw InputError(checkpoint_path + ": corrupt checkpoint (trailing bytes)");
+        restore_run(*restore, checkpoint_path, st, sum, wall_seconds_before, snaps.get(), series, solver);
         restore.reset();
     } else {
         series.open();
@@ -401,17 +425,7 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
     sum.energy_balance_error = dissipated > 0 ? std::abs(e.balance() - st.e0) / dissipated : 0.0;
     series.close();
 
-    if (path) write_deposit(w, measure, dir, sum);
-    SlopeAngles angles{};
-    if (setup->measures_envelope()) angles = write_envelope(w, measure.front_gap, setup->envelope_length(), dir, sum);
-    if (!w.bonds().empty()) {
-        write_bond_breaks(w, dir);
-        sum.bonds = long(w.bonds().size());
-        sum.bonds_broken = long(w.bond_breaks().size());
-    }
-    write_summary(dir + "/summary.json", s, sum,
-                  ReleaseFigures{setup->has_release(), mass.porosity_generated, mass.settle_time, mass.wall_seconds},
-                  setup->measures_envelope() ? &angles : nullptr);
+    write_results(s, *setup, w, measure, mass, dir, sum);
     std::filesystem::remove(checkpoint_path);  // the run is complete: nothing to resume
     lock->release_and_remove();
     return sum;
