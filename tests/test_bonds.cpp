@@ -35,7 +35,7 @@ TEST(Bonds, LawHasItsClosedForms) {
     const double k0 = ElasticBond::k0(d);
     EXPECT_NEAR(k0, 28867.513, 1e-3);
     // C6: |F| = k0 (L - L0) L / L0 ("current"); f d with |d| = L
-    const auto e = ElasticBond::evaluate(d, k0, 1.0, Vec2(1.09, 0.0));
+    const auto e = ElasticBond::evaluate(d, k0, 1.0, 1.0, Vec2(1.09, 0.0));
     EXPECT_NEAR(e.strain, 0.09, 1e-12);
     EXPECT_NEAR(e.f * 1.09, 2831.903, 1e-3);
     // C7 is the integral of C6: dU/dL = F
@@ -44,12 +44,12 @@ TEST(Bonds, LawHasItsClosedForms) {
     EXPECT_NEAR(dU, e.f * 1.09, 1e-3);
     BondDef rest = d;
     rest.area = BondArea::Rest;
-    EXPECT_NEAR(ElasticBond::evaluate(rest, k0, 1.0, Vec2(1.09, 0.0)).f * 1.09, k0 * 0.09, 1e-6);
-    EXPECT_TRUE(ElasticBond::evaluate(d, k0, 1.0, Vec2(0.79, 0.0)).breaks);   // compression past 0.2
+    EXPECT_NEAR(ElasticBond::evaluate(rest, k0, 1.0, 1.0, Vec2(1.09, 0.0)).f * 1.09, k0 * 0.09, 1e-6);
+    EXPECT_TRUE(ElasticBond::evaluate(d, k0, 1.0, 1.0, Vec2(0.79, 0.0)).breaks);   // compression past 0.2
     BondDef tension = d;
     tension.break_mode = BondBreak::Tension;
-    EXPECT_FALSE(ElasticBond::evaluate(tension, k0, 1.0, Vec2(0.79, 0.0)).breaks);
-    EXPECT_TRUE(ElasticBond::evaluate(d, k0, 1.0, Vec2(5e-4, 0.0)).skipped);  // C4: min_distance
+    EXPECT_FALSE(ElasticBond::evaluate(tension, k0, 1.0, 1.0, Vec2(0.79, 0.0)).breaks);
+    EXPECT_TRUE(ElasticBond::evaluate(d, k0, 1.0, 1.0, Vec2(5e-4, 0.0)).skipped);  // C4: min_distance
 }
 
 // AvaFrame's three-point test (A4), pinned to numbers: discs at (0,0), (1,0), (0,1), bonds

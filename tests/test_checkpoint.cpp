@@ -47,7 +47,7 @@ std::string summary_without_timing(const fs::path& p) {
     std::string line, out;
     while (std::getline(in, line))
         // timing, the broad phase's figures, the threads' balance and the machine are of the
-        // session (the resume rebuilds the lists, and may run on another processor)
+        // process that ran them (the resume rebuilds the lists, and may run on another processor)
         if (line.find("wall_seconds") == std::string::npos && line.find("particle_steps_per_second") == std::string::npos &&
             line.find("broadphase_") == std::string::npos && line.find("force_pass_busy_") == std::string::npos &&
             line.find("\"machine\"") == std::string::npos)

@@ -22,7 +22,7 @@ InterruptScope::InterruptScope() {
     clear_interrupt();
     previous_[0] = std::signal(SIGINT, on_signal);
     previous_[1] = std::signal(SIGTERM, on_signal);
-    // a closed terminal or SSH session: checkpoint and stop, as for SIGTERM
+    // a closed terminal or SSH connection: checkpoint and stop, as for SIGTERM
     previous_[2] = std::signal(SIGHUP, on_signal);
 }
 

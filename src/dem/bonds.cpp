@@ -68,8 +68,7 @@ void World::prepare_bonds() {
 
 void World::compute_bond_forces() {
     const BondDef& def = def_.bond;
-    const double k0 = bond_k0_, k_max = bond_k_max_, eps_c = def.max_strain, d_min_sq = def.min_distance * def.min_distance;
-    const bool current = def.area == BondArea::Current, both = def.break_mode == BondBreak::Both;
+    const double k0 = bond_k0_, k_max = bond_k_max_;
     bond_chunk_broke_.assign(size_t(pool_->size()), 0);
     pool_->parallel_for(bonds_.size(), [&](size_t begin, size_t end, int chunk) {
         uint8_t broke = 0;
@@ -78,26 +77,18 @@ void World::compute_bond_forces() {
             BondOut& o = bond_out_[b];
             o.fx = o.fy = 0.0;
             o.breaks = 0;
-            if (bond.broken) {
-                o.k_tran = 0.0;
-                continue;
-            }
-            o.k_tran = k_max;
+            o.k_tran = bond.broken ? 0.0 : k_max;
+            if (bond.broken) continue;
             const Vec2 d = pos_[size_t(bond.l)] - pos_[size_t(bond.k)];
-            const double length_sq = d.squaredNorm();
-            if (length_sq <= d_min_sq) continue;  // C4: skipped this step
-            const double length = std::sqrt(length_sq);
-            // ElasticBond::evaluate, with 1 / L0 taken once per bond
-            const double strain = length * bond_inv_rest_[b] - 1.0;
-            o.strain = strain;
-            if (both ? std::abs(strain) > eps_c : strain > eps_c) {
+            const ElasticBond::Eval e = ElasticBond::evaluate(def, k0, bond.rest_length, bond_inv_rest_[b], d);
+            o.strain = e.strain;
+            if (e.breaks) {
                 o.breaks = 1;
                 broke = 1;
-                continue;
             }
-            const double f = current ? strain * k0 : strain * k0 * bond.rest_length / length;
-            o.fx = f * d.x();
-            o.fy = f * d.y();
+            if (e.skipped || e.breaks) continue;
+            o.fx = e.f * d.x();
+            o.fy = e.f * d.y();
         }
         if (broke) bond_chunk_broke_[size_t(chunk)] = 1;
     });
@@ -155,11 +146,12 @@ void World::settle_bond_breaks() {
 // The intact bonds' energy at the current positions, in list order (C7).
 double World::bond_elastic_energy() const {
     double u = 0.0;
-    for (const Bond& b : bonds_) {
+    for (size_t k = 0; k < bonds_.size(); ++k) {
+        const Bond& b = bonds_[k];
         if (b.broken) continue;
-        const double length = (pos_[size_t(b.l)] - pos_[size_t(b.k)]).norm();
-        if (length <= def_.bond.min_distance) continue;
-        u += ElasticBond::energy(def_.bond, bond_k0_, b.rest_length, length / b.rest_length - 1.0);
+        const double length_sq = (pos_[size_t(b.l)] - pos_[size_t(b.k)]).squaredNorm();
+        if (length_sq <= def_.bond.min_distance * def_.bond.min_distance) continue;
+        u += ElasticBond::energy(def_.bond, bond_k0_, b.rest_length, ElasticBond::strain(std::sqrt(length_sq), bond_inv_rest_[k]));
     }
     return u;
 }

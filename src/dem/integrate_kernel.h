@@ -2,7 +2,7 @@
 // discs at a time with AVX2 or eight with AVX-512, for the runs that use the per-disc
 // rotational damping (every run but those that ask for damping per contact), with or without
 // local damping (eq. 2.51: the release's settling uses it): the same operations in the same
-// order, lane by lane, so the same bits as the scalar loop (world.cpp).
+// order, lane by lane, so the same bits as the scalar loop (integrate.cpp).
 #pragma once
 #include <cstddef>
 #include <cstdint>

@@ -384,16 +384,16 @@ void World::step() {
     if (wall_removed) {
         // the elastic energy stored in contacts with a removed wall leaves the ledger
         const size_t nw = walls_.size();
-        for (const WallContact& c : dw_) {
-            const size_t w = size_t(c.wall);
-            if (wall_active_[w]) continue;
-            const size_t i = size_t(c.disc);
-            removed_walls_ += with_contact_law(def_.law, [&](auto law) {
-                using Law = decltype(law);
-                return wall_contact_elastic_energy<Law>(geom_[w], pos_[i], radius_[i],
-                                                        tables<Law>().disc_wall[size_t(material_[i]) * nw + w], c);
-            });
-        }
+        with_contact_law(def_.law, [&](auto law) {
+            using Law = decltype(law);
+            for (const WallContact& c : dw_) {
+                const size_t w = size_t(c.wall);
+                if (wall_active_[w]) continue;
+                const size_t i = size_t(c.disc);
+                removed_walls_ += wall_contact_elastic_energy<Law>(geom_[w], pos_[i], radius_[i],
+                                                                   tables<Law>().disc_wall[size_t(material_[i]) * nw + w], c);
+            }
+        });
     }
     // every kPadCheckSteps steps the broad phase also looks for pads wider than the discs'
     // speeds ask for (a scan of the discs: a tenth of a step's time, once in 128 steps)

@@ -70,7 +70,7 @@ struct WorldDef {
                                            // integrate_avx512.cpp); the same bits again
     BondDef bond;                          // the bonds' law (World::add_bond), if any bonds are added
     Prefetch prefetch = Prefetch::Auto;    // the force pass asks for its arrays' lines ahead of use
-                                           // (world.cpp, kPrefetchContacts); never changes a result
+                                           // (force_pass.cpp, kPrefetchContacts); never changes a result
 };
 
 void validate(const WorldDef& d, const std::string& where);
@@ -170,7 +170,7 @@ public:
     // cost (the run's rest and blow-up watch reads it every 10 steps). Not updated by the
     // direct edits below; 0 before the first step.
     double kinetic_energy() const { return kinetic_; }
-    // The force pass's split (world.cpp): disc ranges (one per thread when shared out) and how
+    // The force pass's split (force_pass_ranges.cpp): disc ranges (one per thread when shared out) and how
     // many candidate pairs cross from one range to another (computed into slots first).
     int force_pass_ranges() const { return force_ranges_; }
     bool simd_kernel() const { return avx2_; }  // the AVX2 kernels are in use (pair forces, integration)
@@ -363,7 +363,7 @@ private:
     // thread owns the disc-disc contacts whose first disc i is in its range and the wall
     // contacts of its discs, and adds them straight into its discs' sums. A contact whose
     // second disc j belongs to a later range ("cross" contact) is computed first into a slot,
-    // so that each disc still receives its terms in contact-list order (world.cpp).
+    // so that each disc still receives its terms in contact-list order (force_pass.cpp).
 
     // What the walls' loads and the energy ledger need of a wall contact that touches or
     // dissipates, written by the range that owns it, in list order, into that range's own

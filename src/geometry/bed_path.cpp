@@ -32,10 +32,9 @@ void BedPath::project(const Vec2& p, double& s, double& h) const {
         const WallGeom& g = parts_[k];
         if (g.shape == WallShape::Segment) {
             const double lo = k == 0 ? -1e9 : 0.0;
+            // (start_[0] is exactly 0, so the first part's bound is its length itself)
             const double hi = k == last ? 1e9 : start_[k + 1] - start_[k];
-            // (the first part's length itself, not a difference of starts: the same bits)
-            const double len = k == 0 ? start_[1] : hi;
-            const double t = std::clamp((p - g.p0).dot(g.dir), lo, k == last ? hi : len);
+            const double t = std::clamp((p - g.p0).dot(g.dir), lo, hi);
             const Vec2 q = g.p0 + t * g.dir;
             consider((p - q).norm(), k == 0 ? t : start_[k] + t, (p - g.p0).dot(g.left));
         } else {

@@ -101,8 +101,7 @@ void add_bonds(const Scenario& s, World& w) {
     double r_min = INFINITY;
     for (double r : w.radii()) r_min = std::min(r_min, r);
     if (build.max_gap == 0.0) build.max_gap = 0.25 * r_min;
-    BondBuildReport report;
-    const auto bonds = delaunay_bonds(w.positions(), w.radii(), build, &report);
+    const auto bonds = delaunay_bonds(w.positions(), w.radii(), build);
     if (bonds.empty())
         throw InputError(s.source + ": cohesion.enabled = true, but the triangulation of the " + std::to_string(n) +
                          " disc centres gave no bond with cohesion.filter's rule");
@@ -274,7 +273,7 @@ void write_results(const Scenario& s, const Setup& setup, const World& w, const 
 std::string setup_kind_of_run(const std::string& run_dir) {
     // the tables alone choose the set-up: parsed, not finished (no profile is read again)
     const std::string path = run_dir + "/scenario.toml";
-    return make_setup(parse_scenario(read_whole(path), path))->kind();
+    return make_setup(parse_scenario(read_input_file(path, kMaxScenarioBytes, "scenario file"), path))->kind();
 }
 
 RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
@@ -417,7 +416,7 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
     }
     sum.wall_seconds = elapsed();
     finish_summary(w, sum, candidate_sum, touching_sum, pair_samples);
-    // of this session (a resumed run: since the resume)
+    // of this process (a resumed run: since the resume)
     sum.particle_steps_per_second = double(n) * double(sum.steps - steps_start) /
                                     std::max(sum.wall_seconds - wall_seconds_before, 1e-9);
     const EnergyReport e = solver.energy();

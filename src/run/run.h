@@ -60,7 +60,7 @@ struct RunSummary {
     double t_peak_fx_barrier = -1;
     double t_peak_fy_arc = -1;
     double energy_balance_error = 0;    // |balance drift| / energy dissipated
-    // The broad phase, of this session like wall_seconds (a resumed run counts from the resume,
+    // The broad phase, of this process like wall_seconds (a resumed run counts from the resume,
     // and rebuilds its candidate lists there), sampled every 10 steps: the force pass tests
     // every candidate, so candidates per touching pair is what the margin costs
     double broadphase_margin = 0;       // m, the fat boxes' pad

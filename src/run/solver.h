@@ -33,7 +33,6 @@ public:
     EnergyReport energy() const override { return w_.energy(); }
     void save_state(BinaryWriter& out) const override { w_.save_state(out); }
     void load_state(BinaryReader& in) override { w_.load_state(in); }
-    World& world() { return w_; }
 
 private:
     World& w_;

@@ -291,22 +291,7 @@ void add_setups_keys(std::vector<Key>& k) {
     k.push_back(real("dam_break.floor_length", "m", "length of the floor from the back wall", [](Scenario& s) -> double& { return s.dam_break.floor_length; }, 0, 100, true));
     // terrain
     k.push_back(text("terrain.profile", "CSV file of the ground's profile (a relative path is taken from the scenario file's folder): rows x,y in m with x increasing (a header line and # comments allowed); a wall per segment, the ground below, friction and stiffness from material.friction_wall_deg, wall_kn, wall_ks", [](Scenario& s) -> std::string& { return s.terrain.profile; }));
-    {
-        Key rel{"terrain.release", "m", "array of >= 3 points [x, y] of a convex polygon", "the polygon the release mass fills (generated as for the flume, then dropped onto the profile); [] = the [[discs]] given", nullptr, nullptr};
-        rel.set = [](Scenario& s, const toml::node& n, const std::string& where) {
-            const toml::array* a = n.as_array();
-            if (!a) throw InputError(where + " = " + node_text(n) + ": must be an array of points [x, y] (m)");
-            s.terrain.release.clear();
-            for (const auto& e : *a) s.terrain.release.push_back(read_vec2(e, where, "m"));
-        };
-        rel.get = [](const Scenario& s) {
-            std::string out = "[";
-            for (size_t i = 0; i < s.terrain.release.size(); ++i)
-                out += (i ? ", [" : "[") + toml_number(s.terrain.release[i].x()) + ", " + toml_number(s.terrain.release[i].y()) + "]";
-            return out + "]";
-        };
-        k.push_back(rel);
-    }
+    k.push_back(polygon("terrain.release", "array of >= 3 points [x, y] of a convex polygon", "the polygon the release mass fills (generated as for the flume, then dropped onto the profile); [] = the [[discs]] given", [](Scenario& s) -> std::vector<Vec2>& { return s.terrain.release; }));
 }
 
 void add_run_keys(std::vector<Key>& k) {

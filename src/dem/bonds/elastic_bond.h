@@ -50,6 +50,9 @@ struct ElasticBond {
     // k0 = E t / sqrt(3), N/m
     static double k0(const BondDef& d) { return d.modulus * d.thickness / std::sqrt(3.0); }
 
+    // eps = L / L0 - 1, with 1 / L0 taken once per bond (a division per bond and step saved)
+    static double strain(double length, double inv_rest_length) { return length * inv_rest_length - 1.0; }
+
     // The bond with d = x_l - x_k: whether it is skipped (too short), breaks (no force this
     // step), or acts with force f d on k and -f d on l (f in N/m per m of d).
     struct Eval {
@@ -57,14 +60,15 @@ struct ElasticBond {
         double strain = 0.0;
         bool skipped = false, breaks = false;
     };
-    static Eval evaluate(const BondDef& def, double k0_, double rest_length, const Vec2& d) {
+    static Eval evaluate(const BondDef& def, double k0_, double rest_length, double inv_rest_length, const Vec2& d) {
         Eval e;
-        const double length = d.norm();
-        if (length <= def.min_distance) {
+        const double length_sq = d.squaredNorm();
+        if (length_sq <= def.min_distance * def.min_distance) {
             e.skipped = true;
             return e;
         }
-        e.strain = length / rest_length - 1.0;
+        const double length = std::sqrt(length_sq);
+        e.strain = strain(length, inv_rest_length);
         e.breaks = def.break_mode == BondBreak::Both ? std::abs(e.strain) > def.max_strain : e.strain > def.max_strain;
         if (e.breaks) return e;
         // eps E A / L: "current" A = t L/sqrt(3) gives eps k0; "rest" eps k0 L0 / L

@@ -1,7 +1,7 @@
 // The disc-disc force kernel: one candidate pair, one step of the linear law (linear_law.h),
 // as a small function over the discs' state and the pair's history. World's force pass calls
 // it either to add a pair straight into both discs' sums (the common case) or to park the
-// result in a slot when the two discs belong to different threads (world.cpp).
+// result in a slot when the two discs belong to different threads (force_pass.cpp).
 #pragma once
 #include <algorithm>
 #include <cmath>

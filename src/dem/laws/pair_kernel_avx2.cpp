@@ -10,7 +10,7 @@
 //   so both agree on signed zeros and NaN.
 // - The selects of contact_law.h become blends on the same conditions.
 // The caller sums the batch's results into the discs in list order, as the scalar pass does
-// (world.cpp), so the sums are the same bits too.
+// (force_pass.cpp), so the sums are the same bits too.
 //
 // Only this file's functions use AVX2; the caller asks cpu_has_avx2() first.
 #include <immintrin.h>
@@ -165,7 +165,7 @@ DEMLAB_AVX2 size_t law(const DiscArrays& d, const PairPassParams& p, DiscContact
         const __m256d slip_work = _mm256_mul_pd(_mm256_mul_pd(fs_max, _mm256_max_pd(zero, excess)), inv_ks);
         const __m256d fs_damp = blend(_mm256_and_pd(sliding, no_shear_sliding_m), zero, _mm256_mul_pd(neg(cs), vs));
         const __m256d ft = _mm256_add_pd(fs, fs_damp);
-        // step_contact: the dashpots' work centred on v(t - dt/2)
+        // LinearLaw::step: the dashpots' work centred on v(t - dt/2)
         const __m256d work_n = _mm256_mul_pd(_mm256_add_pd(_mm256_mul_pd(fn_damp, dt), _mm256_mul_pd(damp_n_old, last_dt)), vn);
         const __m256d work_s = _mm256_mul_pd(_mm256_add_pd(_mm256_mul_pd(fs_damp, dt), _mm256_mul_pd(damp_s_old, last_dt)), vs);
         const __m256d diss_touching = _mm256_sub_pd(slip_work, _mm256_mul_pd(half, _mm256_add_pd(work_n, work_s)));
@@ -232,7 +232,7 @@ DEMLAB_AVX2 size_t disc_pairs(const DiscArrays& d, const PairPassParams& p, Disc
 
 }  // namespace
 
-// The sums of the scalar pass (add_to_i, add_to_j in world.cpp) for a record at a time: the
+// The sums of the scalar pass (add_to_i, add_to_j in force_pass.cpp) for a record at a time: the
 // same additions, lane by lane, in the same order of pairs.
 [[gnu::target("avx2")]] void add_pair_batch_avx2(const PairBatch& batch, const DiscContact* c, DiscLoad* load) {
     static_assert(offsetof(DiscLoad, force) == 0 && offsetof(DiscLoad, torque) == 16 && offsetof(DiscLoad, k_tran) == 24 &&

@@ -210,7 +210,7 @@ DEMLAB_AVX512 size_t law8(const DiscArrays& d, const PairPassParams& p, DiscCont
         const __m512d slip_work = _mm512_mul_pd(_mm512_mul_pd(fs_max, _mm512_max_pd(zero, excess)), inv_ks);
         const __m512d fs_damp = blend(sliding & no_shear_sliding_m, zero, _mm512_mul_pd(neg(cs), vs));
         const __m512d ft = _mm512_add_pd(fs, fs_damp);
-        // step_contact: the dashpots' work centred on v(t - dt/2)
+        // LinearLaw::step: the dashpots' work centred on v(t - dt/2)
         const __m512d work_n = _mm512_mul_pd(_mm512_add_pd(_mm512_mul_pd(fn_damp, dt), _mm512_mul_pd(damp_n_old, last_dt)), vn);
         const __m512d work_s = _mm512_mul_pd(_mm512_add_pd(_mm512_mul_pd(fs_damp, dt), _mm512_mul_pd(damp_s_old, last_dt)), vs);
         const __m512d diss_touching = _mm512_sub_pd(slip_work, _mm512_mul_pd(half, _mm512_add_pd(work_n, work_s)));
