@@ -182,6 +182,30 @@ TEST(Renderer, WorksWithoutADisplay) {
     if (display) setenv("DISPLAY", saved.c_str(), 1);
 }
 
+// The bonds colouring: an intact bond as a line between the centres, a disc with all its
+// bonds in snow blue, one that lost half of them half way from orange to dark red, one that
+// never had a bond grey; the other colourings draw no bonds.
+TEST(Renderer, BondsColouringDrawsBondsAndMarksDiscsThatLostThem) {
+    Frame f;
+    f.pos = {Vec2(0.2, 0.5), Vec2(0.8, 0.5), Vec2(0.5, 0.8)};
+    f.radius = {0.05, 0.05, 0.05};
+    f.angle = f.speed = {0.0, 0.0, 0.0};
+    f.layer = f.grid = {0, 0, 0};
+    f.bonds_intact = {1, 1, 0};
+    f.bonds_broken = {0, 1, 0};
+    f.bonds = {{0, 1}};
+    RenderStyle style = unit_view(400);
+    style.color = parse_color_mode("bonds");
+    const Image img = Renderer(style).render(f);
+    EXPECT_LE(colour_distance(img.at(70, 190), 158, 189, 224), 3);   // disc 0, beside the line
+    EXPECT_LE(colour_distance(img.at(330, 190), 201, 84, 31), 3);    // disc 1: (0.79, 0.33, 0.12)
+    EXPECT_LE(colour_distance(img.at(200, 60), 204, 204, 204), 3);   // disc 2: no bonds
+    EXPECT_LE(colour_distance(img.at(200, 199), 31, 51, 102), 12);   // the bond, between the discs
+    EXPECT_EQ(colour_distance(img.at(200, 190), 255, 255, 255), 0);  // and only there
+    style.color = ColorMode::Layers;
+    EXPECT_EQ(colour_distance(Renderer(style).render(f).at(200, 199), 255, 255, 255), 0);
+}
+
 TEST(Renderer, RefusesBadOptions) {
     RenderStyle s;
     s.width = 0;
@@ -313,4 +337,19 @@ TEST_F(SmallRun, PlotsAreValidPngsOfTheRequestedSize) {
         EXPECT_EQ(img.width, 640) << p;
         EXPECT_EQ(img.height, 400) << p;
     }
+}
+
+// A run without bonds has none to colour by
+TEST_F(SmallRun, BondsColouringIsRefusedWithoutBonds) {
+    RenderRunOptions o;
+    o.run_dir = dir_->string();
+    o.out = (*dir_ / "bonds").string();
+    o.color = "bonds";
+    try {
+        render_run(o);
+        FAIL() << "rendered bonds of a run without bonds";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("hold no bonds"), std::string::npos) << e.what();
+    }
+    EXPECT_FALSE(fs::exists(*dir_ / "bonds"));  // refused before any output
 }

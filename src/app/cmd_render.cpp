@@ -26,8 +26,10 @@ Command add_render_command(CLI::App& app) {
     sub->add_option("--every", o->every, "Seconds of simulated time between frames (from saved snapshots only)");
     sub->add_option("--fps", o->fps, "Frames per simulated second (alternative to --every)");
     sub->add_option("--size", o->size, "Frame size WxH in pixels")->capture_default_str();
-    sub->add_option("--color", o->color, "Colouring: layers (initial bands), grid, speed (with a colour bar), rotation (a radial line per disc)")
-        ->capture_default_str();
+    sub->add_option("--color", o->color,
+                    "Colouring: layers (initial bands), grid, speed (with a colour bar), rotation (a radial line per disc), "
+                    "bonds (the intact bonds as lines, discs by the share of their bonds lost); default bonds for a run "
+                    "with bonds, layers otherwise");
     sub->add_option("--view", o->view, "flume (whole flume), barrier (arc and barrier), or x0,y0,x1,y1 in metres")
         ->capture_default_str();
     sub->add_option("--speed-max", o->speed_max, "Top of the speed colour bar, m/s")->capture_default_str();

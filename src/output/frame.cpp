@@ -93,6 +93,25 @@ Frame read_frame(const std::string& discs_vtp, const std::string& walls_vtp) {
         if (pts.size() != 3 * n || f.angle.size() != n || f.speed.size() != n || f.layer.size() != n || f.grid.size() != n)
             throw InputError(discs_vtp + ": arrays of different lengths");
         for (size_t i = 0; i < n; ++i) f.pos.emplace_back(pts[3 * i], pts[3 * i + 1]);
+        if (a.count("bonds_intact")) {
+            f.bonds_intact = numbers<int>(a, "bonds_intact", discs_vtp);
+            f.bonds_broken = numbers<int>(a, "bonds_broken", discs_vtp);
+            if (f.bonds_intact.size() != n || f.bonds_broken.size() != n)
+                throw InputError(discs_vtp + ": arrays of different lengths");
+            // the intact bonds: the connectivity of the <Lines> cells (pairs of disc ids)
+            const size_t lines = text.find("<Lines>"), lines_end = text.find("</Lines>");
+            if (lines != std::string::npos) {
+                if (lines_end == std::string::npos) throw InputError(discs_vtp + ": unterminated <Lines>");
+                const std::string cells = text.substr(lines, lines_end - lines);
+                const auto ends = numbers<long>(data_arrays(cells, discs_vtp), "connectivity", discs_vtp);
+                if (ends.size() % 2) throw InputError(discs_vtp + ": a bond line without its second disc");
+                for (size_t k = 0; k + 1 < ends.size(); k += 2) {
+                    if (ends[k] < 0 || ends[k + 1] < 0 || size_t(ends[k]) >= n || size_t(ends[k + 1]) >= n)
+                        throw InputError(discs_vtp + ": a bond names a disc that is not in the file");
+                    f.bonds.emplace_back(int(ends[k]), int(ends[k + 1]));
+                }
+            }
+        }
     }
     {
         const std::string text = slurp(walls_vtp);

@@ -3,6 +3,7 @@
 // exactly what the run drew.
 #pragma once
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "core/vec2.h"
@@ -14,6 +15,10 @@ struct Frame {
     std::vector<Vec2> pos;
     std::vector<double> radius, angle, speed;
     std::vector<int> layer, grid;
+    // a run with bonds: per disc its intact and broken bonds, and the intact bonds (disc ids);
+    // all empty without bonds
+    std::vector<int> bonds_intact, bonds_broken;
+    std::vector<std::pair<int, int>> bonds;
     std::vector<std::vector<Vec2>> walls;  // polylines of the walls present
     std::vector<int> wall_id;              // wall index of each polyline
     // drawn on top (analysis figures): polylines in a colour, and text at world positions

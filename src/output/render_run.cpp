@@ -68,10 +68,14 @@ int render_run(const RenderRunOptions& o) {
     const auto snaps = list_snapshots(o.run_dir);
     RenderStyle style = default_render_style(setup_kind_of_run(o.run_dir) == "flume");
     parse_size(o.size, style);
-    style.color = parse_color_mode(o.color);
     require_positive("--speed-max", o.speed_max, "m/s");
     style.speed_max = o.speed_max;
     const Frame first = read_frame(snaps.front().discs, snaps.front().walls);
+    const bool has_bonds = !first.bonds_intact.empty();
+    const std::string color = o.color.empty() ? (has_bonds ? "bonds" : "layers") : o.color;
+    style.color = parse_color_mode(color);
+    if (style.color == ColorMode::Bonds && !has_bonds)
+        throw InputError("--color bonds: the snapshots of " + o.run_dir + " hold no bonds (the run had no [cohesion])");
     parse_view(o.view, first, style);
     if (!style.view_set) {
         // one view for the whole sequence: the walls at the first snapshot (a lifting gate
@@ -145,7 +149,7 @@ int render_run(const RenderRunOptions& o) {
     for (std::thread& th : pool) th.join();
     const size_t first_failed = size_t(std::min_element(failed_frame.begin(), failed_frame.end()) - failed_frame.begin());
     if (threads > 0 && failed[first_failed]) std::rethrow_exception(failed[first_failed]);
-    std::printf("rendered %zu frames (%dx%d, %s) into %s/\n", chosen.size(), style.width, style.height, o.color.c_str(),
+    std::printf("rendered %zu frames (%dx%d, %s) into %s/\n", chosen.size(), style.width, style.height, color.c_str(),
                 out.c_str());
     const int frames = int(chosen.size());
     if (!o.strip.empty() && !tiles.empty()) {
@@ -189,6 +193,7 @@ void attach_frame_hook(RunOptions& ro, bool flume) {
         const Frame f = read_frame(discs, walls);
         if (!*renderer) {
             RenderStyle style = default_render_style(flume);
+            if (!f.bonds_intact.empty()) style.color = ColorMode::Bonds;
             // a resumed run starts past the first snapshot: its view still comes from that one
             fit_view(index == 0 ? f : read_frame(dir + "/snapshots/discs_00000.vtp", dir + "/snapshots/walls_00000.vtp"),
                      style.view_lo, style.view_hi);

@@ -11,7 +11,8 @@ struct RenderRunOptions {
     std::string run_dir;
     std::string out;                // default RUN_DIR/frames
     std::string size = "1280x720";  // WxH px
-    std::string color = "layers";   // layers, grid, speed, rotation
+    std::string color;              // layers, grid, speed, rotation, bonds; empty: bonds for a
+                                    // run with bonds, layers otherwise
     std::string view = "flume";     // flume, barrier, or x0,y0,x1,y1 (m)
     double every = 0;               // s between frames; 0 with fps 0: every snapshot
     double fps = 0;                 // frames per simulated second
@@ -27,7 +28,8 @@ struct RenderRunOptions {
 // Renders the frames; returns the number written. Throws InputError on bad options.
 int render_run(const RenderRunOptions& o);
 
-// Makes run_scenario() render a frame (default look) after every snapshot into OUT/frames.
+// Makes run_scenario() render a frame (default look: bonds colouring for a run with bonds)
+// after every snapshot into OUT/frames.
 void attach_frame_hook(RunOptions& ro, bool flume);
 
 }  // namespace demlab

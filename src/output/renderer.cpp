@@ -27,6 +27,18 @@ const Rgb kLayerA{0.84, 0.55, 0.24};  // sand
 const Rgb kLayerB{0.27, 0.43, 0.67};  // blue bands, as the thesis' layer plots
 const Rgb kRotationFill{0.80, 0.80, 0.80};
 const Rgb kRotationLine{0.10, 0.10, 0.10};
+const Rgb kBondIntact{0.62, 0.74, 0.88};  // a disc with all its bonds: snow blue
+const Rgb kBondLine{0.12, 0.20, 0.40};
+
+// A disc by the share q of its bonds that broke: snow blue at 0, orange past 0, dark red at 1;
+// a disc that never had a bond is grey.
+Rgb bond_colour(int intact, int broken) {
+    if (intact + broken == 0) return kRotationFill;
+    if (broken == 0) return kBondIntact;
+    const double q = double(broken) / double(intact + broken);
+    const Rgb lo{0.96, 0.62, 0.20}, hi{0.62, 0.04, 0.04};
+    return {lo.r + q * (hi.r - lo.r), lo.g + q * (hi.g - lo.g), lo.b + q * (hi.b - lo.b)};
+}
 
 // viridis, five stops
 Rgb speed_colour(double v, double vmax) {
@@ -65,7 +77,8 @@ ColorMode parse_color_mode(const std::string& s) {
     if (s == "grid") return ColorMode::Grid;
     if (s == "speed") return ColorMode::Speed;
     if (s == "rotation") return ColorMode::Rotation;
-    throw InputError("--color '" + s + "': must be layers, grid, speed or rotation");
+    if (s == "bonds") return ColorMode::Bonds;
+    throw InputError("--color '" + s + "': must be layers, grid, speed, rotation or bonds");
 }
 
 RenderStyle default_render_style(bool flume) {
@@ -224,6 +237,9 @@ void Renderer::draw_discs(const Frame& f, double px_per_m) {
             case ColorMode::Grid: c = ((f.grid[i] % 1000 + f.grid[i] / 1000) % 2 == 0) ? kLayerA : kLayerB; break;
             case ColorMode::Speed: c = speed_colour(f.speed[i], style_.speed_max); break;
             case ColorMode::Rotation: c = kRotationFill; break;
+            case ColorMode::Bonds:
+                c = f.bonds_intact.empty() ? kRotationFill : bond_colour(f.bonds_intact[i], f.bonds_broken[i]);
+                break;
         }
         // 12 to kMaxSegments, decided on the double before any cast: a huge radius gives the
         // most and a NaN one the fewest, never an int overflow (undefined behaviour)
@@ -252,6 +268,18 @@ void Renderer::draw_discs(const Frame& f, double px_per_m) {
             const Vec2 tip = f.pos[i] + f.radius[i] * Vec2(std::cos(f.angle[i]), std::sin(f.angle[i]));
             thick_segment(f.pos[i], tip, std::max(0.75 * style_.supersample / px_per_m, 0.08 * f.radius[i]));
         }
+    }
+}
+
+// the intact bonds, centre to centre, 1 px wide (at least a tenth of the thinnest bond's
+// discs, so a zoomed view keeps them in proportion)
+void Renderer::draw_bonds(const Frame& f, double px_per_m) {
+    if (style_.color != ColorMode::Bonds || f.bonds.empty()) return;
+    colour(kBondLine);
+    const double half_px = 0.5 * style_.supersample / px_per_m;
+    for (const auto& [k, l] : f.bonds) {
+        const double r = std::min(f.radius[size_t(k)], f.radius[size_t(l)]);
+        thick_segment(f.pos[size_t(k)], f.pos[size_t(l)], std::max(half_px, 0.05 * r));
     }
 }
 
@@ -388,6 +416,7 @@ void Renderer::annotate(Image& img, const Frame& f, const std::vector<std::pair<
 Image Renderer::render(const Frame& f) {
     const Window win = set_up_view(f);
     draw_discs(f, win.px_per_m);
+    draw_bonds(f, win.px_per_m);
     const double wall_half = 1.5 * style_.supersample / win.px_per_m;
     draw_walls_and_overlays(f, wall_half);
     const auto labels = style_.flume_marks ? draw_flume_marks(f, wall_half) : std::vector<std::pair<Vec2, std::string>>{};

@@ -1,6 +1,7 @@
 // Off-screen frames: OSMesa (software OpenGL, no display, no GPU) draws the discs as filled
 // circles of their true radius, the walls as they are at that instant, the 10 cm marks along
-// the flume path and, for the rotation colouring, a radial line per disc. The scene is drawn
+// the flume path and, for the rotation colouring, a radial line per disc; the bonds colouring
+// draws the intact bonds as thin lines and the discs by the share of their bonds lost. The scene is drawn
 // at `supersample` times the size and box-filtered down: smooth edges without multisampling.
 // Text (time, colour bar) comes from FreeType with DejaVu Sans.
 #pragma once
@@ -13,7 +14,7 @@
 
 namespace demlab {
 
-enum class ColorMode { Layers, Grid, Speed, Rotation };
+enum class ColorMode { Layers, Grid, Speed, Rotation, Bonds };
 
 struct RenderStyle {
     int width = 1280;            // px
@@ -27,7 +28,7 @@ struct RenderStyle {
     bool show_time = true;
 };
 
-// Parses "layers", "grid", "speed", "rotation"; throws InputError otherwise.
+// Parses "layers", "grid", "speed", "rotation", "bonds"; throws InputError otherwise.
 ColorMode parse_color_mode(const std::string& s);
 
 class Renderer {
@@ -49,6 +50,7 @@ private:
     };
     Window set_up_view(const Frame& f);
     void draw_discs(const Frame& f, double px_per_m);
+    void draw_bonds(const Frame& f, double px_per_m);
     void draw_walls_and_overlays(const Frame& f, double wall_half);
     std::vector<std::pair<Vec2, std::string>> draw_flume_marks(const Frame& f, double wall_half);
     Image read_back_downsampled();

@@ -68,6 +68,22 @@ void SnapshotWriter::write(const World& w) {
     put_int(o, long(n));
     o += "\" NumberOfVerts=\"";
     put_int(o, long(n));
+    // intact bonds as line cells between the disc centres; per disc its intact and broken bonds
+    const std::vector<Bond>& bonds = w.bonds();
+    std::vector<long> bond_ends;
+    std::vector<int> intact, broken;
+    if (!bonds.empty()) {
+        intact.assign(n, 0);
+        broken.assign(n, 0);
+        for (const Bond& b : bonds) {
+            std::vector<int>& count = b.broken ? broken : intact;
+            ++count[size_t(b.k)];
+            ++count[size_t(b.l)];
+            if (!b.broken) bond_ends.insert(bond_ends.end(), {long(b.k), long(b.l)});
+        }
+        o += "\" NumberOfLines=\"";
+        put_int(o, long(bond_ends.size() / 2));
+    }
     o += "\">\n      <Points>\n";
     data_array(o, "Float64", "Points", 3, n, [&](std::string& s, size_t i) { put_xy0(s, w.positions()[i], 12); });
     o += "      </Points>\n      <PointData Scalars=\"radius\">\n";
@@ -79,10 +95,21 @@ void SnapshotWriter::write(const World& w) {
     data_array(o, "Int32", "layer", 1, n, [&](std::string& s, size_t i) { put_int(s, i < layer_.size() ? layer_[i] : 0); });
     data_array(o, "Int32", "grid", 1, n, [&](std::string& s, size_t i) { put_int(s, i < grid_.size() ? grid_[i] : 0); });
     data_array(o, "Int32", "id", 1, n, [&](std::string& s, size_t i) { put_int(s, long(i)); });
+    if (!bonds.empty()) {
+        data_array(o, "Int32", "bonds_intact", 1, n, [&](std::string& s, size_t i) { put_int(s, intact[i]); });
+        data_array(o, "Int32", "bonds_broken", 1, n, [&](std::string& s, size_t i) { put_int(s, broken[i]); });
+    }
     o += "      </PointData>\n      <Verts>\n";
     data_array(o, "Int64", "connectivity", 1, n, [&](std::string& s, size_t i) { put_int(s, long(i)); });
     data_array(o, "Int64", "offsets", 1, n, [&](std::string& s, size_t i) { put_int(s, long(i + 1)); });
-    o += "      </Verts>\n    </Piece>\n  </PolyData>\n</VTKFile>\n";
+    o += "      </Verts>\n";
+    if (!bonds.empty()) {
+        o += "      <Lines>\n";
+        data_array(o, "Int64", "connectivity", 1, bond_ends.size(), [&](std::string& s, size_t i) { put_int(s, bond_ends[i]); });
+        data_array(o, "Int64", "offsets", 1, bond_ends.size() / 2, [&](std::string& s, size_t i) { put_int(s, long(2 * i + 2)); });
+        o += "      </Lines>\n";
+    }
+    o += "    </Piece>\n  </PolyData>\n</VTKFile>\n";
     std::snprintf(name, sizeof name, "/discs_%05d.vtp", index);
     write_file_atomic(dir_ + name, o);
 

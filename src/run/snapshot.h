@@ -1,7 +1,10 @@
 // Snapshots of a run as VTK XML PolyData (.vtp), one file for the discs and one for the
 // walls per instant, indexed by ParaView collections (discs.pvd, walls.pvd). Discs are points
 // with radius, velocity, angle, omega, speed, layer, grid and id; open them in ParaView with
-// "Point Gaussian" scaled by radius. The same files are what `demlab render` replays.
+// "Point Gaussian" scaled by radius. A run with bonds adds per disc its intact and broken
+// bonds (bonds_intact, bonds_broken) and the intact bonds as line cells between the centres
+// (ParaView draws them with the "Wireframe" or "Surface" representation). The same files are
+// what `demlab render` replays.
 #pragma once
 #include <string>
 #include <vector>
