@@ -223,6 +223,8 @@ void write_summary(const std::string& path, const Scenario& s, const RunSummary&
       << "  \"t_front_at_barrier\": " << json_number(sum.t_front_at_barrier) << ",\n"
       << "  \"t_peak_fx_barrier\": " << json_number(sum.t_peak_fx_barrier) << ",\n"
       << "  \"t_peak_fy_arc\": " << json_number(sum.t_peak_fy_arc) << ",\n"
+      << "  \"peak_fx_barrier\": " << json_number(sum.peak_fx_barrier) << ",\n"
+      << "  \"peak_fy_arc\": " << json_number(sum.peak_fy_arc) << ",\n"
       << "  \"energy_balance_error\": " << json_number(sum.energy_balance_error) << ",\n"
       << "  \"broadphase_margin\": " << json_number(sum.broadphase_margin) << ",\n"
       << "  \"broadphase_updates\": " << sum.broadphase_updates << ",\n"

@@ -423,6 +423,8 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
     const double dissipated = e.dissipated_contacts + e.dissipated_local + e.dissipated_rotation;
     sum.energy_balance_error = dissipated > 0 ? std::abs(e.balance() - st.e0) / dissipated : 0.0;
     series.close();
+    sum.peak_fx_barrier = std::max(0.0, st.peak_fx_barrier);
+    sum.peak_fy_arc = std::max(0.0, st.peak_fy_arc);
 
     write_results(s, *setup, w, measure, mass, dir, sum);
     std::filesystem::remove(checkpoint_path);  // the run is complete: nothing to resume

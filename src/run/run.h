@@ -59,6 +59,8 @@ struct RunSummary {
     double t_front_at_barrier = -1;     // s, -1 if never
     double t_peak_fx_barrier = -1;
     double t_peak_fy_arc = -1;
+    double peak_fx_barrier = 0;         // N/m, the largest |x-force| on the barrier (forces.csv's samples)
+    double peak_fy_arc = 0;             // N/m, the largest |y-force| on the arc
     double energy_balance_error = 0;    // |balance drift| / energy dissipated
     // The broad phase, of this process like wall_seconds (a resumed run counts from the resume,
     // and rebuilds its candidate lists there), sampled every 10 steps: the force pass tests

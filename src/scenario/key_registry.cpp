@@ -291,6 +291,7 @@ void add_setups_keys(std::vector<Key>& k) {
     k.push_back(real("dam_break.floor_length", "m", "length of the floor from the back wall", [](Scenario& s) -> double& { return s.dam_break.floor_length; }, 0, 100, true));
     // terrain
     k.push_back(text("terrain.profile", "CSV file of the ground's profile (a relative path is taken from the scenario file's folder): rows x,y in m with x increasing (a header line and # comments allowed); a wall per segment, the ground below, friction and stiffness from material.friction_wall_deg, wall_kn, wall_ks", [](Scenario& s) -> std::string& { return s.terrain.profile; }));
+    k.push_back(polygon("terrain.barrier", "array of >= 2 points [x, y], the first on the profile (within 1 mm)", "a barrier (a dam) on the profile: a polyline from its foot, the flow on its left (up the upstream face first), a wall per segment as the profile's; its load goes to forces.csv's barrier columns, the bed path runs up its face (run-up, arrival); [] = none", [](Scenario& s) -> std::vector<Vec2>& { return s.terrain.barrier; }));
     k.push_back(polygon("terrain.release", "array of >= 3 points [x, y] of a convex polygon", "the polygon the release mass fills (generated as for the flume, then dropped onto the profile); [] = the [[discs]] given", [](Scenario& s) -> std::vector<Vec2>& { return s.terrain.release; }));
 }
 

@@ -202,6 +202,33 @@ void finish_terrain(Scenario& s) {
     if (prof.is_relative() && std::filesystem::is_regular_file(s.source))
         t.profile = (std::filesystem::absolute(std::filesystem::path(s.source)).parent_path() / prof).lexically_normal().string();
     t.points = read_profile_csv(t.profile);
+    if (!t.barrier.empty()) {
+        const auto& b = t.barrier;
+        if (b.size() < 2) throw InputError(where + "terrain.barrier: 1 point; a barrier needs at least 2 (its foot and its top)");
+        for (size_t k = 0; k + 1 < b.size(); ++k)
+            if ((b[k + 1] - b[k]).norm() < 1e-6)
+                throw InputError(where + "terrain.barrier: points " + std::to_string(k) + " and " + std::to_string(k + 1) +
+                                 " coincide (a segment must be longer than 1 um)");
+        // the foot on a profile segment (x increasing): within 1 mm of the ground at its x
+        const Vec2 foot = b[0];
+        t.barrier_on_segment = -1;
+        for (size_t k = 0; k + 1 < t.points.size(); ++k) {
+            const Vec2 a = t.points[k], c = t.points[k + 1];
+            if (foot.x() < a.x() || foot.x() > c.x()) continue;
+            const double y = a.y() + (c.y() - a.y()) * (foot.x() - a.x()) / (c.x() - a.x());
+            if (std::abs(y - foot.y()) <= 1e-3) {
+                t.barrier_on_segment = int(k);
+                break;
+            }
+        }
+        if (t.barrier_on_segment < 0)
+            throw InputError(where + "terrain.barrier: its first point [" + format_number(foot.x()) + ", " + format_number(foot.y()) +
+                             "] is not on the profile (within 1 mm of the ground at that x); the barrier stands on the ground");
+        const Vec2 face = b[1] - b[0], ground = t.points[size_t(t.barrier_on_segment) + 1] - t.points[size_t(t.barrier_on_segment)];
+        if (cross(ground, face) <= 0.0)
+            throw InputError(where + "terrain.barrier: its first segment goes down or along the ground; it must rise from the "
+                             "foot (the upstream face first, the flow on its left)");
+    }
     const auto& p = t.release;
     if (p.empty()) return;
     if (p.size() < 3) throw InputError(where + "terrain.release: " + std::to_string(p.size()) + " points; a polygon needs at least 3");

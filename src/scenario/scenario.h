@@ -41,6 +41,10 @@ struct TerrainDef {
     std::string profile;                   // CSV file of x,y rows (m), x increasing
     std::vector<Vec2> release;             // m, a convex polygon the release mass fills; empty: [[discs]]
     std::vector<Vec2> points;              // m, the profile as read (finish_scenario)
+    // m, a barrier (a dam) standing on the profile: a polyline from its foot on the profile,
+    // the flow on its left (up the upstream face first); empty: none
+    std::vector<Vec2> barrier;
+    int barrier_on_segment = -1;           // the profile segment the barrier's foot stands on (finish_scenario)
 };
 
 // Cohesive bonds (docs/spec/COHESION.md; dem/bonds/): the bond law, how the bonds are built

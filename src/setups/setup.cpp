@@ -68,6 +68,14 @@ public:
             d.p1 = p[k + 1];
             w.push_back(d);
         }
+        const auto& b = s_.terrain.barrier;
+        for (size_t k = 0; k + 1 < b.size(); ++k) {
+            WallDef d = base;
+            d.name = "barrier[" + std::to_string(k) + "]";
+            d.p0 = b[k];
+            d.p1 = b[k + 1];
+            w.push_back(d);
+        }
         return w;
     }
     bool has_release() const override { return !s_.terrain.release.empty(); }
@@ -96,20 +104,42 @@ public:
         }
         return b;
     }
+    // The profile; with a barrier, the profile up to the barrier's foot and then the barrier,
+    // so the front arrives at the foot and the run-up is measured on its face (as the flume's
+    // W3). The ground behind the barrier is not on the path.
     std::unique_ptr<BedPath> bed_path(const World& w) const override {
+        const TerrainDef& t = s_.terrain;
+        const int profile_walls = int(t.points.size()) - 1;
         std::vector<WallGeom> parts;
-        for (size_t k = 0; k + 1 < s_.terrain.points.size(); ++k) parts.push_back(w.wall_geom(int(k)));
+        const int upto = t.barrier.empty() ? profile_walls : t.barrier_on_segment;
+        for (int k = 0; k < upto; ++k) parts.push_back(w.wall_geom(k));
+        if (!t.barrier.empty()) {
+            WallDef cut;  // the foot's segment up to the foot (none when the foot is its start)
+            cut.p0 = t.points[size_t(upto)];
+            cut.p1 = t.barrier[0];
+            if ((cut.p1 - cut.p0).norm() > 1e-9) parts.push_back(make_geom(cut));
+            for (int k = 0; k + 1 < int(t.barrier.size()); ++k) parts.push_back(w.wall_geom(profile_walls + k));
+        }
         return std::make_unique<BedPath>(std::move(parts));
     }
-    // the whole profile's load in forces.csv's slope columns
+    BarrierMarks barrier(const BedPath& path) const override {
+        if (s_.terrain.barrier.empty()) return {};
+        double s, h;
+        path.project(s_.terrain.barrier[0], s, h);
+        return {s, s_.terrain.barrier[0]};
+    }
+    // the profile's load in forces.csv's slope columns, the barrier's in its barrier columns
     ForceWalls force_walls() const override {
         ForceWalls f;
-        for (size_t k = 0; k + 1 < s_.terrain.points.size(); ++k) f.slope.push_back(int(k));
+        const int profile_walls = int(s_.terrain.points.size()) - 1;
+        for (int k = 0; k < profile_walls; ++k) f.slope.push_back(k);
+        for (int k = 0; k + 1 < int(s_.terrain.barrier.size()); ++k) f.barrier.push_back(profile_walls + k);
         return f;
     }
     std::vector<Vec2> extent() const override {
         std::vector<Vec2> e = s_.terrain.points;
         e.insert(e.end(), s_.terrain.release.begin(), s_.terrain.release.end());
+        e.insert(e.end(), s_.terrain.barrier.begin(), s_.terrain.barrier.end());
         return e;
     }
 
