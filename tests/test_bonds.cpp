@@ -157,6 +157,50 @@ TEST(Bonds, BreaksPastMaxStrain) {
     }
 }
 
+// Two bonded discs approaching at v (no contact: they touch only at L = 0.1 m): with "both" the
+// bond breaks in compression iff v > sqrt(2 U(-0.2) / m_eff) = 5.82908 m/s (U = 500.370 J at
+// eps = -0.2, C7); with "tension" it never breaks and the pair rebounds with e = 1 (the bond
+// is conservative).
+TEST(Bonds, BreaksInCompression) {
+    // U(-0.2) = k0 L0^2 (0.02 - 0.008/3), the closed form the threshold comes from
+    EXPECT_NEAR(ElasticBond::energy(BondDef{}, ElasticBond::k0(BondDef{}), 1.0, -0.2), 500.370, 1e-3);
+    for (const BondBreak mode : {BondBreak::Both, BondBreak::Tension})
+        for (const double v : {5.75, 6.0}) {
+            WorldDef d = bond_world_def();
+            d.bond.break_mode = mode;
+            World w(d);
+            w.add_material(steel_like());
+            disc(w, {0, 0}, {0.5 * v, 0.0});
+            disc(w, {1.0, 0}, {-0.5 * v, 0.0});
+            w.add_bond(0, 1);
+            w.finalize();
+            w.set_dt(1e-5);
+            const double e0 = w.energy().balance();
+            double min_strain = 0.0;
+            bool rebounded = false;
+            for (int s = 0; s < 40000 && !rebounded; ++s) {
+                w.step();
+                const double strain = w.positions()[1].x() - w.positions()[0].x() - 1.0;
+                min_strain = std::min(min_strain, strain);
+                if (!w.bond_breaks().empty()) break;
+                rebounded = min_strain < -0.1 && strain >= 0.0;  // back at the rest length
+            }
+            const bool breaks = mode == BondBreak::Both && v > 5.82908;
+            ASSERT_EQ(w.bond_breaks().size(), breaks ? 1u : 0u) << v;
+            if (breaks) {
+                EXPECT_NEAR(w.bond_breaks()[0].strain, -0.2, 2e-3);
+                EXPECT_NEAR(w.energy().bond_break_loss, 500.370, 5.0);
+                EXPECT_LT(std::abs(w.energy().balance() - e0), 1e-3 * e0);
+                continue;
+            }
+            ASSERT_TRUE(rebounded) << v;
+            if (v < 5.82908) EXPECT_GT(min_strain, -0.2);  // short of the break
+            else EXPECT_LT(min_strain, -0.2);              // "tension": past -0.2 and intact
+            const double separation = w.velocities()[1].x() - w.velocities()[0].x();
+            EXPECT_NEAR(separation / v, 1.0, 1e-4);  // e = 1
+        }
+}
+
 // A lone bonded pair, automatic step: 0.8 sqrt(m / (1.4 k0)) = 0.0305420 s (C10, "current").
 TEST(Bonds, TimeStepSeesBonds) {
     WorldDef d = bond_world_def();
