@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Regenerates the figures the README shows (figures/*.png) from runs of geometries A, B, C.
+# Regenerates the figures the README shows (figures/*.png) from runs of geometries A, B, C
+# and of the snow slide with and without bonds.
 # usage: scripts/make-figures.sh [RUNS_DIR]     (default runs/figures; SCALE=4 by default)
 # Runs that already exist in RUNS_DIR (with a summary.json) are reused, not recomputed.
 # At scale 4 the three runs take about an hour on 2 cores; SCALE=20 gives a quick look.
@@ -27,6 +28,15 @@ a="$runs/geometry-A-s$scale"
 for g in A B C; do
   r="$runs/geometry-$g-s$scale"
   "$demlab" render "$r" --last --view barrier --size 640x360 --out "$r/deposit" --force --strip "figures/deposit-$g.png"
+done
+# the snow slab with and without bonds (seconds, not an hour): the bonded slab by its bonds
+# (intact blue, lost orange to red), the loose one by its rows
+for v in bonded loose; do
+  r="$runs/snow-slide-$v"
+  if [ "$v" = bonded ]; then set_bonds=(); color=bonds; else set_bonds=(--set cohesion.enabled=false); color=layers; fi
+  [ -f "$r/summary.json" ] || { rm -rf "$r"; "$demlab" run scenarios/snow-slide-2d.toml "${set_bonds[@]}" --out "$r" --no-plots > "$r.log" 2>&1; }
+  "$demlab" render "$r" --every 4 --color "$color" --view=-50,-1,40,32 --size 960x352 --out "$r/strip" --force \
+    --strip "figures/snow-slide-$v.png"
 done
 "$demlab" plot "$a" > /dev/null
 cp "$a/plots/forces_x.png" figures/geometry-A-forces-x.png
