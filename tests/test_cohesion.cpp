@@ -187,7 +187,6 @@ TEST(Cohesion, BadInputIsRefusedWithTheKey) {
     expect_refused([&] { load("[cohesion]\nenabled = true\nfilter = \"length\"\n"); }, {"cohesion.max_bond_length"});
     expect_refused([&] { load("[cohesion]\nenabled = true\nbonds = [[0, 2]]\n"); }, {"cohesion.bonds", "does not exist"});
     expect_refused([&] { load("[cohesion]\nenabled = true\nbonds = [[1, 1]]\n"); }, {"cohesion.bonds", "two different discs"});
-    expect_refused([&] { load("[cohesion]\nenabled = true\npredict = true\n"); }, {"cohesion.predict", "not built"});
     expect_refused([&] { load("[lattice_release]\nregion = [[0, 0], [1, 0]]\norigin = [0, 0]\nr_min = 0.1\n"); },
                    {"lattice_release.region", "at least 3"});
     expect_refused([&] { load("[lattice_release]\nregion = [[0, 0], [1, 1], [1, 0], [0, 1]]\norigin = [0, 0]\nr_min = 0.1\n"); },

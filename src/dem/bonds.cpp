@@ -62,11 +62,20 @@ void World::prepare_bonds() {
         bond_disc_[fill[size_t(bonds_[b].l)]++] = uint32_t(2 * b + 1);
     }
     bond_out_.assign(bonds_.size(), BondOut{0.0, 0.0, 0.0, 0.0, 0});
+    if (d.predict) {
+        bond_dashpot_.assign(bonds_.size(), Vec2::Zero());
+        bond_dashpot_last_.assign(bonds_.size(), Vec2::Zero());
+        bond_dissipated_.assign(bonds_.size(), 0.0);
+    }
     bond_inv_rest_.resize(bonds_.size());
     for (size_t b = 0; b < bonds_.size(); ++b) bond_inv_rest_[b] = 1.0 / bonds_[b].rest_length;
 }
 
 void World::compute_bond_forces() {
+    if (def_.bond.predict) {
+        compute_predicted_bond_forces();
+        return;
+    }
     const BondDef& def = def_.bond;
     const double k0 = bond_k0_, k_max = bond_k_max_;
     bond_chunk_broke_.assign(size_t(pool_->size()), 0);
@@ -92,6 +101,60 @@ void World::compute_bond_forces() {
         }
         if (broke) bond_chunk_broke_[size_t(chunk)] = 1;
     });
+}
+
+// C5: the bond's length, strain, force and break from the positions predicted one step,
+// x + dt v with v = v(t - dt/2), as AvaFrame's code does. The force is the spring's at the
+// current length plus a dashpot's, F(d + dt v_kl) - F(d) ~ k_b dt v_kl (C11); the dashpot's
+// work is booked as the contacts' dashpots' is, centred on v(t - dt/2): this step's force
+// over the first half of the velocity interval, the last step's over the second half.
+void World::compute_predicted_bond_forces() {
+    const BondDef& def = def_.bond;
+    const double k0 = bond_k0_, k_max = bond_k_max_, dt = dt_, last_dt = last_dt_;
+    bond_chunk_broke_.assign(size_t(pool_->size()), 0);
+    pool_->parallel_for(bonds_.size(), [&](size_t begin, size_t end, int chunk) {
+        uint8_t broke = 0;
+        for (size_t b = begin; b < end; ++b) {
+            const Bond& bond = bonds_[b];
+            BondOut& o = bond_out_[b];
+            o.fx = o.fy = 0.0;
+            o.breaks = 0;
+            o.k_tran = bond.broken ? 0.0 : k_max;
+            const Vec2 v_kl = vel_[size_t(bond.l)] - vel_[size_t(bond.k)];
+            Vec2 dashpot = Vec2::Zero();
+            if (!bond.broken) {
+                const Vec2 d = pos_[size_t(bond.l)] - pos_[size_t(bond.k)];
+                const Vec2 ahead = d + dt * v_kl;
+                const ElasticBond::Eval e = ElasticBond::evaluate(def, k0, bond.rest_length, bond_inv_rest_[b], ahead);
+                o.strain = e.strain;
+                if (e.breaks) {
+                    o.breaks = 1;
+                    broke = 1;
+                }
+                if (!e.skipped && !e.breaks) {
+                    o.fx = e.f * ahead.x();
+                    o.fy = e.f * ahead.y();
+                    const ElasticBond::Eval now = ElasticBond::evaluate(def, k0, bond.rest_length, bond_inv_rest_[b], d);
+                    const Vec2 spring = now.skipped || now.breaks ? Vec2::Zero() : Vec2(now.f * d.x(), now.f * d.y());
+                    dashpot = Vec2(o.fx, o.fy) - spring;
+                }
+            }
+            // the energy the dashpot took (on k: +dashpot, on l: -dashpot; power -dashpot . v_kl)
+            bond_dissipated_[b] = 0.5 * (dt * dashpot + last_dt * bond_dashpot_last_[b]).dot(v_kl);
+            bond_dashpot_[b] = dashpot;
+        }
+        if (broke) bond_chunk_broke_[size_t(chunk)] = 1;
+    });
+}
+
+// After the pass: the predicted bonds' dashpot work into the ledger, in list order, and this
+// step's dashpot forces become the last ones.
+void World::book_bond_dashpots() {
+    if (!def_.bond.predict) return;
+    double sum = 0.0;
+    for (const double d : bond_dissipated_) sum += d;
+    diss_contacts_ += sum;
+    bond_dashpot_last_.swap(bond_dashpot_);
 }
 
 // The bond terms of discs [d0, d1), after their contact terms: the force, and the bond's

@@ -182,7 +182,10 @@ void World::compute_forces_with(bool then_integrate) {
         if (first) throw RunError(first->message);
     }
     add_up_pass();
-    if (!bonds_.empty()) settle_bond_breaks();
+    if (!bonds_.empty()) {
+        book_bond_dashpots();
+        settle_bond_breaks();
+    }
 }
 
 // The cross contacts' own copies of their records and clearances (cross_dd_, world.h).

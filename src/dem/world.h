@@ -295,9 +295,11 @@ private:
     // force into its slot before the ranges; a block's discs' bond terms; the breaks after
     void prepare_bonds();
     void compute_bond_forces();
+    void compute_predicted_bond_forces();
     void add_bond_terms(size_t d0, size_t d1);
     void add_external_forces(size_t d0, size_t d1);
     void settle_bond_breaks();
+    void book_bond_dashpots();
     double bond_elastic_energy() const;
     void note_wall_fault(size_t kw, double overlap, int chunk);
     IntegrateConsts integrate_prepare();
@@ -503,6 +505,11 @@ private:
         uint8_t breaks;
     };
     std::vector<BondOut> bond_out_;
+    // with BondDef::predict: each bond's dashpot force on k (the predicted force less the
+    // spring's) this step and the last, and the energy it took this step (J/m), summed in list
+    // order after the pass (bonds.cpp); the last force is history, saved in checkpoints
+    std::vector<Vec2> bond_dashpot_, bond_dashpot_last_;
+    std::vector<double> bond_dissipated_;
     // constant forces on discs (DiscDef::force), N/m; any_external_force_: some disc has one
     std::vector<Vec2> external_force_;
     bool any_external_force_ = false;

@@ -123,6 +123,12 @@ void World::save_state(BinaryWriter& out) const {
             out.put(b.rest_length);
             out.put(b.broken);
         }
+        // the predicted bonds' last dashpot forces (their history)
+        if (def_.bond.predict)
+            for (const Vec2& f : bond_dashpot_last_) {
+                out.put(f.x());
+                out.put(f.y());
+            }
         out.put(bond_break_loss_);
         out.put(uint64_t(bond_breaks_.size()));
         for (const BondBreakEvent& e : bond_breaks_) {
@@ -240,6 +246,11 @@ void World::load_state(BinaryReader& in) {
             b.rest_length = s.rest_length;
             b.broken = s.broken;
         }
+        if (def_.bond.predict)
+            for (Vec2& f : bond_dashpot_last_) {
+                in.get(f.x());
+                in.get(f.y());
+            }
         in.get(bond_break_loss_);
         const uint64_t breaks = in.get<uint64_t>();
         if (breaks > bonds_.size()) throw InputError("checkpoint: corrupt bond list");

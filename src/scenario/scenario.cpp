@@ -258,14 +258,11 @@ void finish_terrain(Scenario& s) {
                          format_number(size) + " m across): at most " + format_number(size / 8) + " m");
 }
 
-// The bonds' keys together (COHESION.md section 7's choices; predict not built).
+// The bonds' keys together (COHESION.md section 7's choices).
 void finish_cohesion(Scenario& s) {
     const std::string where = s.source + ": ";
     const CohesionDef& c = s.cohesion;
     if (!c.enabled) return;
-    if (c.predict)
-        throw InputError(where + "cohesion.predict = true: AvaFrame's predicted lengths (C5) are not built in this version; "
-                         "use false (the default: the bond is conservative and the ledger closes)");
     // with explicit discs only, their count is known now: a bond naming a missing disc is
     // refused before any output (with generated discs, when the world is built)
     if (!has_release(s) && !s.lattice_release.enabled)

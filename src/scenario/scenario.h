@@ -52,8 +52,7 @@ struct TerrainDef {
 struct CohesionDef {
     bool enabled = false;                  // a [cohesion] table with enabled = true
     bool given = false;                    // a [cohesion] table was given (it is then written back)
-    BondDef bond;                          // modulus, max_strain, min_distance, area, break_mode
-    bool predict = false;                  // C5 (AvaFrame's predicted positions): refused, not built
+    BondDef bond;                          // modulus, max_strain, min_distance, area, break_mode, predict
     BondBuildDef build;                    // filter, max_edge_factor, max_bond_length, max_gap
     std::vector<std::pair<long, long>> bonds;  // explicit [k, l] pairs; when given, no triangulation
 };

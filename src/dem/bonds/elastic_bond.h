@@ -12,6 +12,7 @@
 //   broken when |eps| > eps_c ("both") or eps > eps_c ("tension"); skipped when L <= d_min  C4
 //   U_b = k0 L0^2 (eps^2/2 + eps^3/3) ("current"), k0 L0^2 eps^2 / 2 ("rest")   C7
 //   the automatic step adds k_b,max = k0 (1 + 2 eps_c) ("current") or k0 to both discs  C10
+//   predict: the length (strain, force, break) from x + dt v, a dashpot c = k_b dt     C5, C11
 #pragma once
 #include <cmath>
 #include <cstdint>
@@ -30,6 +31,10 @@ struct BondDef {
     BondArea area = BondArea::Current;
     BondBreak break_mode = BondBreak::Both;
     double thickness = 1.0;         // m, t: PFC2D's unit thickness
+    // C5, AvaFrame's lengths from positions predicted one step: d = x_l - x_k + dt (v_l - v_k).
+    // With the leapfrog's v(t - dt/2) that is the spring plus a dashpot c = k_b dt (C11); the
+    // difference to the spring alone is booked as dissipation (the ledger's contacts' term).
+    bool predict = false;
 };
 
 // A bond between discs k < l, rest length L0 (m) taken when the world is finalized.
