@@ -7,6 +7,7 @@
 #include <csignal>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 
 #include "core/error.h"
 #include "core/interrupt.h"
@@ -16,6 +17,8 @@
 #include "helpers.h"
 #include "output/frame.h"
 #include "output/render_run.h"
+#include "setups/lattice_release.h"
+#include "setups/setup.h"
 #include "run/run.h"
 #include "scenario/scenario.h"
 
@@ -249,5 +252,100 @@ TEST(Cohesion, LedgerClosesWhileBreaking) {
     const size_t c2 = last.rfind(','), c1 = last.rfind(',', c2 - 1);
     EXPECT_GT(std::stod(last.substr(c1 + 1, c2 - c1 - 1)), 0.0);
     EXPECT_LT(r.energy_balance_error, 0.01);
+    fs::remove_all(dir);
+}
+
+// Variant C of the spec's section 6, small: a disordered 4-row slab (r in [0.1, 0.125] m on
+// the 0.25 m lattice) settled under gravity behind a gate removed at t = 0, bonded by the
+// "gap" filter. The discs leave their nodes, the bonds are built from the settled positions
+// (no bond energy at t = 0), the mass starts at rest, and 1 and 2 threads give the same bytes.
+TEST(Cohesion, LatticeSettlesBehindAGate) {
+    const std::string text = std::string(R"(
+[terrain]
+profile = ")") + DEMLAB_SOURCE_DIR + R"(/data/snow-slide-profile.csv"
+[[walls]]
+name = "gate"
+start = [-39.38332, 24.60941]
+end = [-38.74742, 25.62707]
+remove_at = 0.0
+kn = 1e7
+ks = 1e7
+[lattice_release]
+region = [[-47.8638, 29.9086], [-39.38332, 24.60941], [-38.90639, 25.37265], [-47.38687, 30.67184]]
+origin = [-47.7425, 29.9802]
+angle_deg = -32.0
+r_min = 0.1
+r_max = 0.125
+spacing = 0.25
+settle = true
+[cohesion]
+enabled = true
+filter = "gap"
+max_gap = 0.06
+[material]
+density = 330.8
+kn = 1e7
+ks = 1e7
+friction_disc_deg = 18.0042
+friction_wall_deg = 18.0042
+wall_kn = 1e7
+wall_ks = 1e7
+[rotation]
+model = 1
+[release]
+settle_max_time = 5.0
+[stop]
+t_max = 0.5
+[output]
+series_interval = 0.05
+snapshot_interval = 0.5
+)";
+    std::string bytes[2];
+    for (const int threads : {1, 2}) {
+        Scenario s = parse_scenario(text, "settle.toml");
+        s.world.threads = threads;
+        finish_scenario(s);
+        const fs::path dir = temp_dir("lattice-settle-" + std::to_string(threads));
+        const RunSummary r = run_scenario(s, {dir.string(), false, {}});
+        EXPECT_GT(r.bonds, 300);
+        // energy.csv's first row: no kinetic energy, no bond energy (bonds from the settled state)
+        std::ifstream in(dir / "energy.csv");
+        std::string header, first;
+        std::getline(in, header);
+        std::getline(in, first);
+        std::vector<double> v;
+        std::stringstream row(first);
+        for (std::string cell; std::getline(row, cell, ',');) v.push_back(std::stod(cell));
+        EXPECT_EQ(v[1], 0.0);  // kinetic_translation
+        EXPECT_LT(v[11], 1e-20);  // bond_elastic: round-off of the lengths only
+        const std::string summary = read_file(dir / "summary.json");
+        EXPECT_EQ(summary.find("\"release_settle_time\": null"), std::string::npos) << summary;
+        // the discs left their nodes: the first snapshot is not the lattice
+        const Frame f = read_frame((dir / "snapshots/discs_00000.vtp").string(), (dir / "snapshots/walls_00000.vtp").string());
+        Scenario unsettled = parse_scenario(text, "settle.toml");
+        apply_override(unsettled, "lattice_release.settle=false");
+        finish_scenario(unsettled);
+        std::vector<WallDef> walls = make_setup(unsettled)->walls();
+        walls.insert(walls.end(), unsettled.walls.begin(), unsettled.walls.end());
+        const ReleaseMass nodes = lattice_mass(unsettled, walls);
+        ASSERT_EQ(nodes.pos.size(), f.pos.size());
+        double moved = 0.0;
+        for (size_t i = 0; i < f.pos.size(); ++i) moved = std::max(moved, (f.pos[i] - nodes.pos[i]).norm());
+        EXPECT_GT(moved, 0.01);
+        bytes[threads - 1] = read_file(dir / "forces.csv") + read_file(dir / "energy.csv") + read_file(dir / "snapshots/discs_00001.vtp");
+        fs::remove_all(dir);
+    }
+    EXPECT_EQ(bytes[0], bytes[1]);
+    // a mass that cannot settle in the time allowed is refused with the keys to change
+    Scenario s = parse_scenario(text, "settle.toml");
+    apply_override(s, "release.settle_max_time=0.05");
+    finish_scenario(s);
+    const fs::path dir = temp_dir("lattice-unsettled");
+    try {
+        run_scenario(s, {dir.string(), false, {}});
+        ADD_FAILURE() << "an unsettled lattice was run";
+    } catch (const RunError& e) {
+        EXPECT_NE(std::string(e.what()).find("release.settle_max_time"), std::string::npos) << e.what();
+    }
     fs::remove_all(dir);
 }

@@ -69,7 +69,7 @@ TEST(Scenario, EveryShippedScenarioLoadsAndResolves) {
                   resolved_toml(s).substr(resolved_toml(s).find('\n', 80)));
         ++count;
     }
-    EXPECT_EQ(count, 15);  // 8 rows of Table 2, the presets A, B, C, the dam break, the terrain profile, the snow slide and its dam
+    EXPECT_EQ(count, 16);  // 8 rows of Table 2, the presets A, B, C, the dam break, the terrain profile, the snow slide, its dam and its disordered variant
 }
 
 TEST(Release, CountFollowsPfcsRuleForTheThesisScales) {

@@ -263,8 +263,11 @@ void write_results(const Scenario& s, const Setup& setup, const World& w, const 
         sum.bonds = long(w.bonds().size());
         sum.bonds_broken = long(w.bond_breaks().size());
     }
+    // a settled lattice reports its settling (it has no generated porosity)
+    const bool settled_lattice = s.lattice_release.enabled && s.lattice_release.settle;
     write_summary(dir + "/summary.json", s, sum,
-                  ReleaseFigures{setup.has_release(), mass.porosity_generated, mass.settle_time, mass.wall_seconds},
+                  ReleaseFigures{setup.has_release() || settled_lattice, settled_lattice ? NAN : mass.porosity_generated,
+                                 mass.settle_time, mass.wall_seconds},
                   setup.measures_envelope() ? &angles : nullptr);
 }
 

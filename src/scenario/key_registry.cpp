@@ -268,7 +268,7 @@ void add_cohesion_keys(std::vector<Key>& k) {
     k.push_back(real("lattice_release.spacing", "m", "distance between neighbouring nodes; 0 = 2 r_max", [](Scenario& s) -> double& { return s.lattice_release.spacing; }, 0, 100));
     k.push_back(real("lattice_release.r_min", "m", "smallest radius (required, > 0)", [](Scenario& s) -> double& { return s.lattice_release.r_min; }, 0, 10));
     k.push_back(real("lattice_release.r_max", "m", "largest radius; 0 = r_min (radii uniform in [r_min, r_max] from scenario.seed)", [](Scenario& s) -> double& { return s.lattice_release.r_max; }, 0, 10));
-    k.push_back(boolean("lattice_release.settle", "settle the lattice under gravity before t = 0; not built: true is refused", [](Scenario& s) -> bool& { return s.lattice_release.settle; }));
+    k.push_back(boolean("lattice_release.settle", "settle the lattice under gravity before t = 0, against every wall (one removed at t = 0 holds it as a gate), with local damping release.settle_alpha until release.settle_ratio, at most release.settle_max_time; the bonds are built from the settled positions", [](Scenario& s) -> bool& { return s.lattice_release.settle; }));
 }
 
 void add_setups_keys(std::vector<Key>& k) {

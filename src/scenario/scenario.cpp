@@ -283,9 +283,6 @@ void finish_lattice(Scenario& s) {
     if (s.flume.enabled || s.dam_break.enabled || (s.terrain.enabled && !s.terrain.release.empty()))
         throw InputError(where + "[lattice_release] fills its own region: it cannot go with a [flume], a [dam_break] "
                          "or a terrain.release (they generate a release mass)");
-    if (l.settle)
-        throw InputError(where + "lattice_release.settle = true: settling the lattice before t = 0 is not built in this "
-                         "version; use false (the discs start on their nodes)");
     if (l.region.size() < 3)
         throw InputError(where + "lattice_release.region: " + std::to_string(l.region.size()) +
                          " points; a polygon needs at least 3 ([[x, y], ...] in m)");

@@ -66,7 +66,7 @@ struct LatticeReleaseDef {
     double spacing = 0.0;                  // m, between neighbours; 0 = 2 r_max
     double r_min = 0.0;                    // m, > 0 (required)
     double r_max = 0.0;                    // m; 0 = r_min (radii uniform in [r_min, r_max] from the seed)
-    bool settle = false;                   // settle before t = 0: refused, not built
+    bool settle = false;                   // settle under gravity before t = 0 (lattice_release.cpp)
 };
 
 struct ReleaseDef {

@@ -1,11 +1,15 @@
 #include "setups/lattice_release.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <random>
 
 #include "core/error.h"
+#include "core/interrupt.h"
+#include "core/progress.h"
 #include "core/validate.h"
+#include "dem/world.h"
 
 namespace demlab {
 
@@ -66,7 +70,54 @@ ReleaseMass lattice_mass(const Scenario& s, const std::vector<WallDef>& walls) {
         }
     if (m.pos.empty()) throw InputError(s.source + ": lattice_release: no node of the lattice lies inside the region and clear of the walls");
     m.settled = true;
+    if (l.settle) settle_lattice(s, walls, m);
     return m;
+}
+
+// The lattice settled under gravity before t = 0 (COHESION.md section 3, variant C): the
+// discs and every wall of the run, those removed at t = 0 (a gate) too, with the release's
+// local damping (release.settle_alpha) and no tensile dashpot force (mode 1, as the flume's
+// settling), rotation locked; settled when the mean unbalanced force falls below
+// release.settle_ratio of the mean contact force, refused when it does not within
+// release.settle_max_time. Bonds are built afterwards, at t = 0, from the settled positions.
+void settle_lattice(const Scenario& s, const std::vector<WallDef>& walls, ReleaseMass& m) {
+    const auto t0 = std::chrono::steady_clock::now();
+    const ReleaseDef& rd = s.release;
+    WorldDef def = s.world;
+    def.rotation.model = 1;
+    def.damping.local_alpha = rd.settle_alpha;
+    def.damping.dp_mode = DashpotMode::NoTension;
+    World w(def);
+    const int mat = w.add_material(s.disc);
+    for (size_t i = 0; i < m.pos.size(); ++i) w.add_disc({m.pos[i], m.radius[i], Vec2::Zero(), 0, 0, mat});
+    for (WallDef wd : walls) {
+        wd.remove_at = kNever;  // a gate holds the mass while it settles
+        wd.velocity = Vec2::Zero();
+        w.add_wall(wd);
+    }
+    w.finalize();
+    Progress progress(rd.settle_max_time, "s of settling");
+    bool done = false;
+    while (w.time() < rd.settle_max_time) {
+        w.run(200);
+        if (pending_interrupt()) throw Interrupted("stopped while the lattice settled, which is not checkpointed");
+        m.settle_ratio = w.unbalanced_force_ratio();
+        progress.update(w.time(), w.step_count());
+        if (w.time() > 0.02 && m.settle_ratio < rd.settle_ratio) {
+            done = true;
+            break;
+        }
+    }
+    progress.finish();
+    if (!done)
+        throw RunError(s.source + ": lattice_release.settle: the lattice did not settle within release.settle_max_time = " +
+                       format_number(rd.settle_max_time) + " s (unbalanced force ratio " + format_number(m.settle_ratio) +
+                       ", asked < release.settle_ratio = " + format_number(rd.settle_ratio) +
+                       "); raise settle_max_time, or hold the mass with a wall removed at t = 0");
+    m.pos = w.positions();
+    m.settle_time = w.time();
+    m.settle_steps = w.step_count();
+    m.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
 }  // namespace demlab

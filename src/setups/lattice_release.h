@@ -4,7 +4,7 @@
 // 1e-9 s of its boundary counts) and at least r from every wall (less 0.1 % of r, for
 // coordinates rounded to 0.1 mm). Radii uniform in
 // [r_min, r_max] from scenario.seed. Numbered row by row (j, then i), so discs near in space
-// are near in number (the force pass' ranges); a disc's layer is its row.
+// are near in number (the force pass' ranges); a disc's layer is its row (before settling).
 #pragma once
 #include <vector>
 
@@ -13,6 +13,9 @@
 
 namespace demlab {
 
+// With lattice_release.settle, the discs then settle under gravity against the walls
+// (settle_lattice). Throws RunError when they do not within release.settle_max_time.
 ReleaseMass lattice_mass(const Scenario& s, const std::vector<WallDef>& walls);
+void settle_lattice(const Scenario& s, const std::vector<WallDef>& walls, ReleaseMass& m);
 
 }  // namespace demlab
