@@ -11,6 +11,7 @@
 #include <thread>
 #include <vector>
 
+#include "app/bench_bonds.h"
 #include "app/commands.h"
 #include "setups/db9k.h"
 #include "core/error.h"
@@ -302,7 +303,20 @@ int bench(const BenchOptions& o) {
         return jitter(o);
     }
     if (o.seconds_given) throw InputError("bench --seconds: only with the jitter workload (bench jitter --seconds S)");
-    if (o.workload != "db9k") throw InputError("bench: unknown workload '" + o.workload + "'; accepted: db9k, jitter");
+    if (o.workload == "bonds") {
+        if (o.peer || o.targets || o.ceiling || o.copies != 1 || o.prefetch != "auto")
+            throw InputError("bench bonds: takes --steps, --threads, --rounds, --file (a scenario with bonds), --scalar and "
+                             "--no-avx512; the other options are DB-9k's");
+        BondBenchOptions b;
+        b.scenario = o.file;
+        if (o.steps_given) b.steps = o.steps;
+        b.threads = o.threads;
+        if (o.rounds > 0) b.rounds = o.rounds;
+        b.scalar = o.scalar;
+        b.no_avx512 = o.no_avx512;
+        return bench_bonds(b);
+    }
+    if (o.workload != "db9k") throw InputError("bench: unknown workload '" + o.workload + "'; accepted: db9k, bonds, jitter");
     if (o.steps < 1) throw InputError("bench --steps = " + std::to_string(o.steps) + ": must be >= 1");
     if (o.ceiling && o.threads < 2)
         throw InputError("bench --ceiling with --threads = " + std::to_string(o.threads) +
@@ -310,7 +324,7 @@ int bench(const BenchOptions& o) {
     if (o.copies != 1 && (o.peer || o.targets))
         throw InputError("bench --copies = " + std::to_string(o.copies) + " with " + (o.peer ? "--peer" : "--targets") +
                          ": the peer's script runs one column; compare with LAMMPS on --copies 1");
-    if (o.rounds > 0 && !o.targets) throw InputError("bench --rounds: only with --targets (the rounds of the targets' figures)");
+    if (o.rounds > 0 && !o.targets) throw InputError("bench --rounds: only with --targets or the bonds workload");
     if (o.targets && (o.threads_given || o.ceiling))
         throw InputError(std::string("bench --targets with ") + (o.ceiling ? "--ceiling" : "--threads") +
                          ": --targets runs 1 and 2 threads and the two cores' ceiling itself; leave it out");
@@ -382,7 +396,8 @@ Command add_bench_command(CLI::App& app) {
     auto opts = std::make_shared<BenchOptions>();
     CLI::App* sub = app.add_subcommand("bench", "Speed benchmark: prints particle-steps per second and a state checksum");
     sub->add_option("workload", opts->workload,
-                    "Workload to run: db9k (the speed workload), jitter (the machine's interruptions on each core)")
+                    "Workload to run: db9k (the speed workload), bonds (what cohesive bonds cost: a bonded scenario, "
+                    "default the snow slab, bonds on against off), jitter (the machine's interruptions on each core)")
         ->capture_default_str();
     CLI::Option* steps = sub->add_option("--steps", opts->steps, "Number of time steps (20000: the quick figure; 100000: the reference)")
         ->capture_default_str();
@@ -394,7 +409,8 @@ Command add_bench_command(CLI::App& app) {
                     "Software prefetch in the force pass: auto (on when the step streams more than half the last-level "
                     "cache), on, off (the same bits; for comparison)")
         ->capture_default_str()->check(CLI::IsMember({"auto", "on", "off"}));
-    sub->add_option("--file", opts->file, "Initial state 'id x y r' (default: the repository's bench/db9k/db9k_initial.xyr)");
+    sub->add_option("--file", opts->file, "db9k: initial state 'id x y r' (default: the repository's bench/db9k/db9k_initial.xyr); "
+                    "bonds: a scenario with bonds (default scenarios/snow-slide-2d.toml)");
     CLI::Option* threads = sub->add_option("--threads", opts->threads, "Worker threads (the final state is the same bits for any count); jitter: the cores to probe (default: all)")
         ->capture_default_str()->check(CLI::Range(1, 64));
     sub->add_flag("--scalar", opts->scalar, "Use the scalar loops (pair forces, integration) even if the CPU has AVX2 (the same bits; for comparison)");
@@ -406,7 +422,8 @@ Command add_bench_command(CLI::App& app) {
     sub->add_flag("--targets", opts->targets,
                   "The issue's side-by-side figures: rounds of 1 thread, 2 threads and the two cores' ceiling (with "
                   "--peer, LAMMPS on 1 and 2 ranks too); prints a table with medians and ranges, and each target met or not");
-    sub->add_option("--rounds", opts->rounds, "With --targets: how many rounds (default 5; about a minute each with --peer)")
+    sub->add_option("--rounds", opts->rounds, "With --targets: how many rounds (default 5; about a minute each with --peer); "
+                    "bonds: pairs of runs (default 3)")
         ->check(CLI::Range(1, 100));
     CLI::Option* seconds = sub->add_option("--seconds", opts->seconds, "jitter: how long the probes run, s")
         ->capture_default_str()->check(CLI::Range(0.01, 600.0));

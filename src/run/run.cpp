@@ -273,6 +273,23 @@ void write_results(const Scenario& s, const Setup& setup, const World& w, const 
 
 }  // namespace
 
+World world_of_scenario(const Scenario& s) {
+    const std::unique_ptr<Setup> setup = make_setup(s);
+    ReleaseMass mass;
+    if (s.lattice_release.enabled) {
+        std::vector<WallDef> walls = setup->walls();
+        walls.insert(walls.end(), s.walls.begin(), s.walls.end());
+        mass = lattice_mass(s, walls);
+    } else if (setup->has_release()) {
+        mass = s.release.from_file.empty() ? generate_release(s) : load_release(s.release.from_file);
+        double r_max = 0.0;
+        for (double r : mass.radius) r_max = std::max(r_max, r);
+        order_in_space(mass, 4.0 * r_max);
+    }
+    std::vector<int> layer, grid;
+    return build_world(s, *setup, mass, false, layer, grid);
+}
+
 std::string setup_kind_of_run(const std::string& run_dir) {
     // the tables alone choose the set-up: parsed, not finished (no profile is read again)
     const std::string path = run_dir + "/scenario.toml";

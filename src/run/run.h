@@ -80,6 +80,10 @@ struct RunSummary {
 
 RunSummary run_scenario(const Scenario& s, const RunOptions& o);
 
+// The world a run of the scenario starts from (its release mass, discs, walls and bonds),
+// finalized and ready to step, with no run folder: benchmarks and scripting.
+World world_of_scenario(const Scenario& s);
+
 // The set-up of a run folder's scenario ("flume", "dam_break", "terrain", "explicit";
 // setups/setup.h), from its scenario.toml.
 std::string setup_kind_of_run(const std::string& run_dir);
