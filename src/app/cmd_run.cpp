@@ -34,10 +34,19 @@ struct RunCliOptions {
     bool no_avx512 = false;
     bool no_plots = false;
     double checkpoint_every = 0.0;
+    std::string solver;  // empty: the scenario's
 };
 
 // The lines a finished run prints, and its plots.
 int report(const Scenario& s, const RunSummary& r, const std::string& dir, bool plots) {
+    if (s.solver == "dan") {
+        std::printf("%s (DAN): %d blocks, %ld steps to t = %.3f s (%s), dt %.3g s, wall time %.2f s\n", s.name.c_str(),
+                    s.dan.blocks, r.steps, r.t_end, r.stop_reason.c_str(), r.dt, r.wall_seconds);
+        std::printf("  front at the barrier %.3f s; peak x-force on the barrier %.3f s; peak y-force on the arc %.3f s\n",
+                    r.t_front_at_barrier, r.t_peak_fx_barrier, r.t_peak_fy_arc);
+        std::printf("  run-out s = %.3f m; run-up %.3f m (max during run %.3f m)\n", r.runout_s, r.runup_height,
+                    r.max_runup_height_during_run);
+    } else {
     std::printf("%s: %ld discs, model %d, variant %s, %ld steps to t = %.3f s (%s), dt %.3g-%.3g s\n", s.name.c_str(),
                 r.n_discs, s.world.rotation.model, s.release.variant.c_str(), r.steps, r.t_end, r.stop_reason.c_str(),
                 r.dt_min, r.dt_max);
@@ -49,6 +58,7 @@ int report(const Scenario& s, const RunSummary& r, const std::string& dir, bool 
                     r.max_runup_height_during_run);
     }
     std::printf("  energy ledger closes to %.2f %% of the dissipated energy\n", 100.0 * r.energy_balance_error);
+    }
     std::printf("  wrote %s/\n", dir.c_str());
     if (plots) {
         if (gnuplot_available()) {
@@ -68,7 +78,15 @@ int run_command(const RunCliOptions& o) {
     if (o.scale) apply_override(s, "release.scale=" + std::to_string(o.scale));
     if (!o.release_from.empty()) s.release.from_file = o.release_from;
     for (const std::string& a : o.set) apply_override(s, a);
+    if (!o.solver.empty()) apply_override(s, "scenario.solver=\"" + o.solver + "\"");
     finish_scenario(s);
+    if (s.solver == "dan" && (o.frames || o.checkpoint_every > 0 || o.model || !o.release_from.empty()))
+        throw InputError(std::string("--solver dan: ") +
+                         (o.frames ? "--frames (render DAN's blocks.csv with demlab compare instead)"
+                          : o.checkpoint_every > 0 ? "--checkpoint-every (a DAN run takes seconds and writes no checkpoint)"
+                          : o.model ? "--model (the rotation models are the discs')"
+                                    : "--release-from (DAN fills the release box itself)") +
+                         " does not apply to the continuum model");
     s.world.threads = o.threads;
     s.world.simd = !o.scalar;
     s.world.avx512 = !o.no_avx512;
@@ -96,6 +114,8 @@ Command add_run_command(CLI::App& app) {
     sub->add_option("--scale", o->scale, "Upscaling of the sand (Table 14: 2, 4, 20): radii [0.25, 0.5] mm times this")
         ->check(CLI::Range(1, 100));
     sub->add_option("--out", o->out, "Output folder (default runs/<scenario name>); must not exist unless --force");
+    sub->add_option("--solver", o->solver, "dem (the discs, default) or dan (the continuum model on the flume's path; scenario.solver)")
+        ->check(CLI::IsMember({"dem", "dan"}));
     sub->add_option("--set", o->set, "Override a scenario key: --set key=value (repeatable), e.g. --set material.friction_disc_deg=16");
     sub->add_option("--release-from", o->release_from, "Start from a settled release mass (release.csv of an earlier run)");
     sub->add_flag("--force", o->force, "Replace the files of an existing output folder");

@@ -93,9 +93,15 @@ std::vector<std::string> make_plots(const std::string& run_dir, int width, int h
     }
     const std::string energy = run_dir + "/energy.csv";
     if (fs::exists(energy)) {
+        std::string header;
+        std::getline(std::ifstream(energy) >> std::ws, header);
         gp << "set output '" << dir << "/kinetic_energy.png'\nset title 'Kinetic energy (per metre of width)'\n"
-           << "set ylabel 'E (J/m)'\nplot '" << energy << "' using 1:($2+$3) with lines lw 2 title 'total', '' using "
-              "1:2 with lines title 'translation', '' using 1:3 with lines title 'rotation'\n";
+           << "set ylabel 'E (J/m)'\n";
+        if (header.rfind("t,kinetic,", 0) == 0)  // a DAN run: one kinetic energy
+            gp << "plot '" << energy << "' using 1:2 with lines lw 2 title 'kinetic'\n";
+        else
+            gp << "plot '" << energy << "' using 1:($2+$3) with lines lw 2 title 'total', '' using "
+                  "1:2 with lines title 'translation', '' using 1:3 with lines title 'rotation'\n";
         made.push_back(dir + "/kinetic_energy.png");
     }
     if (made.empty()) throw InputError(run_dir + ": no forces.csv, front.csv or energy.csv to plot");

@@ -20,7 +20,9 @@
 #include "core/validate.h"
 #include "dem/world.h"
 #include "run/checkpoint_file.h"
+#include "run/dan_run.h"
 #include "run/measures.h"
+#include "run/run_folder.h"
 #include "run/snapshot.h"
 #include "run/solver.h"
 #include "setups/lattice_release.h"
@@ -158,66 +160,6 @@ World build_world(const Scenario& s, const Setup& setup, const ReleaseMass& mass
     return w;
 }
 
-// The run folder's lock (flock on RUN_DIR/.demlab.lock, held while the run lives): a second
-// process resuming or forcing the same folder is refused instead of writing over the first.
-// The kernel drops the lock when the process ends, however it ends; a finished run removes
-// the file.
-class RunFolderLock {
-public:
-    explicit RunFolderLock(const std::string& dir) : path_(dir + "/.demlab.lock") {
-        fd_ = ::open(path_.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
-        if (fd_ < 0) throw InputError(path_ + ": cannot create the run folder's lock");
-        if (::flock(fd_, LOCK_EX | LOCK_NB) != 0) {
-            ::close(fd_);
-            fd_ = -1;
-            throw InputError(dir + ": another demlab process is running in this folder (it holds " + path_ +
-                             "); wait for it to finish, or choose another --out");
-        }
-    }
-    ~RunFolderLock() {
-        if (fd_ >= 0) ::close(fd_);
-    }
-    RunFolderLock(const RunFolderLock&) = delete;
-    RunFolderLock& operator=(const RunFolderLock&) = delete;
-    void release_and_remove() {
-        std::filesystem::remove(path_);
-        if (fd_ >= 0) ::close(fd_);
-        fd_ = -1;
-    }
-
-private:
-    std::string path_;
-    int fd_ = -1;
-};
-
-// The run folder: a new one (refused if it exists, unless forced) with the resolved scenario,
-// or the checkpoint of the one to resume, checked against it; locked either way.
-std::unique_ptr<BinaryReader> open_run_folder(const RunOptions& o, const std::string& scenario_text,
-                                              std::unique_ptr<RunFolderLock>& lock) {
-    const std::string& dir = o.out_dir;
-    const std::string checkpoint_path = dir + "/" + kCheckpointFile;
-    if (!o.resume) {
-        // a folder that exists is locked before it is touched (a forced run over a running one)
-        if (o.force && std::filesystem::is_directory(dir)) lock = std::make_unique<RunFolderLock>(dir);
-        prepare_output_dir(o.out_dir, o.force);
-        if (!lock) lock = std::make_unique<RunFolderLock>(dir);
-        std::filesystem::remove(checkpoint_path);  // a stale one of a replaced run
-        write_file_atomic(dir + "/scenario.toml", scenario_text);
-        return nullptr;
-    }
-    if (!std::filesystem::is_directory(dir)) throw InputError(dir + ": no such run folder to resume");
-    lock = std::make_unique<RunFolderLock>(dir);
-    auto restore = std::make_unique<BinaryReader>(read_checkpoint_file(checkpoint_path), checkpoint_path);
-    if (!same_scenario(get_checkpoint_header(*restore, checkpoint_path).scenario_text, scenario_text))
-        throw InputError(dir + "/scenario.toml differs from the scenario the checkpoint was written with "
-                         "(was it edited?); a resumed run must continue the same scenario");
-    restore->expect_tag("RUN ");
-    // a write the kill interrupted left its temporary file (the target is intact)
-    for (const auto& e : std::filesystem::recursive_directory_iterator(dir))
-        if (e.is_regular_file() && e.path().extension() == ".tmp") std::filesystem::remove(e.path());
-    return restore;
-}
-
 // The world's performance figures into the summary.
 void finish_summary(const World& w, RunSummary& sum, double candidate_sum, double touching_sum, long pair_samples) {
     sum.broadphase_margin = w.broad_phase_margin();
@@ -297,6 +239,7 @@ std::string setup_kind_of_run(const std::string& run_dir) {
 }
 
 RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
+    if (s.solver == "dan") return run_dan(s, o);
     const std::string dir = o.out_dir;
     const std::string checkpoint_path = dir + "/" + kCheckpointFile;
     const std::string scenario_text = resolved_toml(s);

@@ -160,6 +160,7 @@ void add_scenario_and_material_keys(std::vector<Key>& k) {
     // scenario
     k.push_back(text("scenario.name", "name of the scenario, used in outputs", [](Scenario& s) -> std::string& { return s.name; }));
     k.push_back(text("scenario.description", "free text", [](Scenario& s) -> std::string& { return s.description; }));
+    k.push_back(text("scenario.solver", "dem: the discs (the thesis' PFC2D model); dan: the depth-averaged continuum model on a flume's path ([dan], docs/dan.md)", [](Scenario& s) -> std::string& { return s.solver; }, {"dem", "dan"}));
     {
         Key seed{"scenario.seed", "-", "integer in [0, 2^63)", "seed of every random draw (release mass radii and positions)", nullptr, nullptr};
         seed.set = [](Scenario& s, const toml::node& n, const std::string& where) {
@@ -295,6 +296,39 @@ void add_setups_keys(std::vector<Key>& k) {
     k.push_back(polygon("terrain.release", "array of >= 3 points [x, y] of a convex polygon", "the polygon the release mass fills (generated as for the flume, then dropped onto the profile); [] = the [[discs]] given", [](Scenario& s) -> std::vector<Vec2>& { return s.terrain.release; }));
 }
 
+// The continuum model (docs/spec/DAN.md section 3; its equations D1-D15 in brackets)
+void add_dan_keys(std::vector<Key>& k) {
+    k.push_back(integer("dan.blocks", "-", "boundary blocks n (n - 1 mass blocks between them)", [](Scenario& s) -> int& { return s.dan.blocks; }, 3, 100000));
+    k.push_back(choice<DanColumns>("dan.columns", "mass blocks as vertical columns (Mancarella & Hungr 2010) or normal to the bed [D1]", [](Scenario& s) -> DanColumns& { return s.dan.columns; }, {{"vertical", DanColumns::Vertical}, {"normal", DanColumns::Normal}}));
+    k.push_back(real("dan.density", "kg/m3", "bulk density of the flow (lab: 1630); only the forces scale with it", [](Scenario& s) -> double& { return s.dan.density; }, 0, 1e5, true));
+    k.push_back(real("dan.width", "m", "width B (1 m as PFC2D: results per metre)", [](Scenario& s) -> double& { return s.dan.width; }, 0, 100, true));
+    k.push_back(real("dan.phi_internal_deg", "deg", "dynamic internal friction angle (Table 16: 30.9) [D5]", [](Scenario& s) -> double& { return s.dan.phi_internal_deg; }, 0, 89));
+    k.push_back(real("dan.phi_basal_deg", "deg", "basal friction angle (Table 16: 21.7) [D10]", [](Scenario& s) -> double& { return s.dan.phi_basal_deg; }, 0, 89));
+    k.push_back(real("dan.pore_pressure_ratio", "-", "pore-pressure ratio r_u [D10]", [](Scenario& s) -> double& { return s.dan.pore_pressure_ratio; }, 0, 1, false, true));
+    k.push_back(choice<DanKMode>("dan.k_mode", "earth-pressure coefficient from the blocks' strains between active and passive (dan), or k_fixed [D6]", [](Scenario& s) -> DanKMode& { return s.dan.k_mode; }, {{"dan", DanKMode::Dan}, {"fixed", DanKMode::Fixed}}));
+    k.push_back(real("dan.k_fixed", "-", "k with k_mode fixed (1: a fluid)", [](Scenario& s) -> double& { return s.dan.k_fixed; }, 0, 100));
+    k.push_back(real("dan.k_initial", "-", "k at t = 0, clamped at the first update", [](Scenario& s) -> double& { return s.dan.k_initial; }, 0, 100));
+    k.push_back(real("dan.k_stiffness", "-", "E_k: k changes by -E_k times the strain increment; 0 = the Savage-Hutter switch [D6]", [](Scenario& s) -> double& { return s.dan.k_stiffness; }, 0, 1e9));
+    k.push_back(real("dan.lambda", "-", "Hungr's factor of the modified basal angle (eq. 2.38) [D4]", [](Scenario& s) -> double& { return s.dan.lambda; }, -1, 1));
+    k.push_back(choice<DanPressure>("dan.pressure_form", "DAN's k dH/ds at the boundary blocks, or the conservative difference of the blocks' thrusts [D7]", [](Scenario& s) -> DanPressure& { return s.dan.pressure_form; }, {{"dan", DanPressure::Dan}, {"conservative", DanPressure::Conservative}}));
+    k.push_back(choice<DanEndHeight>("dan.end_height", "the surface at the end blocks: half the end block's height (literal) or zero (it meets the bed) [D7, D8]", [](Scenario& s) -> DanEndHeight& { return s.dan.end_height; }, {{"half", DanEndHeight::Half}, {"zero", DanEndHeight::Zero}}));
+    k.push_back(boolean("dan.pressure_centripetal", "also scale the pressure by (1 + kappa v^2 / (g cos alpha)), as AvaFrame does", [](Scenario& s) -> bool& { return s.dan.pressure_centripetal; }));
+    k.push_back(boolean("dan.centripetal", "the centripetal term kappa v^2 in the basal resistance [D10]", [](Scenario& s) -> bool& { return s.dan.centripetal; }));
+    k.push_back(real("dan.curvature_window", "m", "running mean of the path's curvature over this length; 0 = none", [](Scenario& s) -> double& { return s.dan.curvature_window; }, 0, 1));
+    k.push_back(boolean("dan.smoothing", "the thesis' velocity smoothing (section 2.2.6) [D12]", [](Scenario& s) -> bool& { return s.dan.smoothing; }));
+    k.push_back(real("dan.cs_interior", "-", "smoothing factor c_s of the inner boundary blocks (thesis: 0.02)", [](Scenario& s) -> double& { return s.dan.cs_interior; }, 0, 1));
+    k.push_back(real("dan.cs_ends", "-", "smoothing factor c_s of the front and tail blocks (thesis: 0.004)", [](Scenario& s) -> double& { return s.dan.cs_ends; }, 0, 1));
+    k.push_back(choice<DanSpacing>("dan.smoothing_spacing", "the smoothing's spacings along x (thesis) or along the path [D12]", [](Scenario& s) -> DanSpacing& { return s.dan.smoothing_spacing; }, {{"horizontal", DanSpacing::Horizontal}, {"path", DanSpacing::Path}}));
+    k.push_back(real("dan.smoothing_dt_ref", "s", "the smoothing acts as c_s dt / smoothing_dt_ref a step, so its effect per second is independent of dt; 0 = c_s a step, literally", [](Scenario& s) -> double& { return s.dan.smoothing_dt_ref; }, 0, 1));
+    k.push_back(choice<DanMomentum>("dan.momentum_correction", "give the moving blocks back the momentum the smoothing moved (global), or not (none) [D13]", [](Scenario& s) -> DanMomentum& { return s.dan.momentum_correction; }, {{"global", DanMomentum::Global}, {"none", DanMomentum::None}}));
+    k.push_back(real("dan.dt", "s", "time step (dt_mode auto: the largest step allowed)", [](Scenario& s) -> double& { return s.dan.dt; }, 1e-7, 1e-2));
+    k.push_back(choice<DanStep>("dan.dt_mode", "a fixed step (the run stops past cfl_max) or the largest within cfl_max", [](Scenario& s) -> DanStep& { return s.dan.dt_mode; }, {{"fixed", DanStep::Fixed}, {"auto", DanStep::Auto}}));
+    k.push_back(real("dan.cfl_max", "-", "stability limit: dt (sqrt(k g h cos alpha) + |dv|) / l at most this", [](Scenario& s) -> double& { return s.dan.cfl_max; }, 0, 1, true));
+    k.push_back(real("dan.path_extension", "m", "the path goes on straight this far past the barrier's end and before the slope's start", [](Scenario& s) -> double& { return s.dan.path_extension; }, 0, 100));
+    k.push_back(real("dan.sync_time", "s", "the reference front's time the DAN front is synchronised at (thesis Abb. 37: 0.4 s)", [](Scenario& s) -> double& { return s.dan.sync_time; }, 0, 100));
+    k.push_back(text("dan.sync_front", "a reference front.csv (a DEM run's, or the lab's digitised) for front_synced.csv; a relative path is taken from the scenario file's folder; empty = none", [](Scenario& s) -> std::string& { return s.dan.sync_front; }));
+}
+
 void add_run_keys(std::vector<Key>& k) {
     // release
     k.push_back(integer("release.scale", "-", "upscaling of the sand (Table 14): radii [0.25, 0.5] mm times this (2: 36,403 discs; 4: 9,099; 20: 364)", [](Scenario& s) -> int& { return s.release.scale; }, 1, 100));
@@ -352,6 +386,7 @@ const std::vector<Key>& registry() {
         add_dynamics_keys(k);
         add_setups_keys(k);
         add_cohesion_keys(k);
+        add_dan_keys(k);
         add_run_keys(k);
         return k;
     }();

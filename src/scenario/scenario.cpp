@@ -137,6 +137,7 @@ void read_table(Scenario& s, const toml::table& t, const std::string& prefix, co
         if (key == "terrain") s.terrain.enabled = true;
         if (key == "cohesion") s.cohesion.given = true;
         if (key == "lattice_release") s.lattice_release.enabled = true;
+        if (key == "dan") s.dan_given = true;
         if (const toml::table* sub = node.as_table()) {
             read_table(s, *sub, key, file);
             continue;
@@ -188,6 +189,7 @@ void apply_override(Scenario& s, const std::string& assignment) {
     if (key.rfind("terrain.", 0) == 0) s.terrain.enabled = true;
     if (key.rfind("cohesion.", 0) == 0) s.cohesion.given = true;
     if (key.rfind("lattice_release.", 0) == 0) s.lattice_release.enabled = true;
+    if (key.rfind("dan.", 0) == 0) s.dan_given = true;
 }
 
 // The profile read and the release polygon checked: a convex polygon of >= 3 corners that
@@ -258,6 +260,30 @@ void finish_terrain(Scenario& s) {
                          format_number(size) + " m across): at most " + format_number(size / 8) + " m");
 }
 
+// The continuum solver's constraints (DAN.md section 3): a flume's path, gravity along -y, no
+// discs of the scenario's own; its reference front resolved like a profile.
+void finish_dan(Scenario& s) {
+    const std::string where = s.source + ": ";
+    if (s.solver != "dan") return;
+    if (!s.flume.enabled)
+        throw InputError(where + "scenario.solver = \"dan\" runs on a flume's path: the scenario needs a [flume] (the "
+                         "geometries of scenarios/flume-*.toml and geometry-*.toml)");
+    if (s.cohesion.enabled || s.lattice_release.enabled || !s.discs.empty() || !s.walls.empty())
+        throw InputError(where + "scenario.solver = \"dan\": the continuum model has no discs, bonds or walls of its own; "
+                         "leave out [cohesion], [lattice_release], [[discs]] and [[walls]]");
+    if (s.world.gravity.x() != 0.0 || !(s.world.gravity.y() < 0.0))
+        throw InputError(where + "world.gravity = [" + format_number(s.world.gravity.x()) + ", " + format_number(s.world.gravity.y()) +
+                         "] m/s2: scenario.solver = \"dan\" needs gravity along -y");
+    DanDef& d = s.dan;
+    if (!d.sync_front.empty()) {
+        const std::filesystem::path f(d.sync_front);
+        if (f.is_relative() && std::filesystem::is_regular_file(s.source))
+            d.sync_front = (std::filesystem::absolute(std::filesystem::path(s.source)).parent_path() / f).lexically_normal().string();
+        if (!std::filesystem::is_regular_file(d.sync_front))
+            throw InputError(where + "dan.sync_front = \"" + d.sync_front + "\": not a file (a front.csv with t,s_front columns)");
+    }
+}
+
 // The bonds' keys together (COHESION.md section 7's choices).
 void finish_cohesion(Scenario& s) {
     const std::string where = s.source + ": ";
@@ -318,6 +344,7 @@ void finish_scenario(Scenario& s) {
     if (int(s.flume.enabled) + int(s.dam_break.enabled) + int(s.terrain.enabled) > 1)
         throw InputError(where + "a scenario is one of [flume], [dam_break] and [terrain], not several");
     if (s.terrain.enabled) finish_terrain(s);
+    finish_dan(s);
     finish_lattice(s);
     finish_cohesion(s);
     if (has_release(s) && !(r.r_min <= r.r_max))
@@ -377,6 +404,7 @@ static bool section_in_use(const Scenario& s, const std::string& sec) {
     if (sec == "terrain") return s.terrain.enabled;
     if (sec == "cohesion") return s.cohesion.given;
     if (sec == "lattice_release") return s.lattice_release.enabled;
+    if (sec == "dan") return s.dan_given || s.solver == "dan";
     return true;
 }
 

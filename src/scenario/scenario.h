@@ -9,6 +9,7 @@
 #include "dem/material.h"
 #include "dem/bonds/bond_builder.h"
 #include "geometry/wall.h"
+#include "dan/dan_def.h"
 #include "dem/world.h"
 
 namespace demlab {
@@ -112,6 +113,9 @@ struct Scenario {
     double disc_friction_deg = 15.5;
     double wall_friction_deg = 21.7;
     double wall_kn = 1.0e8, wall_ks = 1.0e8;
+    std::string solver = "dem";            // "dem" (discs) or "dan" (the continuum model, dan/)
+    DanDef dan;                            // the continuum model's parameters ([dan])
+    bool dan_given = false;                // a [dan] table was given (it is then written back)
     FlumeDef flume;
     DamBreakDef dam_break;
     TerrainDef terrain;

@@ -1,0 +1,20 @@
+// `demlab run` with scenario.solver = "dan": the continuum model (dan/) on a flume's path,
+// into the same run folder as a DEM run where the quantity exists (docs/spec/DAN.md section
+// 2, "Outputs"): scenario.toml, front.csv (t, s_front, displacement, s_tail, v_front),
+// forces.csv (the DEM's columns: the bed's load on slope, arc and barrier), energy.csv (t,
+// kinetic, potential, dissipated_friction, other, balance), blocks.csv (every block at each
+// snapshot interval), deposit.csv (s, height, block_height), front_synced.csv (with
+// dan.sync_front) and summary.json. A DAN run takes seconds: it writes no checkpoints.
+#pragma once
+#include "dan/dan_solver.h"
+#include "run/run.h"
+
+namespace demlab {
+
+RunSummary run_dan(const Scenario& s, const RunOptions& o);
+
+// The solver of a flume scenario's DAN run at t = 0 (its path from the world-joined walls, its
+// release from the release box), without a run folder: tests and scripting.
+DanSolver dan_of_scenario(const Scenario& s);
+
+}  // namespace demlab

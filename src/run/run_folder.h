@@ -1,0 +1,55 @@
+// The run folder of `demlab run` (DEM or DAN): created new (refused when it exists, unless
+// forced) with the resolved scenario, or opened to resume from its checkpoint, and locked
+// while the run lives (flock on RUN_DIR/.demlab.lock), so a second process resuming or
+// forcing the same folder is refused instead of writing over the first.
+#pragma once
+#include <fcntl.h>
+#include <sys/file.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <memory>
+#include <string>
+
+#include "core/binary_io.h"
+#include "core/error.h"
+#include "run/run.h"
+
+namespace demlab {
+
+// The kernel drops the lock when the process ends, however it ends; a finished run removes
+// the file.
+class RunFolderLock {
+public:
+    explicit RunFolderLock(const std::string& dir) : path_(dir + "/.demlab.lock") {
+        fd_ = ::open(path_.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+        if (fd_ < 0) throw InputError(path_ + ": cannot create the run folder's lock");
+        if (::flock(fd_, LOCK_EX | LOCK_NB) != 0) {
+            ::close(fd_);
+            fd_ = -1;
+            throw InputError(dir + ": another demlab process is running in this folder (it holds " + path_ +
+                             "); wait for it to finish, or choose another --out");
+        }
+    }
+    ~RunFolderLock() {
+        if (fd_ >= 0) ::close(fd_);
+    }
+    RunFolderLock(const RunFolderLock&) = delete;
+    RunFolderLock& operator=(const RunFolderLock&) = delete;
+    void release_and_remove() {
+        std::filesystem::remove(path_);
+        if (fd_ >= 0) ::close(fd_);
+        fd_ = -1;
+    }
+
+private:
+    std::string path_;
+    int fd_ = -1;
+};
+
+// The run folder: a new one (refused if it exists, unless forced) with the resolved scenario,
+// or the checkpoint of the one to resume, checked against it; locked either way.
+std::unique_ptr<BinaryReader> open_run_folder(const RunOptions& o, const std::string& scenario_text,
+                                              std::unique_ptr<RunFolderLock>& lock);
+
+}  // namespace demlab
