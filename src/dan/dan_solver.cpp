@@ -88,7 +88,7 @@ EarthPressure earth_pressure_limits(double phi_internal_rad, double tan_basal) {
 
 DanSolver::DanSolver(const DanDef& def, DanPath path, Vec2 gravity, const DanInitial& init)
     : def_(def), path_(std::move(path)) {
-    if (gravity.x() != 0.0 || !(gravity.y() < 0.0))
+    if (gravity.x() != 0.0 || !(gravity.y() <= 0.0))
         throw InputError("world.gravity = [" + format_number(gravity.x()) + ", " + format_number(gravity.y()) +
                          "] m/s2: the continuum solver needs gravity along -y (the path's x is horizontal)");
     g_ = -gravity.y();
@@ -98,7 +98,8 @@ DanSolver::DanSolver(const DanDef& def, DanPath path, Vec2 gravity, const DanIni
     phi_internal_ = deg_to_rad(def.phi_internal_deg);
     s_ = init.s;
     vol_ = init.volume;
-    v_.assign(n, 0.0);
+    v_ = init.v.empty() ? std::vector<double>(n, 0.0) : init.v;
+    if (v_.size() != n) throw InputError("dan: one initial velocity per boundary block");
     k_.assign(n - 1, def.k_mode == DanKMode::Fixed ? def.k_fixed : def.k_initial);
     // D8: each mass block's mass split between its two boundary blocks, half and half; an end
     // block takes the share e of its block (the tip of a triangular end block: 1/4 with

@@ -14,10 +14,10 @@
 
 namespace demlab {
 
-// The initial blocks: positions along the path (m) and the mass blocks' volumes (m3, B
-// included); all at rest.
+// The initial blocks: positions along the path (m), the mass blocks' volumes (m3, B
+// included) and the boundary blocks' velocities (m/s; empty: at rest).
 struct DanInitial {
-    std::vector<double> s, volume;
+    std::vector<double> s, volume, v;
 };
 
 // The release polygon (convex or not) cut into n - 1 mass blocks: vertical columns between

@@ -271,7 +271,7 @@ void finish_dan(Scenario& s) {
     if (s.cohesion.enabled || s.lattice_release.enabled || !s.discs.empty() || !s.walls.empty())
         throw InputError(where + "scenario.solver = \"dan\": the continuum model has no discs, bonds or walls of its own; "
                          "leave out [cohesion], [lattice_release], [[discs]] and [[walls]]");
-    if (s.world.gravity.x() != 0.0 || !(s.world.gravity.y() < 0.0))
+    if (s.world.gravity.x() != 0.0 || !(s.world.gravity.y() <= 0.0))
         throw InputError(where + "world.gravity = [" + format_number(s.world.gravity.x()) + ", " + format_number(s.world.gravity.y()) +
                          "] m/s2: scenario.solver = \"dan\" needs gravity along -y");
     DanDef& d = s.dan;
