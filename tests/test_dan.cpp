@@ -12,6 +12,9 @@
 #include "dan/dan_solver.h"
 #include "files.h"
 #include "helpers.h"
+#include "output/compare.h"
+#include "output/frame.h"
+#include "output/render_run.h"
 #include "run/dan_run.h"
 #include "run/run.h"
 #include "scenario/scenario.h"
@@ -406,5 +409,28 @@ TEST(Dan, RefusalsAndGeometryAReference) {
     EXPECT_NEAR(r.runout_s, 2.0883, 1e-4);
     EXPECT_NEAR(r.runup_height, 0.1939, 1e-4);
     EXPECT_EQ(r.stop_reason, "rest");
+    // its frames come from blocks.csv (one a snapshot interval, the flow as filled quads)
+    const std::vector<Frame> frames = read_dan_frames(dir.string());
+    EXPECT_EQ(frames.size(), size_t(std::floor(r.t_end / 0.02)) + 1);
+    EXPECT_EQ(frames.front().fills.size(), 40u);
+    RenderRunOptions render;
+    render.run_dir = dir.string();
+    render.last_only = true;
+    render.threads = 1;
+    EXPECT_EQ(render_run(render), 1);
+    // compare: a folder that is not a finished run is refused before anything is written
+    const fs::path out = temp_dir("dan-compare");
+    fs::remove_all(out);
+    CompareOptions c;
+    c.runs = {dir.string(), (fs::path(root) / "scenarios").string()};
+    c.out = out.string();
+    expect_refused([&] { compare_runs(c); }, {"scenarios", "not a finished run folder"});
+    EXPECT_FALSE(fs::exists(out));
+    c.runs = {dir.string(), dir.string()};
+    const auto files = compare_runs(c);
+    for (const std::string& f : files) EXPECT_GT(fs::file_size(f), 100u) << f;
+    EXPECT_NE(read_file(out / "comparison.md").find("(DAN, 41 blocks) | 0.388 | 2.088 | 0.194"), std::string::npos)
+        << read_file(out / "comparison.md");
+    fs::remove_all(out);
     fs::remove_all(dir);
 }

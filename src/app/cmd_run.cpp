@@ -80,10 +80,9 @@ int run_command(const RunCliOptions& o) {
     for (const std::string& a : o.set) apply_override(s, a);
     if (!o.solver.empty()) apply_override(s, "scenario.solver=\"" + o.solver + "\"");
     finish_scenario(s);
-    if (s.solver == "dan" && (o.frames || o.checkpoint_every > 0 || o.model || !o.release_from.empty()))
+    if (s.solver == "dan" && (o.checkpoint_every > 0 || o.model || !o.release_from.empty()))
         throw InputError(std::string("--solver dan: ") +
-                         (o.frames ? "--frames (render DAN's blocks.csv with demlab compare instead)"
-                          : o.checkpoint_every > 0 ? "--checkpoint-every (a DAN run takes seconds and writes no checkpoint)"
+                         (o.checkpoint_every > 0 ? "--checkpoint-every (a DAN run takes seconds and writes no checkpoint)"
                           : o.model ? "--model (the rotation models are the discs')"
                                     : "--release-from (DAN fills the release box itself)") +
                          " does not apply to the continuum model");
@@ -97,8 +96,14 @@ int run_command(const RunCliOptions& o) {
     ro.handle_signals = true;
     ro.frames = o.frames;
     ro.plots = !o.no_plots;
-    if (o.frames) attach_frame_hook(ro, make_setup(s)->kind() == "flume");
+    if (o.frames && s.solver != "dan") attach_frame_hook(ro, make_setup(s)->kind() == "flume");
     const RunSummary r = run_scenario(s, ro);
+    if (o.frames && s.solver == "dan") {  // DAN's frames from its blocks.csv, after the run
+        RenderRunOptions frames;
+        frames.run_dir = ro.out_dir;
+        frames.force = o.force;
+        render_run(frames);
+    }
     return report(s, r, ro.out_dir, ro.plots);
 }
 }  // namespace

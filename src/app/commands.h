@@ -16,5 +16,6 @@ Command add_keys_command(CLI::App& app);
 Command add_render_command(CLI::App& app);
 Command add_plot_command(CLI::App& app);
 Command add_calibrate_command(CLI::App& app);
+Command add_compare_command(CLI::App& app);
 
 }  // namespace demlab

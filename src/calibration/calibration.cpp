@@ -21,6 +21,7 @@
 #include "core/progress.h"
 #include "output/renderer.h"
 #include "run/run.h"
+#include "run/summary_file.h"
 #include "scenario/scenario.h"
 #include "setups/setup.h"
 #include "core/validate.h"
@@ -108,23 +109,7 @@ CalibrationConfig load_calibration(const std::string& path) {
 
 namespace {
 
-std::map<std::string, double> read_summary(const std::string& path) {
-    std::ifstream in(path);
-    std::map<std::string, double> out;
-    std::string line;
-    while (std::getline(in, line)) {
-        const size_t q1 = line.find('"'), q2 = line.find('"', q1 + 1), colon = line.find(':', q2);
-        if (q1 == std::string::npos || q2 == std::string::npos || colon == std::string::npos) continue;
-        const std::string key = line.substr(q1 + 1, q2 - q1 - 1);
-        std::string value = line.substr(colon + 1);
-        if (value.find('"') != std::string::npos) continue;
-        try {
-            out[key] = value.find("null") != std::string::npos ? NAN : std::stod(value);
-        } catch (...) {
-        }
-    }
-    return out;
-}
+std::map<std::string, double> read_summary(const std::string& path) { return read_summary_file(path).numbers; }
 
 std::string angle_tag(double angle) {
     char buf[32];

@@ -6,10 +6,15 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <sstream>
 #include <string_view>
 #include <type_traits>
 
 #include "core/error.h"
+#include "core/fileio.h"
+#include "run/dan_run.h"
+#include "scenario/scenario.h"
+#include "setups/flume.h"
 
 namespace demlab {
 
@@ -130,6 +135,68 @@ Frame read_frame(const std::string& discs_vtp, const std::string& walls_vtp) {
         if (f.wall_id.size() != f.walls.size()) throw InputError(walls_vtp + ": wall ids do not match the lines");
     }
     return f;
+}
+
+std::vector<Frame> read_dan_frames(const std::string& run_dir) {
+    const std::string scenario_file = run_dir + "/scenario.toml", blocks_file = run_dir + "/blocks.csv";
+    Scenario s = parse_scenario(read_input_file(scenario_file, kMaxScenarioBytes, "scenario file"), scenario_file);
+    finish_scenario(s);
+    const DanPath path = flume_dan_path(s);
+    // the flume's walls as the DEM snapshots draw them: segments, the arc in 48 pieces
+    std::vector<std::vector<Vec2>> walls;
+    const std::vector<WallDef> defs = flume_walls(s, false);
+    for (int k = 0; k <= kW3; ++k) {
+        const WallGeom g = make_geom(defs[size_t(k)]);
+        std::vector<Vec2> line;
+        if (g.shape == WallShape::Segment) {
+            line = {g.p0, g.p1};
+        } else {
+            for (int j = 0; j <= 48; ++j) {
+                const double a = g.angle0 + g.extent * j / 48.0;
+                line.push_back(g.centre + g.radius * Vec2(std::cos(a), std::sin(a)));
+            }
+        }
+        walls.push_back(line);
+    }
+    std::ifstream in(blocks_file);
+    if (!in) throw InputError(run_dir + ": no blocks.csv (was output.snapshot_interval 0?)");
+    std::string line;
+    std::getline(in, line);
+    if (line != "t,i,s,x,y,v,H,k") throw InputError(blocks_file + ": not a DAN blocks.csv");
+    std::vector<Frame> frames;
+    std::vector<std::pair<Vec2, Vec2>> column;  // bed point, surface point of each boundary block
+    double t_now = NAN;
+    auto close_frame = [&] {
+        if (column.empty()) return;
+        Frame f;
+        f.time = t_now;
+        f.walls = walls;
+        f.wall_id = {0, 1, 2};
+        for (size_t i = 0; i + 1 < column.size(); ++i)
+            f.fills.push_back({{column[i].first, column[i + 1].first, column[i + 1].second, column[i].second}});
+        frames.push_back(std::move(f));
+        column.clear();
+    };
+    long row = 1;
+    while (std::getline(in, line)) {
+        ++row;
+        std::istringstream c(line);
+        std::vector<double> v;
+        for (std::string cell; std::getline(c, cell, ',');) v.push_back(std::stod(cell));
+        if (v.size() != 8) throw InputError(blocks_file + ":" + std::to_string(row) + ": expected 8 columns");
+        if (v[0] != t_now) {
+            close_frame();
+            t_now = v[0];
+        }
+        // H is the thickness normal to the bed; a vertical column's surface lies H / cos(alpha)
+        // straight above its bed point
+        const DanPathPoint q = path.at(v[2]);
+        const Vec2 up = s.dan.columns == DanColumns::Vertical ? Vec2(0.0, v[6] / std::cos(q.alpha)) : Vec2(v[6] * q.normal());
+        column.emplace_back(q.p, q.p + up);
+    }
+    close_frame();
+    if (frames.empty()) throw InputError(blocks_file + ": no rows");
+    return frames;
 }
 
 std::vector<SnapshotEntry> list_snapshots(const std::string& run_dir) {

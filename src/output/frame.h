@@ -27,11 +27,23 @@ struct Frame {
         double r = 0.8, g = 0.1, b = 0.1;
     };
     std::vector<Overlay> overlays;
+    // filled convex polygons drawn under the discs (a continuum run's flow, in sand colour)
+    struct Fill {
+        std::vector<Vec2> polygon;
+        double r = 0.84, g = 0.55, b = 0.24;
+    };
+    std::vector<Fill> fills;
     std::vector<std::pair<Vec2, std::string>> notes;
 };
 
 // Reads snapshots/discs_NNNNN.vtp and walls_NNNNN.vtp. Throws InputError on a malformed file.
 Frame read_frame(const std::string& discs_vtp, const std::string& walls_vtp);
+
+// A continuum (DAN) run's frames, one per time of its blocks.csv: the flow as a filled profile
+// (the boundary blocks' bed points and the surface H above them: straight up for vertical
+// columns, along the bed's normal for normal ones), over the flume's
+// walls W1, arc and W3 (ids 0, 1, 2, so the flume's marks are drawn). Throws InputError.
+std::vector<Frame> read_dan_frames(const std::string& run_dir);
 
 struct SnapshotEntry {
     double time;

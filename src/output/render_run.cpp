@@ -65,12 +65,22 @@ int render_run(const RenderRunOptions& o) {
     if (o.every < 0 || o.fps < 0) throw InputError("--every and --fps must be > 0");
     if (o.every > 0 && o.fps > 0) throw InputError("give --every or --fps, not both");
     if (o.threads < 0 || o.threads > 64) throw InputError("--threads " + std::to_string(o.threads) + ": must be 0 to 64");
-    const auto snaps = list_snapshots(o.run_dir);
+    // a continuum run draws its frames from blocks.csv, a DEM run from its snapshots
+    const bool dan = !std::filesystem::exists(o.run_dir + "/snapshots") && std::filesystem::exists(o.run_dir + "/blocks.csv");
+    std::vector<Frame> dan_frames;
+    std::vector<SnapshotEntry> snaps;
+    if (dan) {
+        dan_frames = read_dan_frames(o.run_dir);
+        for (const Frame& f : dan_frames) snaps.push_back({f.time, "", ""});
+    } else {
+        snaps = list_snapshots(o.run_dir);
+    }
+    auto frame_at = [&](size_t k) { return dan ? dan_frames[k] : read_frame(snaps[k].discs, snaps[k].walls); };
     RenderStyle style = default_render_style(setup_kind_of_run(o.run_dir) == "flume");
     parse_size(o.size, style);
     require_positive("--speed-max", o.speed_max, "m/s");
     style.speed_max = o.speed_max;
-    const Frame first = read_frame(snaps.front().discs, snaps.front().walls);
+    const Frame first = frame_at(0);
     const bool has_bonds = !first.bonds_intact.empty();
     const std::string color = o.color.empty() ? (has_bonds ? "bonds" : "layers") : o.color;
     style.color = parse_color_mode(color);
@@ -126,10 +136,9 @@ int render_run(const RenderRunOptions& o) {
         try {
             Renderer renderer(style);
             for (; f < chosen.size(); f += threads) {
-                const SnapshotEntry& e = snaps[chosen[f]];
                 char name[64];
                 std::snprintf(name, sizeof name, "/frame_%05zu.png", f);
-                Image img = renderer.render(read_frame(e.discs, e.walls));
+                Image img = renderer.render(frame_at(chosen[f]));
                 write_png(out + name, img);
                 if (!tiles.empty()) tiles[f] = std::move(img);
             }

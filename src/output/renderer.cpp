@@ -224,6 +224,12 @@ Renderer::Window Renderer::set_up_view(const Frame& f) {
 
 void Renderer::draw_discs(const Frame& f, double px_per_m) {
     Impl& im = *impl_;
+    for (const Frame::Fill& fill : f.fills) {
+        glColor3d(fill.r, fill.g, fill.b);
+        glBegin(GL_POLYGON);
+        for (const Vec2& p : fill.polygon) glVertex2d(p.x(), p.y());
+        glEnd();
+    }
     // discs: the same fans as glBegin(GL_TRIANGLE_FAN) per disc, from arrays in one call (the
     // immediate mode's call per vertex was most of OSMesa's time for a flume's 9,101 discs)
     im.xy.clear();

@@ -28,8 +28,9 @@ std::string num(double v) {
     return o.str();
 }
 
-// The flume's path as the DEM world joins its walls (W1, arc, W3; a world of those walls alone)
-DanPath flume_path(const Scenario& s) {
+}  // namespace
+
+DanPath flume_dan_path(const Scenario& s) {
     const std::unique_ptr<Setup> setup = make_setup(s);
     WorldDef def = s.world;
     def.threads = 1;
@@ -42,6 +43,8 @@ DanPath flume_path(const Scenario& s) {
     w.finalize();
     return DanPath(*setup->bed_path(w), s.dan.curvature_window);
 }
+
+namespace {
 
 // s on the path of a point of a front.csv (t, s_front, ...) at time t, interpolated linearly
 struct FrontSeries {
@@ -87,7 +90,7 @@ double first_time_at(const std::vector<double>& t, const std::vector<double>& s,
 }  // namespace
 
 DanSolver dan_of_scenario(const Scenario& s) {
-    DanPath path = flume_path(s);
+    DanPath path = flume_dan_path(s);
     const DanDef& d = s.dan;
     if (d.columns == DanColumns::Vertical && !path.x_increasing(-d.path_extension, path.length() + d.path_extension, 0.05))
         throw InputError(s.source + ": dan.columns = \"vertical\" needs a path whose x increases everywhere (cos alpha >= "

@@ -17,4 +17,7 @@ RunSummary run_dan(const Scenario& s, const RunOptions& o);
 // release from the release box), without a run folder: tests and scripting.
 DanSolver dan_of_scenario(const Scenario& s);
 
+// A flume scenario's path (W1, arc, W3) as the DEM world joins its walls.
+DanPath flume_dan_path(const Scenario& s);
+
 }  // namespace demlab

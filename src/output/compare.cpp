@@ -1,0 +1,189 @@
+#include "output/compare.h"
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "core/error.h"
+#include "core/fileio.h"
+#include "core/output_dir.h"
+#include "output/plot.h"
+#include "run/dan_run.h"
+#include "run/summary_file.h"
+#include "scenario/scenario.h"
+
+namespace demlab {
+
+namespace {
+namespace fs = std::filesystem;
+
+struct RunInfo {
+    std::string dir, label;
+    bool dan = false, flume = false;
+    Scenario scenario;
+    SummaryFile summary;
+};
+
+RunInfo read_run(const std::string& dir) {
+    RunInfo r;
+    r.dir = dir;
+    if (!fs::is_directory(dir)) throw InputError(dir + ": no such run folder");
+    for (const char* f : {"scenario.toml", "summary.json", "front.csv", "forces.csv"})
+        if (!fs::is_regular_file(dir + "/" + f))
+            throw InputError(dir + ": not a finished run folder (no " + f + "); compare takes folders written by demlab run");
+    r.scenario = parse_scenario(read_input_file(dir + "/scenario.toml", kMaxScenarioBytes, "scenario file"), dir + "/scenario.toml");
+    r.summary = read_summary_file(dir + "/summary.json");
+    r.dan = r.summary.text("model") == "dan";
+    r.flume = r.scenario.flume.enabled;
+    std::string name = fs::path(dir).lexically_normal().filename().string();
+    if (name.empty() || name == ".") name = fs::path(dir).lexically_normal().parent_path().filename().string();
+    if (r.dan) {
+        r.label = name + " (DAN, " + std::to_string(r.scenario.dan.blocks) + " blocks)";
+    } else {
+        r.label = name + " (DEM";
+        if (r.flume) r.label += ", model " + std::to_string(r.scenario.world.rotation.model) + ", scale " + std::to_string(r.scenario.release.scale);
+        r.label += ")";
+    }
+    return r;
+}
+
+std::string quoted(const std::string& s) {
+    std::string o;
+    for (char c : s) o += (c == '\'' ? std::string("''") : std::string(1, c));
+    return "'" + o + "'";
+}
+
+std::string cell(double v, int digits = 3) {
+    if (!std::isfinite(v)) return "-";
+    char b[32];
+    std::snprintf(b, sizeof b, "%.*f", digits, v);
+    return b;
+}
+}  // namespace
+
+std::vector<std::string> compare_runs(const CompareOptions& o) {
+    if (o.runs.empty()) throw InputError("compare: give one or more run folders");
+    std::vector<RunInfo> runs;
+    for (const std::string& d : o.runs) runs.push_back(read_run(d));
+    if (!gnuplot_available())
+        throw RunError("gnuplot is not installed, so no comparison was drawn (apt-get install gnuplot-nox, or "
+                       "scripts/install-deps.sh)");
+    prepare_output_dir(o.out, o.force);
+    std::vector<std::string> made;
+    bool all_flume = true;
+    for (const RunInfo& r : runs) all_flume = all_flume && r.flume;
+
+    // the deposits: over the flume in x, y (each run's surface from its own path), or along s
+    std::ostringstream gp;
+    gp << "set terminal pngcairo size 1100,600 font 'DejaVu Sans,11'\nset datafile separator ','\nset grid\n"
+       << "set key below\n";
+    {
+        std::ostringstream plot;
+        if (all_flume) {
+            const DanPath bed = flume_dan_path(runs[0].scenario);
+            std::ostringstream b;
+            b << "x_m,y_m\n";
+            for (double s = 0.0; s <= bed.length() + 1e-9; s += 0.005) b << bed.at(s).p.x() << ',' << bed.at(s).p.y() << '\n';
+            write_file_atomic(o.out + "/bed.csv", b.str());
+            plot << "plot '" << o.out << "/bed.csv' using 1:2 with lines lw 3 lc rgb '#303030' title 'flume (" << runs[0].label << ")'";
+        } else {
+            plot << "plot ";
+        }
+        for (size_t k = 0; k < runs.size(); ++k) {
+            const RunInfo& r = runs[k];
+            const std::string src = r.dir + "/deposit.csv";
+            if (!fs::exists(src)) continue;
+            std::ifstream in(src);
+            std::string line;
+            std::getline(in, line);
+            std::ostringstream surf;
+            surf << "x_m,y_m\n";
+            const DanPath* path = nullptr;
+            std::unique_ptr<DanPath> own;
+            if (all_flume) {
+                own = std::make_unique<DanPath>(flume_dan_path(r.scenario));
+                path = own.get();
+            }
+            while (std::getline(in, line)) {
+                std::istringstream c(line);
+                std::string a, h;
+                std::getline(c, a, ',');
+                std::getline(c, h, ',');
+                const double s = std::stod(a), height = std::stod(h);
+                if (path) {
+                    const DanPathPoint q = path->at(s);
+                    if (height <= 0.0) {
+                        surf << '\n';  // a gap in the surface where there is no mass
+                        continue;
+                    }
+                    const Vec2 p = q.p + height * q.normal();
+                    surf << p.x() << ',' << p.y() << '\n';
+                } else {
+                    surf << s << ',' << height << '\n';
+                }
+            }
+            const std::string file = o.out + "/deposit_" + std::to_string(k) + ".csv";
+            write_file_atomic(file, surf.str());
+            plot << (k > 0 || all_flume ? ", " : "") << "'" << file << "' using 1:2 with lines lw 2 title " << quoted(r.label);
+        }
+        gp << "set output '" << o.out << "/deposit.png'\nset title 'Final deposits'\n";
+        if (all_flume) gp << "set size ratio -1\nset xlabel 'x (m)'\nset ylabel 'y (m)'\n";
+        else gp << "set xlabel 's along the bed path (m)'\nset ylabel 'height normal to the bed (m)'\n";
+        gp << plot.str() << "\nset size noratio\n";
+        made.push_back(o.out + "/deposit.png");
+    }
+    // the fronts over time
+    gp << "set output '" << o.out << "/front.png'\nset title 'Front along the bed path'\nset xlabel 't (s)'\n"
+       << "set ylabel 's of the front (m)'\nplot ";
+    for (size_t k = 0; k < runs.size(); ++k) {
+        const RunInfo& r = runs[k];
+        gp << (k ? ", " : "") << "'" << r.dir << "/front.csv' every ::1 using 1:2 with lines lw 2 title " << quoted(r.label);
+        if (fs::exists(r.dir + "/front_synced.csv"))
+            gp << ", '" << r.dir << "/front_synced.csv' every ::1 using 1:2 with lines lw 2 dt 2 title "
+               << quoted(r.label + ", synchronised at " + cell(r.scenario.dan.sync_time, 2) + " s");
+    }
+    gp << "\n";
+    made.push_back(o.out + "/front.png");
+    // the barrier's force histories
+    for (const auto& [column, axis] : {std::pair<int, const char*>{6, "x"}, std::pair<int, const char*>{7, "y"}}) {
+        gp << "set output '" << o.out << "/barrier_f" << axis << ".png'\nset title 'Force on the barrier, " << axis
+           << " (per metre of width)'\nset ylabel 'f" << axis << " (N/m)'\nplot ";
+        for (size_t k = 0; k < runs.size(); ++k)
+            gp << (k ? ", " : "") << "'" << runs[k].dir << "/forces.csv' every ::1 using 1:" << column << " with lines lw 1.5 title "
+               << quoted(runs[k].label);
+        gp << "\n";
+        made.push_back(o.out + "/barrier_f" + axis + ".png");
+    }
+    const std::string script = o.out + "/compare.gp";
+    write_file_atomic(script, gp.str());
+    const std::string cmd = "gnuplot '" + script + "' 2>'" + o.out + "/gnuplot.log'";
+    if (std::system(cmd.c_str()) != 0) throw RunError("gnuplot failed on " + script + " (see " + o.out + "/gnuplot.log)");
+
+    // the landmarks side by side
+    std::ostringstream md, csv;
+    md << "# Comparison\n\n| run | front at the barrier (s) | run-out s (m) | run-up (m) | highest run-up (m) | peak fx on the "
+          "barrier (N/m) | at (s) | at rest (s) | stop |\n|---|---|---|---|---|---|---|---|---|\n";
+    csv << "run,model,t_front_at_barrier,runout_s,runup_height,max_runup_height_during_run,peak_fx_barrier,t_peak_fx_barrier,t_end,stop_reason\n";
+    for (const RunInfo& r : runs) {
+        const SummaryFile& s = r.summary;
+        md << "| " << r.label << " | " << cell(s.number("t_front_at_barrier")) << " | " << cell(s.number("runout_s")) << " | "
+           << cell(s.number("runup_height")) << " | " << cell(s.number("max_runup_height_during_run")) << " | "
+           << cell(s.number("peak_fx_barrier"), 1) << " | " << cell(s.number("t_peak_fx_barrier")) << " | "
+           << cell(s.number("t_end")) << " | " << s.text("stop_reason") << " |\n";
+        csv << '"' << r.label << "\"," << (r.dan ? "dan" : "dem") << ',' << cell(s.number("t_front_at_barrier"), 6) << ','
+            << cell(s.number("runout_s"), 6) << ',' << cell(s.number("runup_height"), 6) << ','
+            << cell(s.number("max_runup_height_during_run"), 6) << ',' << cell(s.number("peak_fx_barrier"), 3) << ','
+            << cell(s.number("t_peak_fx_barrier"), 6) << ',' << cell(s.number("t_end"), 6) << ',' << s.text("stop_reason") << '\n';
+    }
+    md << "\nRun-out: s of the deposit's front along the bed path (DEM: the foremost connected disc; DAN: the front "
+          "block). Run-up: the deposit's highest point on the barrier above its foot.\n";
+    write_file_atomic(o.out + "/comparison.md", md.str());
+    write_file_atomic(o.out + "/comparison.csv", csv.str());
+    made.push_back(o.out + "/comparison.md");
+    made.push_back(o.out + "/comparison.csv");
+    return made;
+}
+
+}  // namespace demlab
