@@ -8,6 +8,8 @@
 #include <functional>
 #include <limits>
 
+#include "core/output_dir.h"
+#include "files.h"
 #include "run/run.h"
 #include "scenario/scenario.h"
 #include "setups/db9k.h"
@@ -175,4 +177,53 @@ TEST(Validation, TheLastSeriesRowIsWrittenOnce) {
     }
     EXPECT_NE(before.substr(0, before.find(',')), last.substr(0, last.find(','))) << "the last time is written twice";
     std::filesystem::remove_all(dir);
+}
+
+// A release mass that did not settle is refused with the ratio and the key to change; with
+// release.accept_unsettled it runs, and summary.json records the ratio it reached.
+TEST(Validation, UnsettledReleaseIsRefusedUnlessAccepted) {
+    Scenario s = load_scenario(std::string(DEMLAB_SOURCE_DIR) + "/scenarios/geometry-A.toml");
+    apply_override(s, "release.scale=20");
+    apply_override(s, "release.settle_max_time=0.02");
+    apply_override(s, "stop.t_max=0.05");
+    apply_override(s, "stop.rest_duration=0.01");
+    apply_override(s, "output.snapshot_interval=0");
+    finish_scenario(s);
+    const auto dir = std::filesystem::temp_directory_path() / ("demlab-unsettled-" + std::to_string(::getpid()));
+    std::filesystem::remove_all(dir);
+    try {
+        run_scenario(s, {dir.string(), false, {}});
+        ADD_FAILURE() << "an unsettled mass was run";
+    } catch (const RunError& e) {
+        const std::string m = e.what();
+        EXPECT_NE(m.find("did not settle"), std::string::npos) << m;
+        EXPECT_NE(m.find("release.accept_unsettled"), std::string::npos) << m;
+    }
+    std::filesystem::remove_all(dir);
+    apply_override(s, "release.accept_unsettled=true");
+    run_scenario(s, {dir.string(), false, {}});
+    const std::string summary = read_file(dir / "summary.json");
+    EXPECT_EQ(summary.find("\"release_settle_ratio\": null"), std::string::npos) << summary;
+    EXPECT_NE(summary.find("\"release_settle_ratio\": "), std::string::npos);
+    std::filesystem::remove_all(dir);
+}
+
+// Names that would write outside runs/, discs that overlap at t = 0 and an empty output folder
+// are input errors, refused before any output.
+TEST(Validation, PathNamesOverlapsAndEmptyFoldersAreRefused) {
+    for (const char* name : {"../x", "a/b", ".hidden", ""}) {
+        expect_refused([&] {
+            Scenario s = parse_scenario(std::string("[scenario]\nname = \"") + name + "\"\n[[discs]]\nposition = [0, 0]\nradius = 0.01\n", "n.toml");
+            finish_scenario(s);
+        }, {"scenario.name", "plain name"});
+    }
+    expect_refused([] {
+        Scenario s = parse_scenario("[[discs]]\nposition = [0, 0]\nradius = 0.01\n[[discs]]\nposition = [0.5, 0]\nradius = 0.01\n"
+                                    "[[discs]]\nposition = [0.004, 0]\nradius = 0.01\n", "o.toml");
+        finish_scenario(s);
+    }, {"discs[0] and discs[2] overlap", "world.max_overlap_ratio"});
+    // touching (or slightly overlapping) discs are fine
+    Scenario ok = parse_scenario("[[discs]]\nposition = [0, 0]\nradius = 0.01\n[[discs]]\nposition = [0.0199, 0]\nradius = 0.01\n", "ok.toml");
+    EXPECT_NO_THROW(finish_scenario(ok));
+    expect_refused([] { prepare_output_dir("", false); }, {"needs a name"});
 }

@@ -23,8 +23,9 @@ Command add_render_command(CLI::App& app) {
     auto o = std::make_shared<RenderRunOptions>();
     CLI::App* sub = app.add_subcommand("render", "Replay a run's snapshots into PNG frames (off-screen, no display needed)");
     sub->add_option("run_dir", o->run_dir, "A run folder written by demlab run")->required()->check(CLI::ExistingDirectory);
-    sub->add_option("--every", o->every, "Seconds of simulated time between frames (from saved snapshots only)");
-    sub->add_option("--fps", o->fps, "Frames per simulated second (alternative to --every)");
+    sub->add_option("--every", o->every, "Seconds of simulated time between frames (from saved snapshots only)")
+        ->check(CLI::PositiveNumber);
+    sub->add_option("--fps", o->fps, "Frames per simulated second (alternative to --every)")->check(CLI::PositiveNumber);
     sub->add_option("--size", o->size, "Frame size WxH in pixels")->capture_default_str();
     sub->add_option("--color", o->color,
                     "Colouring: layers (initial bands), grid, speed (with a colour bar), rotation (a radial line per disc), "

@@ -1,4 +1,5 @@
 // demlab run SCENARIO: a flume (or any scenario) from its release to rest.
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
@@ -35,6 +36,7 @@ struct RunCliOptions {
     bool no_plots = false;
     double checkpoint_every = 0.0;
     std::string solver;  // empty: the scenario's
+    bool out_given = false;
 };
 
 // The lines a finished run prints, and its plots.
@@ -72,6 +74,9 @@ int report(const Scenario& s, const RunSummary& r, const std::string& dir, bool 
 }
 
 int run_command(const RunCliOptions& o) {
+    // (CLI11's range checks let NaN through: every comparison with it is false)
+    if (!std::isfinite(o.checkpoint_every)) throw InputError("--checkpoint-every nan: must be seconds in [0, 1e7]");
+    if (o.out_given && o.out.empty()) throw InputError("--out '': an output folder needs a name");
     Scenario s = load_scenario(o.scenario);
     if (o.model) apply_override(s, "rotation.model=" + std::to_string(o.model));
     if (!o.variant.empty()) apply_override(s, "release.variant=\"" + o.variant + "\"");
@@ -118,7 +123,7 @@ Command add_run_command(CLI::App& app) {
         ->check(CLI::IsMember({"I", "II"}));
     sub->add_option("--scale", o->scale, "Upscaling of the sand (Table 14: 2, 4, 20): radii [0.25, 0.5] mm times this")
         ->check(CLI::Range(1, 100));
-    sub->add_option("--out", o->out, "Output folder (default runs/<scenario name>); must not exist unless --force");
+    CLI::Option* out = sub->add_option("--out", o->out, "Output folder (default runs/<scenario name>); must not exist unless --force");
     sub->add_option("--solver", o->solver, "dem (the discs, default) or dan (the continuum model on the flume's path; scenario.solver)")
         ->check(CLI::IsMember({"dem", "dan"}));
     sub->add_option("--set", o->set, "Override a scenario key: --set key=value (repeatable), e.g. --set material.friction_disc_deg=16");
@@ -133,7 +138,10 @@ Command add_run_command(CLI::App& app) {
     sub->add_option("--checkpoint-every", o->checkpoint_every,
                     "Write RUN_DIR/checkpoint.bin every this many seconds of wall-clock time (0: only on SIGINT/SIGTERM)")
         ->check(CLI::Range(0.0, 1.0e7));
-    return [o] { return run_command(*o); };
+    return [o, out] {
+        o->out_given = out->count() > 0;
+        return run_command(*o);
+    };
 }
 
 namespace {

@@ -8,6 +8,7 @@ namespace demlab {
 
 void prepare_output_dir(const std::string& dir, bool force) {
     namespace fs = std::filesystem;
+    if (dir.empty()) throw InputError("--out '': an output folder needs a name");
     std::error_code ec;
     if (fs::exists(dir, ec)) {
         if (!force)

@@ -62,7 +62,9 @@ void parse_view(const std::string& v, const Frame& first, RenderStyle& st) {
 }  // namespace
 
 int render_run(const RenderRunOptions& o) {
-    if (o.every < 0 || o.fps < 0) throw InputError("--every and --fps must be > 0");
+    if (!(o.every >= 0) || !(o.fps >= 0) || !std::isfinite(o.every) || !std::isfinite(o.fps))
+        throw InputError("--every and --fps must be > 0 (finite)");
+    if (o.run_dir.empty()) throw InputError("render: a run folder is needed");
     if (o.every > 0 && o.fps > 0) throw InputError("give --every or --fps, not both");
     if (o.threads < 0 || o.threads > 64) throw InputError("--threads " + std::to_string(o.threads) + ": must be 0 to 64");
     // a continuum run draws its frames from blocks.csv, a DEM run from its snapshots

@@ -206,6 +206,7 @@ void write_summary(const std::string& path, const Scenario& s, const RunSummary&
       << "  \"porosity\": " << json_number(sum.porosity) << ",\n"
       << "  \"release_porosity_generated\": " << json_number(r ? release.porosity_generated : NAN) << ",\n"
       << "  \"release_settle_time\": " << json_number(r ? release.settle_time : NAN) << ",\n"
+      << "  \"release_settle_ratio\": " << json_number(r ? release.settle_ratio : NAN) << ",\n"
       << "  \"release_wall_seconds\": " << json_number(r ? release.wall_seconds : NAN) << ",\n"
       << "  \"dt\": " << json_number(sum.dt) << ",\n"
       << "  \"dt_min\": " << json_number(sum.dt_min) << ",\n"

@@ -4,6 +4,7 @@
 // bed path (deposit.csv), the envelope and slope angles of a dam break (envelope.csv), the
 // energy watch, and summary.json.
 #pragma once
+#include <cmath>
 #include <array>
 #include <cstdint>
 #include <string>
@@ -75,6 +76,7 @@ void write_bond_breaks(const World& w, const std::string& dir);
 struct ReleaseFigures {
     bool generated = false;  // a release mass (not explicit discs)
     double porosity_generated = 0, settle_time = 0, wall_seconds = 0;
+    double settle_ratio = NAN;  // the unbalanced force ratio the settling reached (NaN: not known, a resumed run)
 };
 void write_summary(const std::string& path, const Scenario& s, const RunSummary& sum, const ReleaseFigures& release,
                    const SlopeAngles* angles);

@@ -33,6 +33,9 @@ namespace demlab {
 
 namespace {
 
+// Steps a run may take at most: the real sand size to rest is about 1e7.
+constexpr double kMaxRunSteps = 1e10;
+
 // The release mass: restored from a checkpoint (the discs as they were at the start), read
 // from a saved mass (release.from_file), or generated; saved to release.csv in space order.
 ReleaseMass start_mass(const Scenario& s, const Setup& setup, BinaryReader* restore, const std::string& dir, bool terminal) {
@@ -47,6 +50,9 @@ ReleaseMass start_mass(const Scenario& s, const Setup& setup, BinaryReader* rest
         restore->get(mass.porosity_generated);
         restore->get(mass.settle_time);
         restore->get(mass.wall_seconds);
+        // the ratio the settling reached, from the run's own release.csv (not in the checkpoint)
+        if (setup.has_release() && std::filesystem::is_regular_file(dir + "/release.csv"))
+            mass.settle_ratio = load_release(dir + "/release.csv").settle_ratio;
         return mass;
     }
     if (s.lattice_release.enabled) {
@@ -75,9 +81,18 @@ ReleaseMass start_mass(const Scenario& s, const Setup& setup, BinaryReader* rest
     }
     mass.box_walls.clear();
     for (const WallDef& wd : box_walls) mass.box_walls.push_back({wd.p0, wd.p1});
-    if (!mass.settled)
-        std::fprintf(stderr, "demlab: warning: the release mass did not reach settle_ratio %.3g within %.3g s (ratio %.3g)\n",
+    if (!mass.settled) {
+        // a mass still moving starts the run with stored energy and no defined porosity
+        if (!s.release.accept_unsettled)
+            throw RunError(s.source + ": the release mass did not settle: its unbalanced force ratio reached " +
+                           format_number(mass.settle_ratio) + " within release.settle_max_time = " +
+                           format_number(s.release.settle_max_time) + " s, above release.settle_ratio = " +
+                           format_number(s.release.settle_ratio) +
+                           "; raise settle_max_time, or set release.accept_unsettled = true to run it as it is");
+        std::fprintf(stderr, "demlab: warning: the release mass did not reach settle_ratio %.3g within %.3g s (ratio %.3g); "
+                             "run as it is (release.accept_unsettled)\n",
                      s.release.settle_ratio, s.release.settle_max_time, mass.settle_ratio);
+    }
     // space order (release.h): strips two of the largest diameters wide
     double r_max = 0.0;
     for (double r : mass.radius) r_max = std::max(r_max, r);
@@ -209,7 +224,7 @@ void write_results(const Scenario& s, const Setup& setup, const World& w, const 
     const bool settled_lattice = s.lattice_release.enabled && s.lattice_release.settle;
     write_summary(dir + "/summary.json", s, sum,
                   ReleaseFigures{setup.has_release() || settled_lattice, settled_lattice ? NAN : mass.porosity_generated,
-                                 mass.settle_time, mass.wall_seconds},
+                                 mass.settle_time, mass.wall_seconds, mass.settle_ratio > 0.0 ? mass.settle_ratio : NAN},
                   setup.measures_envelope() ? &angles : nullptr);
 }
 
@@ -335,6 +350,11 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
         if (solver.time() >= s.stop.t_max) break;
         solver.step();
         sampled_now = false;
+        // a step so small that the run would not end in any time is refused at once
+        if (solver.step_count() == steps_start + 1 && (s.stop.t_max - solver.time()) / solver.dt() > kMaxRunSteps)
+            throw RunError(s.source + ": the run would take " + format_number((s.stop.t_max - solver.time()) / solver.dt()) +
+                           " steps of " + format_number(solver.dt()) + " s to stop.t_max (more than " + format_number(kMaxRunSteps) +
+                           "): the stiffnesses and densities give an absurdly small time step");
         sum.dt_min = std::min(sum.dt_min, solver.dt());
         sum.dt_max = std::max(sum.dt_max, solver.dt());
         if (solver.step_count() % 10 == 0) {

@@ -260,6 +260,30 @@ void finish_terrain(Scenario& s) {
                          format_number(size) + " m across): at most " + format_number(size / 8) + " m");
 }
 
+// Explicit discs that overlap beyond world.max_overlap_ratio of the smaller radius at t = 0
+// would be a blow-up at step 0: an input error naming the two (a sweep along x).
+void finish_explicit_discs(const Scenario& s) {
+    const auto& d = s.discs;
+    if (d.size() < 2) return;
+    std::vector<size_t> order(d.size());
+    for (size_t i = 0; i < d.size(); ++i) order[i] = i;
+    std::sort(order.begin(), order.end(), [&](size_t a, size_t b) { return d[a].pos.x() - d[a].radius < d[b].pos.x() - d[b].radius; });
+    for (size_t a = 0; a < order.size(); ++a) {
+        const DiscDef& p = d[order[a]];
+        for (size_t b = a + 1; b < order.size(); ++b) {
+            const DiscDef& q = d[order[b]];
+            if (q.pos.x() - q.radius > p.pos.x() + p.radius) break;
+            const double overlap = p.radius + q.radius - (q.pos - p.pos).norm();
+            if (overlap > s.world.max_overlap_ratio * std::min(p.radius, q.radius)) {
+                const size_t i = std::min(order[a], order[b]), j = std::max(order[a], order[b]);
+                throw InputError(s.source + ": discs[" + std::to_string(i) + "] and discs[" + std::to_string(j) + "] overlap by " +
+                                 format_number(overlap) + " m at t = 0, more than world.max_overlap_ratio = " +
+                                 format_number(s.world.max_overlap_ratio) + " of the smaller radius: move them apart");
+            }
+        }
+    }
+}
+
 // The continuum solver's constraints (DAN.md section 3): a flume's path, gravity along -y, no
 // discs of the scenario's own; its reference front resolved like a profile.
 void finish_dan(Scenario& s) {
@@ -343,6 +367,12 @@ void finish_scenario(Scenario& s) {
     if (r.r_max == 0.0) r.r_max = scale_r_max(r.scale);
     if (int(s.flume.enabled) + int(s.dam_break.enabled) + int(s.terrain.enabled) > 1)
         throw InputError(where + "a scenario is one of [flume], [dam_break] and [terrain], not several");
+    // the name makes the default run folder runs/<name>: no path of its own
+    if (s.name.empty() || s.name.find('/') != std::string::npos || s.name.find('\\') != std::string::npos ||
+        s.name.find("..") != std::string::npos || s.name[0] == '.')
+        throw InputError(where + "scenario.name = \"" + s.name + "\": must be a plain name (no '/', '\\' or '..', not starting "
+                         "with '.'); it names the run folder runs/<name>");
+    finish_explicit_discs(s);
     if (s.terrain.enabled) finish_terrain(s);
     finish_dan(s);
     finish_lattice(s);

@@ -80,6 +80,7 @@ struct ReleaseDef {
     double gate_speed = 2.25;              // m/s, Variant II
     double settle_alpha = 0.7;             // local damping while settling (frictionless phase)
     double settle_ratio = 5e-4;            // settled when mean |unbalanced force| / mean |contact force| < this
+    bool accept_unsettled = false;         // run a mass that did not reach settle_ratio (else refused, exit 3)
     double settle_max_time = 1.5;          // s of simulated settling at most
     double layer_height = 0.03;            // m, height of the colour bands (layers)
     double grid_cell = 0.05;               // m, size of the colour grid cells

@@ -105,6 +105,9 @@ std::vector<Vec2> place_without_overlap(const Polygon& tri, const std::vector<do
 namespace {
 // The generation is not checkpointed (minutes at scale 4): a signal ends it
 // here, and `demlab resume` starts the run again (the seed gives the same mass).
+// Settling steps at most: the real sand size (145,615 discs) settles in about 3e6.
+constexpr double kMaxSettleSteps = 1e8;
+
 void throw_if_interrupted_in_generation() {
     if (pending_interrupt())
         throw Interrupted("stopped during the release generation, which is not checkpointed");
@@ -221,6 +224,12 @@ ReleaseMass generate_release(const Scenario& s) {
         while (w.time() < t_phase) {
             w.run(200);
             throw_if_interrupted_in_generation();
+            // a step so small that settling would not end in any time (an absurd stiffness or
+            // density) is refused at once instead of running for ever
+            if (w.step_count() == 200 && (t_phase - w.time()) / w.dt() > kMaxSettleSteps)
+                throw RunError(s.source + ": settling the release would take " + format_number((t_phase - w.time()) / w.dt()) +
+                               " steps of " + format_number(w.dt()) + " s (more than " + format_number(kMaxSettleSteps) +
+                               "): material.kn / ks and material.density give an absurdly small time step");
             m.settle_ratio = w.unbalanced_force_ratio();
             progress.update(0.5 + 0.25 * phase + 0.25 * std::min(1.0, w.time() / t_phase), w.step_count());
             // the frictionless phase only compacts: it may stop at ten times the final ratio
