@@ -59,7 +59,7 @@ int report(const Scenario& s, const RunSummary& r, const std::string& dir, bool 
         std::printf("  run-out s = %.3f m; run-up %.3f m (max during run %.3f m)\n", r.runout_s, r.runup_height,
                     r.max_runup_height_during_run);
     }
-    std::printf("  energy ledger closes to %.2f %% of the dissipated energy\n", 100.0 * r.energy_balance_error);
+    std::printf("  energy ledger closes to %.2f %% of the energy put in\n", 100.0 * r.energy_balance_error);
     }
     std::printf("  wrote %s/\n", dir.c_str());
     if (plots) {

@@ -30,11 +30,13 @@ struct MeasureContext {
 
 // The loop's own state between two steps, saved in checkpoints (in this order).
 struct RunState {
-    double peak_fx_barrier = -1, peak_fy_arc = -1, peak_ke = 0, peak_elastic = 0, rest_since = -1, e0 = 0;
+    // peak_put_in: the largest energy put in at a series sample (energy_put_in), the scale of
+    // the ledger's closure (it holds the slot of the peak elastic energy of earlier builds)
+    double peak_fx_barrier = -1, peak_fy_arc = -1, peak_ke = 0, peak_put_in = 0, rest_since = -1, e0 = 0;
     double next_series = 0.0, next_snap = 0.0;
     template <typename IO, typename Field>
     void fields(IO& io, Field&& field, RunSummary& sum) {
-        for (double* v : {&peak_fx_barrier, &peak_fy_arc, &peak_ke, &peak_elastic, &rest_since, &e0, &next_series,
+        for (double* v : {&peak_fx_barrier, &peak_fy_arc, &peak_ke, &peak_put_in, &rest_since, &e0, &next_series,
                           &next_snap, &sum.dt_min, &sum.dt_max, &sum.t_peak_fx_barrier, &sum.t_peak_fy_arc,
                           &sum.max_runup_height_during_run, &sum.t_front_at_barrier})
             field(io, *v);
@@ -61,7 +63,10 @@ private:
 // Energy created by the numerics: throws RunError (run.cpp's watch, measures.cpp).
 constexpr long kEnergyWatchSteps = 1000;
 class Solver;
-void check_energy_growth(const Solver& w, double e0, double peak_ke, double& peak_elastic, double max_gain);
+void check_energy_growth(const Solver& w, double e0, double max_gain, double noise, double& peak_put_in);
+// The energy a run had and was given by time t (J/m): e0 less the potential now plus the
+// walls' work; the scale of the ledger's closure and of the energy watch
+double energy_put_in(const EnergyReport& e, double e0);
 
 // deposit.csv: the deposit's top, normal to the bed, in bins along the path; the run-out and
 // final run-up into the summary.

@@ -61,7 +61,7 @@ struct RunSummary {
     double t_peak_fy_arc = -1;
     double peak_fx_barrier = 0;         // N/m, the largest |x-force| on the barrier (forces.csv's samples)
     double peak_fy_arc = 0;             // N/m, the largest |y-force| on the arc
-    double energy_balance_error = 0;    // |balance drift| / energy dissipated
+    double energy_balance_error = 0;    // |balance drift| / the largest energy put in (measures.h, energy_put_in)
     // The broad phase, of this process like wall_seconds (a resumed run counts from the resume,
     // and rebuilds its candidate lists there), sampled every 10 steps: the force pass tests
     // every candidate, so candidates per touching pair is what the margin costs
