@@ -268,3 +268,16 @@ TEST(BlowUp, EnergyWatchCatchesStepsJustAboveTheCriticalOne) {
     EXPECT_GT(r.energy_balance_error, 0.5);
     std::filesystem::remove_all(dir);
 }
+
+// What is found wrong only once the release mass exists (a tracer id past its discs) is
+// refused before the run folder is made, so the corrected retry is not blocked by it.
+TEST(Validation, LateFindingsLeaveNoRunFolder) {
+    Scenario s = load_scenario(std::string(DEMLAB_SOURCE_DIR) + "/scenarios/geometry-A.toml");
+    apply_override(s, "release.scale=20");
+    apply_override(s, "output.track=[100000]");
+    finish_scenario(s);
+    const auto dir = std::filesystem::temp_directory_path() / ("demlab-late-" + std::to_string(::getpid()));
+    std::filesystem::remove_all(dir);
+    expect_refused([&] { run_scenario(s, {dir.string(), false, {}}); }, {"output.track", "100000"});
+    EXPECT_FALSE(std::filesystem::exists(dir));
+}

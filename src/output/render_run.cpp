@@ -95,6 +95,8 @@ int render_run(const RenderRunOptions& o) {
         fit_view(first, style.view_lo, style.view_hi);
         style.view_set = true;
     }
+    if (style.width < 16 || style.height < 16 || style.width > 8192 || style.height > 8192)
+        throw InputError("--size " + o.size + ": width and height must be in [16, 8192] px");
     const std::string out = o.out.empty() ? o.run_dir + "/frames" : o.out;
     prepare_output_dir(out, o.force);
 

@@ -37,7 +37,8 @@ namespace {
 constexpr double kMaxRunSteps = 1e10;
 
 // The release mass: restored from a checkpoint (the discs as they were at the start), read
-// from a saved mass (release.from_file), or generated; saved to release.csv in space order.
+// from a saved mass (release.from_file), or generated, in space order (the caller saves it to
+// release.csv once the run folder exists).
 ReleaseMass start_mass(const Scenario& s, const Setup& setup, BinaryReader* restore, const std::string& dir, bool terminal) {
     ReleaseMass mass;
     if (restore) {
@@ -97,7 +98,6 @@ ReleaseMass start_mass(const Scenario& s, const Setup& setup, BinaryReader* rest
     double r_max = 0.0;
     for (double r : mass.radius) r_max = std::max(r_max, r);
     order_in_space(mass, 4.0 * r_max);
-    save_release(mass, dir + "/release.csv");
     return mass;
 }
 
@@ -259,7 +259,14 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
     const std::string checkpoint_path = dir + "/" + kCheckpointFile;
     const std::string scenario_text = resolved_toml(s);
     std::unique_ptr<RunFolderLock> lock;
-    std::unique_ptr<BinaryReader> restore = open_run_folder(o, scenario_text, lock);
+    // A new run's folder is made only once everything that can be checked is: the release
+    // mass (generated or read), the walls, the tracers; a refusal leaves no partial folder to
+    // block the corrected retry. That the folder is free is checked first.
+    std::unique_ptr<BinaryReader> restore;
+    if (o.resume) restore = open_run_folder(o, scenario_text, lock);
+    else if (dir.empty()) throw InputError("--out '': an output folder needs a name");
+    else if (!o.force && std::filesystem::exists(dir))
+        throw InputError("output folder '" + dir + "' exists already; choose another --out or pass --force to replace its files");
     const bool terminal = isatty(STDERR_FILENO) != 0;
     std::unique_ptr<InterruptScope> interrupts;
     if (o.handle_signals) interrupts = std::make_unique<InterruptScope>();
@@ -268,6 +275,10 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
     const ReleaseMass mass = start_mass(s, *setup, restore.get(), dir, terminal);
     std::vector<int> layer, grid;
     World w = build_world(s, *setup, mass, restore != nullptr, layer, grid);
+    if (!o.resume) {
+        open_run_folder(o, scenario_text, lock);
+        if (setup->has_release() && !s.lattice_release.enabled) save_release(mass, dir + "/release.csv");
+    }
     DemSolver dem(w);
     Solver& solver = dem;
     const size_t n = w.disc_count();
