@@ -281,3 +281,29 @@ TEST(Validation, LateFindingsLeaveNoRunFolder) {
     expect_refused([&] { run_scenario(s, {dir.string(), false, {}}); }, {"output.track", "100000"});
     EXPECT_FALSE(std::filesystem::exists(dir));
 }
+
+// A saved mass of another scale is refused (the resolved scenario would describe discs that
+// are not the ones used), before any folder is made; the same scale is taken.
+TEST(Validation, ReleaseFromAnotherScaleIsRefused) {
+    Scenario s = load_scenario(std::string(DEMLAB_SOURCE_DIR) + "/scenarios/geometry-A.toml");
+    apply_override(s, "release.scale=20");
+    apply_override(s, "stop.t_max=0.01");
+    apply_override(s, "stop.rest_duration=0.005");
+    apply_override(s, "output.snapshot_interval=0");
+    finish_scenario(s);
+    const auto tmp = std::filesystem::temp_directory_path();
+    const auto first = tmp / ("demlab-mass-" + std::to_string(::getpid())), second = tmp / ("demlab-mass2-" + std::to_string(::getpid()));
+    std::filesystem::remove_all(first);
+    std::filesystem::remove_all(second);
+    run_scenario(s, {first.string(), false, {}});
+    Scenario other = load_scenario(std::string(DEMLAB_SOURCE_DIR) + "/scenarios/geometry-A.toml");
+    apply_override(other, "release.scale=10");
+    other.release.from_file = (first / "release.csv").string();
+    finish_scenario(other);
+    expect_refused([&] { run_scenario(other, {second.string(), false, {}}); }, {"release.csv", "release.scale = 10"});
+    EXPECT_FALSE(std::filesystem::exists(second));
+    s.release.from_file = (first / "release.csv").string();
+    EXPECT_NO_THROW(run_scenario(s, {second.string(), false, {}}));
+    std::filesystem::remove_all(first);
+    std::filesystem::remove_all(second);
+}

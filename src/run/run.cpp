@@ -65,6 +65,20 @@ ReleaseMass start_mass(const Scenario& s, const Setup& setup, BinaryReader* rest
     const std::vector<WallDef> box_walls = setup.release_box().walls;
     if (!s.release.from_file.empty()) {
         mass = load_release(s.release.from_file);
+        // the resolved scenario must describe the discs used: the mass's radii within this
+        // scenario's release radii (after the reduction)
+        double lo = INFINITY, hi = 0.0;
+        for (double r : mass.radius) {
+            lo = std::min(lo, r);
+            hi = std::max(hi, r);
+        }
+        const double shrink = 1.0 - s.release.radius_reduction;
+        const double want_lo = s.release.r_min * shrink, want_hi = s.release.r_max * shrink;
+        if (!mass.radius.empty() && (lo < want_lo * (1.0 - 1e-6) || hi > want_hi * (1.0 + 1e-6)))
+            throw InputError(s.release.from_file + ": its radii [" + format_number(lo) + ", " + format_number(hi) +
+                             "] m are not those of this scenario's release (release.scale = " + std::to_string(s.release.scale) +
+                             ": [" + format_number(want_lo) + ", " + format_number(want_hi) +
+                             "] m after the reduction); give the scale or radii it was generated with, or omit --release-from");
         // a mass settled against other walls (another geometry's W1 differs by ~0.1 mm at
         // the box) would start with overlaps of tens of micrometres: kilonewtons per disc
         if (mass.box_walls.size() != box_walls.size())
