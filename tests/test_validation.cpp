@@ -307,3 +307,30 @@ TEST(Validation, ReleaseFromAnotherScaleIsRefused) {
     std::filesystem::remove_all(first);
     std::filesystem::remove_all(second);
 }
+
+// --force replaces a folder's content: a shorter run over a longer one leaves none of the old
+// snapshots; the old folder is kept aside until the new run is complete, so a forced run that
+// fails loses nothing.
+TEST(Validation, ForceReplacesTheFolderAndAFailedRunLosesNothing) {
+    auto drop = [](double t_max, const std::string& extra) {
+        Scenario s = parse_scenario("[stop]\nt_max = " + std::to_string(t_max) + "\nrest_duration = 0.01\nrest_ke_fraction = 1e-12\n"
+                                    "[output]\nseries_interval = 0.005\nsnapshot_interval = 0.02\n" + extra +
+                                    "[[discs]]\nposition = [0.0, 0.05]\nradius = 0.01\n[[walls]]\nstart = [-1, 0]\nend = [1, 0]\n",
+                                    "drop.toml");
+        finish_scenario(s);
+        return s;
+    };
+    const auto dir = std::filesystem::temp_directory_path() / ("demlab-force-" + std::to_string(::getpid()));
+    std::filesystem::remove_all(dir);
+    run_scenario(drop(0.12, ""), {dir.string(), false, {}});
+    EXPECT_TRUE(std::filesystem::exists(dir / "snapshots/discs_00006.vtp"));
+    run_scenario(drop(0.04, ""), {dir.string(), true, {}});
+    EXPECT_FALSE(std::filesystem::exists(dir / "snapshots/discs_00006.vtp"));  // none of the old run's
+    EXPECT_TRUE(std::filesystem::exists(dir / "snapshots/discs_00002.vtp"));
+    EXPECT_FALSE(std::filesystem::exists(replaced_output_dir(dir.string())));
+    // a forced run that blows up: the old folder is still there, aside
+    EXPECT_THROW(run_scenario(drop(0.12, "[timestep]\nautomatic = false\nfixed = 0.01\n"), {dir.string(), true, {}}), RunError);
+    EXPECT_TRUE(std::filesystem::exists(replaced_output_dir(dir.string()) + "/snapshots/discs_00002.vtp"));
+    std::filesystem::remove_all(dir);
+    std::filesystem::remove_all(replaced_output_dir(dir.string()));
+}

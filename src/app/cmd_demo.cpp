@@ -114,6 +114,7 @@ int demo(const DemoOptions& o) {
                     return m * 9.81;
                 }());
     std::printf("  wrote %s/series.csv and %s/final_discs.csv\n", o.out.c_str(), o.out.c_str());
+    remove_replaced_output(o.out);
     return kExitOk;
 }
 }  // namespace

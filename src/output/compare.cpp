@@ -183,6 +183,7 @@ std::vector<std::string> compare_runs(const CompareOptions& o) {
     write_file_atomic(o.out + "/comparison.csv", csv.str());
     made.push_back(o.out + "/comparison.md");
     made.push_back(o.out + "/comparison.csv");
+    remove_replaced_output(o.out);
     return made;
 }
 

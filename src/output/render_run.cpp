@@ -162,6 +162,7 @@ int render_run(const RenderRunOptions& o) {
     for (std::thread& th : pool) th.join();
     const size_t first_failed = size_t(std::min_element(failed_frame.begin(), failed_frame.end()) - failed_frame.begin());
     if (threads > 0 && failed[first_failed]) std::rethrow_exception(failed[first_failed]);
+    remove_replaced_output(out);
     std::printf("rendered %zu frames (%dx%d, %s) into %s/\n", chosen.size(), style.width, style.height, color.c_str(),
                 out.c_str());
     const int frames = int(chosen.size());

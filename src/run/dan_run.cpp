@@ -10,6 +10,7 @@
 #include "core/error.h"
 #include "core/fileio.h"
 #include "core/machine.h"
+#include "core/output_dir.h"
 #include "core/progress.h"
 #include "core/validate.h"
 #include "dem/world.h"
@@ -344,6 +345,7 @@ RunSummary run_dan(const Scenario& s, const RunOptions& o) {
       << "}\n";
     write_file_atomic(dir + "/summary.json", j.str());
     lock->release_and_remove();
+    remove_replaced_output(dir);  // a forced run's old folder, now that the new one is complete
     return sum;
 }
 

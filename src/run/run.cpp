@@ -444,6 +444,7 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
     write_results(s, *setup, w, measure, mass, dir, sum);
     std::filesystem::remove(checkpoint_path);  // the run is complete: nothing to resume
     lock->release_and_remove();
+    remove_replaced_output(dir);  // a forced run's old folder, now that the new one is complete
     return sum;
 }
 

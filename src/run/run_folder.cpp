@@ -22,8 +22,8 @@ std::unique_ptr<BinaryReader> open_run_folder(const RunOptions& o, const std::st
     if (!o.resume) {
         // a folder that exists is locked before it is touched (a forced run over a running one)
         if (o.force && std::filesystem::is_directory(dir)) lock = std::make_unique<RunFolderLock>(dir);
-        prepare_output_dir(o.out_dir, o.force);
-        if (!lock) lock = std::make_unique<RunFolderLock>(dir);
+        prepare_output_dir(o.out_dir, o.force);  // (forced: the old folder, with its lock, moved aside)
+        lock = std::make_unique<RunFolderLock>(dir);
         std::filesystem::remove(checkpoint_path);  // a stale one of a replaced run
         write_file_atomic(dir + "/scenario.toml", scenario_text);
         return nullptr;
