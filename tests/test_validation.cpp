@@ -4,11 +4,13 @@
 #include <unistd.h>
 
 #include <cmath>
+#include <csignal>
 #include <filesystem>
 #include <fstream>
 #include <functional>
 #include <limits>
 
+#include "core/interrupt.h"
 #include "core/output_dir.h"
 #include "files.h"
 #include "run/run.h"
@@ -333,4 +335,28 @@ TEST(Validation, ForceReplacesTheFolderAndAFailedRunLosesNothing) {
     EXPECT_TRUE(std::filesystem::exists(replaced_output_dir(dir.string()) + "/snapshots/discs_00002.vtp"));
     std::filesystem::remove_all(dir);
     std::filesystem::remove_all(replaced_output_dir(dir.string()));
+}
+
+// A series file cut short behind the checkpoint's back is an input error on resume (exit 2),
+// naming the file, not a failed run.
+TEST(Validation, TruncatedSeriesOnResumeIsAnInputError) {
+    Scenario s = parse_scenario("[stop]\nt_max = 0.12\nrest_duration = 0.01\nrest_ke_fraction = 1e-12\n"
+                                "[output]\nseries_interval = 0.005\nsnapshot_interval = 0.02\n"
+                                "[[discs]]\nposition = [0.0, 0.05]\nradius = 0.01\n[[walls]]\nstart = [-1, 0]\nend = [1, 0]\n",
+                                "drop.toml");
+    finish_scenario(s);
+    const auto dir = std::filesystem::temp_directory_path() / ("demlab-truncated-" + std::to_string(::getpid()));
+    std::filesystem::remove_all(dir);
+    RunOptions ro{dir.string(), false, [](const std::string&, const std::string&, int index) {
+                      if (index == 3) request_interrupt(SIGTERM);
+                  }};
+    ro.handle_signals = true;
+    EXPECT_THROW(run_scenario(s, ro), Interrupted);
+    std::filesystem::resize_file(dir / "energy.csv.part", 10);
+    Scenario again = load_scenario((dir / "scenario.toml").string());
+    finish_scenario(again);
+    RunOptions rr{dir.string(), false, {}};
+    rr.resume = true;
+    expect_refused([&] { run_scenario(again, rr); }, {"energy.csv.part", "shorter than at the checkpoint"});
+    std::filesystem::remove_all(dir);
 }

@@ -54,7 +54,7 @@ void SeriesFile::reopen(const std::string& path, uint64_t size) {
     std::error_code ec;
     const auto have = fs::file_size(part, ec);
     if (ec || have < size)
-        throw RunError("cannot resume: " + part + " is missing or shorter than at the checkpoint (" +
+        throw InputError("cannot resume: " + part + " is missing or shorter than at the checkpoint (" +
                        std::to_string(size) + " bytes)");
     fs::resize_file(part, size, ec);
     if (ec) throw RunError("cannot resume: cannot cut " + part + " back: " + ec.message());
