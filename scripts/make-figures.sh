@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # Regenerates the figures the README shows (figures/*.png) from runs of geometries A, B, C
-# and of the snow slide with and without bonds.
+# and of the snow slide with and without bonds, and geometry A by DEM against DAN.
 # usage: scripts/make-figures.sh [RUNS_DIR]     (default runs/figures; SCALE=4 by default)
 # Runs that already exist in RUNS_DIR (with a summary.json) are reused, not recomputed.
 # At scale 4 the three runs take about an hour on 2 cores; SCALE=20 gives a quick look.
@@ -38,6 +38,12 @@ for v in bonded loose; do
   "$demlab" render "$r" --every 4 --color "$color" --view=-50,-1,40,32 --size 960x352 --out "$r/strip" --force \
     --strip "figures/snow-slide-$v.png"
 done
+# geometry A by DEM and by DAN (synchronised at 0.4 s on the DEM front, as the thesis' Abb. 37)
+d="$runs/geometry-A-dan"
+"$demlab" run scenarios/geometry-A.toml --solver dan --set "dan.sync_front=\"$(realpath "$a")/front.csv\"" --out "$d" --force --no-plots > "$d.log"
+"$demlab" compare "$a" "$d" --out "$runs/compare-A" --force > /dev/null
+cp "$runs/compare-A/front.png" figures/compare-A-front.png
+cp "$runs/compare-A/deposit.png" figures/compare-A-deposit.png
 "$demlab" plot "$a" > /dev/null
 cp "$a/plots/forces_x.png" figures/geometry-A-forces-x.png
 cp "$a/plots/forces_y.png" figures/geometry-A-forces-y.png

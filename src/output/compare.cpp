@@ -87,7 +87,7 @@ std::vector<std::string> compare_runs(const CompareOptions& o) {
             b << "x_m,y_m\n";
             for (double s = 0.0; s <= bed.length() + 1e-9; s += 0.005) b << bed.at(s).p.x() << ',' << bed.at(s).p.y() << '\n';
             write_file_atomic(o.out + "/bed.csv", b.str());
-            plot << "plot '" << o.out << "/bed.csv' using 1:2 with lines lw 3 lc rgb '#303030' title 'flume (" << runs[0].label << ")'";
+            plot << "plot '" << o.out << "/bed.csv' using 1:2 with lines lw 3 lc rgb '#303030' title 'flume'";
         } else {
             plot << "plot ";
         }
@@ -106,6 +106,7 @@ std::vector<std::string> compare_runs(const CompareOptions& o) {
                 own = std::make_unique<DanPath>(flume_dan_path(r.scenario));
                 path = own.get();
             }
+            double last_x = -INFINITY;
             while (std::getline(in, line)) {
                 std::istringstream c(line);
                 std::string a, h;
@@ -118,7 +119,11 @@ std::vector<std::string> compare_runs(const CompareOptions& o) {
                         surf << '\n';  // a gap in the surface where there is no mass
                         continue;
                     }
+                    // over the arc the bed's normals converge: a deposit thicker than the
+                    // radius maps back on itself there, so a point behind the last is left out
                     const Vec2 p = q.p + height * q.normal();
+                    if (p.x() <= last_x) continue;
+                    last_x = p.x();
                     surf << p.x() << ',' << p.y() << '\n';
                 } else {
                     surf << s << ',' << height << '\n';
@@ -168,7 +173,10 @@ std::vector<std::string> compare_runs(const CompareOptions& o) {
     csv << "run,model,t_front_at_barrier,runout_s,runup_height,max_runup_height_during_run,peak_fx_barrier,t_peak_fx_barrier,t_end,stop_reason\n";
     for (const RunInfo& r : runs) {
         const SummaryFile& s = r.summary;
-        md << "| " << r.label << " | " << cell(s.number("t_front_at_barrier")) << " | " << cell(s.number("runout_s")) << " | "
+        const double shift = s.number("sync_shift");
+        const std::string arrival = cell(s.number("t_front_at_barrier")) +
+                                    (std::isfinite(shift) ? " (" + cell(s.number("t_front_at_barrier") + shift) + " synchronised)" : "");
+        md << "| " << r.label << " | " << arrival << " | " << cell(s.number("runout_s")) << " | "
            << cell(s.number("runup_height")) << " | " << cell(s.number("max_runup_height_during_run")) << " | "
            << cell(s.number("peak_fx_barrier"), 1) << " | " << cell(s.number("t_peak_fx_barrier")) << " | "
            << cell(s.number("t_end")) << " | " << s.text("stop_reason") << " |\n";
