@@ -72,43 +72,18 @@ void World::prepare_bonds() {
 }
 
 void World::compute_bond_forces() {
-    if (def_.bond.predict) {
-        compute_predicted_bond_forces();
-        return;
-    }
-    const BondDef& def = def_.bond;
-    const double k0 = bond_k0_, k_max = bond_k_max_;
-    bond_chunk_broke_.assign(size_t(pool_->size()), 0);
-    pool_->parallel_for(bonds_.size(), [&](size_t begin, size_t end, int chunk) {
-        uint8_t broke = 0;
-        for (size_t b = begin; b < end; ++b) {
-            const Bond& bond = bonds_[b];
-            BondOut& o = bond_out_[b];
-            o.fx = o.fy = 0.0;
-            o.breaks = 0;
-            o.k_tran = bond.broken ? 0.0 : k_max;
-            if (bond.broken) continue;
-            const Vec2 d = pos_[size_t(bond.l)] - pos_[size_t(bond.k)];
-            const ElasticBond::Eval e = ElasticBond::evaluate(def, k0, bond.rest_length, bond_inv_rest_[b], d);
-            o.strain = e.strain;
-            if (e.breaks) {
-                o.breaks = 1;
-                broke = 1;
-            }
-            if (e.skipped || e.breaks) continue;
-            o.fx = e.f * d.x();
-            o.fy = e.f * d.y();
-        }
-        if (broke) bond_chunk_broke_[size_t(chunk)] = 1;
-    });
+    if (def_.bond.predict) bond_pass<true>();
+    else bond_pass<false>();
 }
 
-// C5: the bond's length, strain, force and break from the positions predicted one step,
-// x + dt v with v = v(t - dt/2), as AvaFrame's code does. The force is the spring's at the
-// current length plus a dashpot's, F(d + dt v_kl) - F(d) ~ k_b dt v_kl (C11); the dashpot's
-// work is booked as the contacts' dashpots' is, centred on v(t - dt/2): this step's force
-// over the first half of the velocity interval, the last step's over the second half.
-void World::compute_predicted_bond_forces() {
+// Every intact bond's force into its slot, and whether it breaks; with Predict (C5) the
+// bond's length, strain, force and break come from the positions predicted one step, x + dt v
+// with v = v(t - dt/2), as AvaFrame's code does. The force is then the spring's at the
+// current length plus a dashpot's, F(d + dt v_kl) - F(d) ~ k_b dt v_kl (C11), whose work is
+// booked as the contacts' dashpots' is, centred on v(t - dt/2): this step's force over the
+// first half of the velocity interval, the last step's over the second half.
+template <bool Predict>
+void World::bond_pass() {
     const BondDef& def = def_.bond;
     const double k0 = bond_k0_, k_max = bond_k_max_, dt = dt_, last_dt = last_dt_;
     bond_chunk_broke_.assign(size_t(pool_->size()), 0);
@@ -120,28 +95,32 @@ void World::compute_predicted_bond_forces() {
             o.fx = o.fy = 0.0;
             o.breaks = 0;
             o.k_tran = bond.broken ? 0.0 : k_max;
-            const Vec2 v_kl = vel_[size_t(bond.l)] - vel_[size_t(bond.k)];
-            Vec2 dashpot = Vec2::Zero();
+            [[maybe_unused]] const Vec2 v_kl = Predict ? Vec2(vel_[size_t(bond.l)] - vel_[size_t(bond.k)]) : Vec2::Zero();
+            [[maybe_unused]] Vec2 dashpot = Vec2::Zero();
             if (!bond.broken) {
                 const Vec2 d = pos_[size_t(bond.l)] - pos_[size_t(bond.k)];
-                const Vec2 ahead = d + dt * v_kl;
-                const ElasticBond::Eval e = ElasticBond::evaluate(def, k0, bond.rest_length, bond_inv_rest_[b], ahead);
+                const Vec2 at = Predict ? Vec2(d + dt * v_kl) : d;
+                const ElasticBond::Eval e = ElasticBond::evaluate(def, k0, bond.rest_length, bond_inv_rest_[b], at);
                 o.strain = e.strain;
                 if (e.breaks) {
                     o.breaks = 1;
                     broke = 1;
                 }
                 if (!e.skipped && !e.breaks) {
-                    o.fx = e.f * ahead.x();
-                    o.fy = e.f * ahead.y();
-                    const ElasticBond::Eval now = ElasticBond::evaluate(def, k0, bond.rest_length, bond_inv_rest_[b], d);
-                    const Vec2 spring = now.skipped || now.breaks ? Vec2::Zero() : Vec2(now.f * d.x(), now.f * d.y());
-                    dashpot = Vec2(o.fx, o.fy) - spring;
+                    o.fx = e.f * at.x();
+                    o.fy = e.f * at.y();
+                    if constexpr (Predict) {
+                        const ElasticBond::Eval now = ElasticBond::evaluate(def, k0, bond.rest_length, bond_inv_rest_[b], d);
+                        const Vec2 spring = now.skipped || now.breaks ? Vec2::Zero() : Vec2(now.f * d.x(), now.f * d.y());
+                        dashpot = Vec2(o.fx, o.fy) - spring;
+                    }
                 }
             }
-            // the energy the dashpot took (on k: +dashpot, on l: -dashpot; power -dashpot . v_kl)
-            bond_dissipated_[b] = 0.5 * (dt * dashpot + last_dt * bond_dashpot_last_[b]).dot(v_kl);
-            bond_dashpot_[b] = dashpot;
+            if constexpr (Predict) {
+                // the energy the dashpot took (on k: +dashpot, on l: -dashpot; power -dashpot . v_kl)
+                bond_dissipated_[b] = 0.5 * (dt * dashpot + last_dt * bond_dashpot_last_[b]).dot(v_kl);
+                bond_dashpot_[b] = dashpot;
+            }
         }
         if (broke) bond_chunk_broke_[size_t(chunk)] = 1;
     });

@@ -295,7 +295,8 @@ private:
     // force into its slot before the ranges; a block's discs' bond terms; the breaks after
     void prepare_bonds();
     void compute_bond_forces();
-    void compute_predicted_bond_forces();
+    template <bool Predict>
+    void bond_pass();
     void add_bond_terms(size_t d0, size_t d1);
     void add_external_forces(size_t d0, size_t d1);
     void settle_bond_breaks();

@@ -60,22 +60,18 @@ public:
         base.friction = std::tan(deg_to_rad(s_.wall_friction_deg));
         base.segment_solid = SegmentSolid::Right;
         std::vector<WallDef> w;
-        const auto& p = s_.terrain.points;
-        for (size_t k = 0; k + 1 < p.size(); ++k) {
-            WallDef d = base;
-            d.name = "terrain[" + std::to_string(k) + "]";
-            d.p0 = p[k];
-            d.p1 = p[k + 1];
-            w.push_back(d);
-        }
-        const auto& b = s_.terrain.barrier;
-        for (size_t k = 0; k + 1 < b.size(); ++k) {
-            WallDef d = base;
-            d.name = "barrier[" + std::to_string(k) + "]";
-            d.p0 = b[k];
-            d.p1 = b[k + 1];
-            w.push_back(d);
-        }
+        // a wall per segment of a polyline: the profile's, then the barrier's
+        auto add_polyline = [&](const std::vector<Vec2>& p, const std::string& name) {
+            for (size_t k = 0; k + 1 < p.size(); ++k) {
+                WallDef d = base;
+                d.name = name + "[" + std::to_string(k) + "]";
+                d.p0 = p[k];
+                d.p1 = p[k + 1];
+                w.push_back(d);
+            }
+        };
+        add_polyline(s_.terrain.points, "terrain");
+        add_polyline(s_.terrain.barrier, "barrier");
         return w;
     }
     bool has_release() const override { return !s_.terrain.release.empty(); }
