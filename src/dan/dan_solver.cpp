@@ -162,6 +162,12 @@ void DanSolver::step() {
     const double rate = stability_rate();
     double dt = d.dt;
     if (d.dt_mode == DanStep::Auto && rate > 0.0) dt = std::min(d.dt, d.cfl_max / rate);
+    // a step that collapses (blocks crowding: where the mass comes to rest with many blocks,
+    // at the dam-break tip with thousands) would make the run crawl for ever: refused at a
+    // ten-thousandth of dan.dt
+    if (dt < 1e-4 * d.dt)
+        throw RunError("dan: the automatic step fell to " + format_number(dt) + " s at t = " + format_number(time_) +
+                       " s (below 1e-4 of dan.dt): the blocks crowd; use fewer dan.blocks");
     const double cfl = dt * rate;
     max_cfl_ = std::max(max_cfl_, cfl);
     if (cfl > d.cfl_max * (1.0 + 1e-12))
