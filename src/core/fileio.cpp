@@ -1,5 +1,8 @@
 #include "core/fileio.h"
 
+#include <cmath>
+#include <sstream>
+
 #include <cstdio>
 #include <filesystem>
 
@@ -78,6 +81,14 @@ void SeriesFile::close() {
     std::error_code ec;
     std::filesystem::rename(path_ + ".part", path_, ec);
     if (ec) throw RunError("cannot rename " + path_ + ".part: " + ec.message());
+}
+
+std::string json_number(double v) {
+    if (!std::isfinite(v)) return "null";
+    std::ostringstream o;
+    o.precision(10);
+    o << v;
+    return o.str();
 }
 
 std::string json_string(const std::string& text) {

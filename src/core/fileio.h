@@ -21,6 +21,8 @@ inline constexpr uint64_t kMaxCheckpointBytes = uint64_t(64) << 30;   // checkpo
 // `text` as a JSON string literal, in quotes: quotes, backslashes and control characters
 // escaped (summary.json's free text, such as the machine's name).
 std::string json_string(const std::string& text);
+// A number for summary.json with 10 significant digits; null when not finite.
+std::string json_number(double v);
 
 // A file written over time (a CSV series): it is written as PATH.part and renamed to PATH
 // by close(), so an unfinished series is never mistaken for a complete one.

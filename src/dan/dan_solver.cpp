@@ -235,7 +235,7 @@ void DanSolver::step() {
         }
     }
     // D14
-    const std::vector<double> l_before = l_;
+    l_before_ = l_;  // (a member: no allocation a step)
     for (size_t i = 0; i < n; ++i) {
         s_[i] += 0.5 * dt * (v_hat_[i] + v_[i]);
         v_[i] = v_hat_[i];
@@ -250,7 +250,7 @@ void DanSolver::step() {
         throw RunError("dan: the flow left the path and its extension (dan.path_extension = " + format_number(d.path_extension) +
                        " m) at t = " + format_number(time_ + dt) + " s");
     update_geometry();
-    update_k(l_before);
+    update_k(l_before_);
     time_ += dt;
     dt_ = dt;
     ++steps_;

@@ -82,7 +82,7 @@ private:
     std::vector<double> s_, v_, m_, vol_, k_;
     // per step: boundary blocks' point data, mass blocks' lengths and heights
     std::vector<DanPathPoint> at_;
-    std::vector<double> l_, h_, H_, cos_mid_;
+    std::vector<double> l_, h_, H_, cos_mid_, l_before_;
     std::vector<Vec2> bed_force_;
     std::vector<double> v_star_, v_plus_, v_hat_, accel_;
     double time_ = 0.0, dt_ = 0.0, dissipated_ = 0.0, max_cfl_ = 0.0, momentum_corrected_ = 0.0;

@@ -21,13 +21,6 @@
 namespace demlab {
 
 namespace {
-std::string num(double v) {
-    if (!std::isfinite(v)) return "null";
-    std::ostringstream o;
-    o.precision(10);
-    o << v;
-    return o.str();
-}
 
 }  // namespace
 
@@ -314,33 +307,33 @@ RunSummary run_dan(const Scenario& s, const RunOptions& o) {
     write_file_atomic(dir + "/deposit.csv", dep.str());
     std::ostringstream j;
     j << "{\n"
-      << "  \"scenario\": \"" << s.name << "\",\n"
+      << "  \"scenario\": " << json_string(s.name) << ",\n"
       << "  \"model\": \"dan\",\n"
       << "  \"blocks\": " << n << ",\n"
       << "  \"columns\": \"" << (d.columns == DanColumns::Vertical ? "vertical" : "normal") << "\",\n"
-      << "  \"volume\": " << num(volume) << ",\n"
-      << "  \"total_mass\": " << num(total_mass) << ",\n"
-      << "  \"dt\": " << num(sum.dt) << ",\n"
-      << "  \"dt_min\": " << num(sum.dt_min) << ",\n"
-      << "  \"dt_max\": " << num(sum.dt_max) << ",\n"
+      << "  \"volume\": " << json_number(volume) << ",\n"
+      << "  \"total_mass\": " << json_number(total_mass) << ",\n"
+      << "  \"dt\": " << json_number(sum.dt) << ",\n"
+      << "  \"dt_min\": " << json_number(sum.dt_min) << ",\n"
+      << "  \"dt_max\": " << json_number(sum.dt_max) << ",\n"
       << "  \"steps\": " << sum.steps << ",\n"
-      << "  \"t_end\": " << num(sum.t_end) << ",\n"
+      << "  \"t_end\": " << json_number(sum.t_end) << ",\n"
       << "  \"stop_reason\": \"" << sum.stop_reason << "\",\n"
-      << "  \"wall_seconds\": " << num(sum.wall_seconds) << ",\n"
-      << "  \"machine\": \"" << machine_summary(machine_info()) << "\",\n"
-      << "  \"runout_s\": " << num(sum.runout_s) << ",\n"
-      << "  \"max_front_s\": " << num(max_front) << ",\n"
-      << "  \"runup_height\": " << num(sum.runup_height) << ",\n"
-      << "  \"max_runup_height_during_run\": " << num(sum.max_runup_height_during_run) << ",\n"
-      << "  \"t_front_at_barrier\": " << num(sum.t_front_at_barrier) << ",\n"
-      << "  \"t_peak_fx_barrier\": " << num(sum.t_peak_fx_barrier) << ",\n"
-      << "  \"t_peak_fy_arc\": " << num(sum.t_peak_fy_arc) << ",\n"
-      << "  \"peak_fx_barrier\": " << num(sum.peak_fx_barrier) << ",\n"
-      << "  \"peak_fy_arc\": " << num(sum.peak_fy_arc) << ",\n"
+      << "  \"wall_seconds\": " << json_number(sum.wall_seconds) << ",\n"
+      << "  \"machine\": " << json_string(machine_summary(machine_info())) << ",\n"
+      << "  \"runout_s\": " << json_number(sum.runout_s) << ",\n"
+      << "  \"max_front_s\": " << json_number(max_front) << ",\n"
+      << "  \"runup_height\": " << json_number(sum.runup_height) << ",\n"
+      << "  \"max_runup_height_during_run\": " << json_number(sum.max_runup_height_during_run) << ",\n"
+      << "  \"t_front_at_barrier\": " << json_number(sum.t_front_at_barrier) << ",\n"
+      << "  \"t_peak_fx_barrier\": " << json_number(sum.t_peak_fx_barrier) << ",\n"
+      << "  \"t_peak_fy_arc\": " << json_number(sum.t_peak_fy_arc) << ",\n"
+      << "  \"peak_fx_barrier\": " << json_number(sum.peak_fx_barrier) << ",\n"
+      << "  \"peak_fy_arc\": " << json_number(sum.peak_fy_arc) << ",\n"
       << "  \"left_flume\": " << (left_flume ? "true" : "false") << ",\n"
-      << "  \"sync_shift\": " << num(sync_shift) << ",\n"
-      << "  \"max_cfl\": " << num(dan.max_cfl()) << ",\n"
-      << "  \"momentum_corrected\": " << num(dan.momentum_corrected()) << ",\n"
+      << "  \"sync_shift\": " << json_number(sync_shift) << ",\n"
+      << "  \"max_cfl\": " << json_number(dan.max_cfl()) << ",\n"
+      << "  \"momentum_corrected\": " << json_number(dan.momentum_corrected()) << ",\n"
       << "  \"note\": \"DAN releases the mass at once: release.variant (the gate) does not apply\"\n"
       << "}\n";
     write_file_atomic(dir + "/summary.json", j.str());

@@ -11,13 +11,6 @@
 namespace demlab {
 
 namespace {
-std::string json_number(double v) {
-    if (!std::isfinite(v)) return "null";
-    std::ostringstream o;
-    o.precision(10);
-    o << v;
-    return o.str();
-}
 
 // A group of walls' force or impulse: the first wall's own value, then the others added (a
 // group of one gives that wall's bits, a signed zero too); none: zero.
