@@ -45,6 +45,15 @@ size_t bonds_of(const std::vector<Vec2>& p, BondFilter filter = BondFilter::Tria
     d.filter = filter;
     return delaunay_bonds(p, std::vector<double>(p.size(), 0.05), d).size();
 }
+// The demonstration's slab cut to 4 rows and 10 m, its upper end kept, run for 8 s: the spec's
+// polygon from its upper bed corner A, 10 m down the slope (u) and 0.9 m up from it (n)
+Scenario four_row_slab() {
+    Scenario s = load_scenario(std::string(DEMLAB_SOURCE_DIR) + "/scenarios/snow-slide-2d.toml");
+    apply_override(s, "lattice_release.region=[[-47.8638, 29.9086], [-39.38332, 24.60941], [-38.90639, 25.37265], "
+                      "[-47.38687, 30.67184]]");
+    apply_override(s, "stop.t_max=8.0");
+    return s;
+}
 Scenario slab(const std::string& extra_overrides = "") {
     Scenario s = load_scenario(std::string(DEMLAB_SOURCE_DIR) + "/tests/data/snow-slide-slab.toml");
     if (!extra_overrides.empty()) apply_override(s, extra_overrides);
@@ -231,13 +240,9 @@ TEST(Cohesion, ShippedSnowSlideSlidesWholeThenBreaksAtTheSlopeBreak) {
 
 // The demonstration's slab cut to 4 rows and 10 m (its upper end kept), run for 8 s: it
 // reaches the slope break and bonds break there; the energy they held is booked as
-// bond_break_loss, and the ledger still closes to 1 % of the energy dissipated.
+// bond_break_loss, and the ledger still closes to 1 % of the energy put in.
 TEST(Cohesion, LedgerClosesWhileBreaking) {
-    Scenario s = load_scenario(std::string(DEMLAB_SOURCE_DIR) + "/scenarios/snow-slide-2d.toml");
-    // the spec's polygon from its upper bed corner A: 10 m down the slope (u), 0.9 m up from it (n)
-    apply_override(s, "lattice_release.region=[[-47.8638, 29.9086], [-39.38332, 24.60941], [-38.90639, 25.37265], "
-                      "[-47.38687, 30.67184]]");
-    apply_override(s, "stop.t_max=8.0");
+    Scenario s = four_row_slab();
     apply_override(s, "output.snapshot_interval=0");
     finish_scenario(s);
     const fs::path dir = temp_dir("ledger-breaking");
@@ -353,10 +358,7 @@ snapshot_interval = 0.5
 // A checkpoint taken while bonds are breaking (the 4-row slab breaks from 6.12 s to 7.30 s)
 // resumes to the same bytes: the broken flags, the break events and the loss are state.
 TEST(Cohesion, CheckpointWhileBreakingResumesToTheBytes) {
-    Scenario s = load_scenario(std::string(DEMLAB_SOURCE_DIR) + "/scenarios/snow-slide-2d.toml");
-    apply_override(s, "lattice_release.region=[[-47.8638, 29.9086], [-39.38332, 24.60941], [-38.90639, 25.37265], "
-                      "[-47.38687, 30.67184]]");
-    apply_override(s, "stop.t_max=8.0");
+    Scenario s = four_row_slab();
     finish_scenario(s);
     const fs::path ref = temp_dir("breaking-ref"), cut = temp_dir("breaking-cut");
     run_scenario(s, {ref.string(), false, {}});
