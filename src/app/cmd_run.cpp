@@ -59,6 +59,9 @@ int report(const Scenario& s, const RunSummary& r, const std::string& dir, bool 
         std::printf("  run-out s = %.3f m; run-up %.3f m (max during run %.3f m)\n", r.runout_s, r.runup_height,
                     r.max_runup_height_during_run);
     }
+    if (r.lost_discs > 0)
+        std::printf("  %ld disc%s left the domain and %s taken out (lost.csv; world.lost_discs)\n", r.lost_discs,
+                    r.lost_discs == 1 ? "" : "s", r.lost_discs == 1 ? "was" : "were");
     std::printf("  energy ledger closes to %.2f %% of the energy put in\n", 100.0 * r.energy_balance_error);
     }
     std::printf("  wrote %s/\n", dir.c_str());

@@ -47,6 +47,14 @@ void World::prepare_bonds() {
     }
     bond_k0_ = ElasticBond::k0(d);
     bond_k_max_ = ElasticBond::max_stiffness(d, bond_k0_);
+    bonds_at_start_ = bonds_.size();
+    index_bonds();
+}
+
+// Each disc's bonds and the bonds' buffers, for the present discs and bonds (again after a
+// disc was lost).
+void World::index_bonds() {
+    const BondDef& d = def_.bond;
     // each disc's bonds in list order (CSR)
     const size_t n = pos_.size();
     bond_disc_start_.assign(n + 1, 0);
@@ -181,7 +189,7 @@ void World::settle_bond_breaks() {
         bond.broken = 1;
         const double u = ElasticBond::energy(def_.bond, bond_k0_, bond.rest_length, bond_out_[b].strain);
         bond_break_loss_ += u;
-        bond_breaks_.push_back({time_, bond.k, bond.l, bond_out_[b].strain, u});
+        bond_breaks_.push_back({time_, id_[size_t(bond.k)], id_[size_t(bond.l)], bond_out_[b].strain, u});
     }
 }
 

@@ -70,7 +70,9 @@ EnergyReport World::energy_with() const {
     e.dissipated_rotation = diss_rotation_;
     e.work_by_walls = work_walls_;
     e.removed_with_walls = removed_walls_;
-    if (!bonds_.empty()) {
+    e.lost_with_discs = lost_energy_;
+    e.lost_potential = lost_potential_;
+    if (bonds_at_start_ > 0) {
         e.bond_elastic = bond_elastic_energy();
         e.bond_break_loss = bond_break_loss_;
     }

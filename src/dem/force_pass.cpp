@@ -113,9 +113,9 @@ void World::note_disc_fault(size_t k, double overlap, int chunk) {
     if (k >= dd_fault_[size_t(chunk)].index) return;
     const size_t i = size_t(dd_[k].i), j = size_t(dd_[k].j);
     dd_fault_[size_t(chunk)] =
-        Fault{k, "blow-up: overlap " + format_number(overlap) + " m between discs " + std::to_string(i) + " and " +
-                     std::to_string(j) + " exceeds " + format_number(def_.max_overlap_ratio) +
-                     " of the smaller radius at " + where_disc(steps_, time_, int(i), pos_[i]) +
+        Fault{k, "blow-up: overlap " + format_number(overlap) + " m between discs " + std::to_string(id_[i]) + " and " +
+                     std::to_string(id_[j]) + " exceeds " + format_number(def_.max_overlap_ratio) +
+                     " of the smaller radius at " + where_disc(steps_, time_, id_[i], pos_[i]) +
                      ". Likely cause: the time step is too large for the stiffness and speeds (use the automatic "
                      "time step or a smaller safety factor)"};
 }
@@ -124,9 +124,9 @@ void World::note_wall_fault(size_t kw, double overlap, int chunk) {
     if (kw >= dw_fault_[size_t(chunk)].index) return;
     const size_t i = size_t(dw_[kw].disc), w = size_t(dw_[kw].wall);
     dw_fault_[size_t(chunk)] =
-        Fault{kw, "blow-up: overlap " + format_number(overlap) + " m of disc " + std::to_string(i) + " with wall '" +
+        Fault{kw, "blow-up: overlap " + format_number(overlap) + " m of disc " + std::to_string(id_[i]) + " with wall '" +
                       walls_[w].name + "' exceeds " + format_number(def_.max_overlap_ratio) + " of its radius at " +
-                      where_disc(steps_, time_, int(i), pos_[i]) +
+                      where_disc(steps_, time_, id_[i], pos_[i]) +
                       ". Likely cause: a time step too large for the stiffness, or a disc crossing the wall"};
 }
 

@@ -220,17 +220,36 @@ void World::integrate_note(int chunk, size_t fault, double best_sq, bool any_esc
 void World::integrate_finish() {
     discs_may_have_escaped_ = false;
     for (const ChunkNote& note : chunk_note_) discs_may_have_escaped_ = discs_may_have_escaped_ || note.escaped;
+    auto non_finite = [&](size_t i) {
+        return !std::isfinite(pos_[i].x() + pos_[i].y() + vel_[i].x() + vel_[i].y());
+    };
+    auto blow_up = [&](size_t i) {
+        return RunError("blow-up: non-finite state of disc " + std::to_string(id_[i]) + " at step " +
+                        std::to_string(steps_) + ", t = " + format_number(time_) +
+                        " s. Likely cause: a time step too large for the stiffness");
+    };
+    bool any_fault = false;
     for (const ChunkNote& note : chunk_note_) {
         const size_t i = note.fault;
         if (i == SIZE_MAX) continue;
+        any_fault = true;
+        if (non_finite(i)) throw blow_up(i);
+        if (def_.lost_discs == LostDiscs::Remove) continue;
         const Vec2& p = pos_[i];
-        if (!std::isfinite(p.x() + p.y() + vel_[i].x() + vel_[i].y()))
-            throw RunError("blow-up: non-finite state of disc " + std::to_string(i) + " at step " +
-                           std::to_string(steps_) + ", t = " + format_number(time_) +
-                           " s. Likely cause: a time step too large for the stiffness");
-        throw RunError("lost disc: " + where_disc(steps_, time_, int(i), p) +
-                       " left the domain. Likely cause: a disc crossed a wall (time step too large, or a gap "
-                       "between walls)");
+        throw RunError("lost disc: " + where_disc(steps_, time_, id_[i], p) + " left the domain at velocity (" +
+                       format_number(vel_[i].x()) + ", " + format_number(vel_[i].y()) +
+                       ") m/s: it went over a wall's free end or through a gap between walls (world.lost_discs = "
+                       "\"remove\" takes such discs out and goes on)");
+    }
+    if (any_fault) {
+        // Remove: every disc outside the domain goes at the end of the step (a scan only in a
+        // step where a chunk met one; the chunks note their first fault alone)
+        const Vec2 lo = def_.domain_lo, hi = def_.domain_hi;
+        for (size_t i = 0; i < pos_.size(); ++i) {
+            if (non_finite(i)) throw blow_up(i);
+            const Vec2& p = pos_[i];
+            if (!(p.x() >= lo.x() && p.x() <= hi.x() && p.y() >= lo.y() && p.y() <= hi.y())) lost_pending_.push_back(i);
+        }
     }
     double kinetic = 0.0;
     for (const LedgerBlock& b : ledger_blocks_) {

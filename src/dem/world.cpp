@@ -74,6 +74,7 @@ int World::add_disc(const DiscDef& d) {
     angle_.push_back(d.angle);
     omega_.push_back(def_.rotation.model == 1 ? 0.0 : d.omega);
     material_.push_back(d.material);
+    id_.push_back(int32_t(pos_.size() - 1));
     require_finite(where + ".force", d.force, "N/m");
     external_force_.push_back(d.force);
     any_external_force_ = any_external_force_ || d.force.squaredNorm() > 0.0;
@@ -416,6 +417,7 @@ void World::step() {
         for (const ChunkNote& note : chunk_note_) best_sq = std::min(best_sq, note.dt_sq);
         dt_ = step_from_critical_squared(best_sq);
     }
+    if (!lost_pending_.empty()) take_out_lost_discs();
 }
 
 void World::run(long steps) {

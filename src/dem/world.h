@@ -41,6 +41,10 @@ struct TimeStepDef {
     bool damping_correction = true;        // shrink the rotational bound for the shear dashpot (timestep.h)
 };
 
+// What happens to a disc whose centre leaves the domain (WorldDef::domain_lo/hi): the run
+// stops with an error, or the disc is taken out at the end of the step (World::lost_discs).
+enum class LostDiscs { Stop, Remove };
+
 // Software prefetch in the force pass: Auto turns it on when the step's arrays outgrow the
 // cache (World::prefetching), On and Off force it (benchmarks, tests).
 enum class Prefetch { Auto, Off, On };
@@ -60,8 +64,9 @@ struct WorldDef {
                                            // 0 = six times the largest radius (three diameters)
     double joint_tolerance = 1.0e-3;       // m, wall ends closer than this are joined (snapped)
     double max_overlap_ratio = 0.5;        // -, an overlap beyond this fraction of the smaller radius stops the run
-    Vec2 domain_lo{-1e30, -1e30};          // m, a disc centre leaving [lo, hi] stops the run
+    Vec2 domain_lo{-1e30, -1e30};          // m, a disc centre leaving [lo, hi] is lost: see lost_discs
     Vec2 domain_hi{1e30, 1e30};
+    LostDiscs lost_discs = LostDiscs::Stop;  // a lost disc stops the run, or is taken out (lost_discs.cpp)
     int threads = 1;                       // worker threads; results are the same bits for any count
     bool simd = true;                      // the disc-disc kernel 4 pairs at a time when the CPU has AVX2
                                            // (pair_kernel_avx2.cpp); the same bits as the scalar kernel
@@ -99,14 +104,26 @@ struct EnergyReport {
     double removed_with_walls = 0;    // elastic energy of contacts lost when a wall was removed
     double bond_elastic = 0;          // elastic energy of the intact bonds (elastic_bond.h, C7)
     double bond_break_loss = 0;       // energy the bonds held when they broke (C12)
+    double lost_with_discs = 0;       // energy the lost discs took out (kinetic, potential, contacts, bonds)
+    double lost_potential = 0;        // its potential part (energy_put_in needs it)
     // Balance: kinetic + potential + elastic + dissipated - work_by_walls should stay constant.
     double balance() const {
         double b = kinetic_translation + kinetic_rotation + potential + elastic + dissipated_contacts +
                    dissipated_local + dissipated_rotation + removed_with_walls - work_by_walls;
         // (added only with bonds: a world without them keeps the bits it had)
         if (bond_elastic != 0.0 || bond_break_loss != 0.0) b += bond_elastic + bond_break_loss;
+        if (lost_with_discs != 0.0) b += lost_with_discs;  // (the same: only after a disc was lost)
         return b;
     }
+};
+
+// A disc taken out of the world (LostDiscs::Remove): when, which (its index when added), its
+// state then, and the energy it took out of the ledger (J/m).
+struct LostDiscEvent {
+    double t;
+    int32_t id;
+    Vec2 pos, vel;
+    double omega, mass, energy;
 };
 
 class World {
@@ -147,7 +164,16 @@ public:
     const std::vector<DiscContact>& disc_contacts() const { return dd_; }
     const std::vector<WallContact>& wall_contacts() const { return dw_; }
     const std::vector<Bond>& bonds() const { return bonds_; }                // sorted by (k, l)
-    const std::vector<BondBreakEvent>& bond_breaks() const { return bond_breaks_; }  // in order
+    const std::vector<BondBreakEvent>& bond_breaks() const { return bond_breaks_; }  // in order, disc ids
+    // The index each disc had when it was added (disc_ids()[i] == i until a disc is lost;
+    // ascending), the discs taken out in order, and the bonds: how many there were at
+    // finalize() and how many intact ones went with lost discs (bonds() holds the others).
+    const std::vector<int32_t>& disc_ids() const { return id_; }
+    const std::vector<LostDiscEvent>& lost_discs() const { return lost_; }
+    size_t bonds_at_start() const { return bonds_at_start_; }
+    size_t bonds_lost_with_discs() const { return bonds_lost_; }
+    // the present index of the disc added as `id`, or -1 if it was lost
+    long disc_index(long id) const;
     const WallDef& wall_def(int w) const { return walls_[size_t(w)]; }
     const WallGeom& wall_geom(int w) const { return geom_[size_t(w)]; }
     bool wall_active(int w) const { return wall_active_[size_t(w)] != 0; }
@@ -311,6 +337,14 @@ private:
     void integrate_finish();
     void move_walls();
     void refresh_contacts();
+    // lost discs (lost_discs.cpp): those outside the domain at the end of a step, taken out
+    std::vector<size_t> lost_pending_;
+    void take_out_lost_discs();
+    // takes the discs `gone` (present indices, ascending) out of every array, list and bond
+    void compact_discs(const std::vector<size_t>& gone);
+    // the broad phase and contact lists rebuilt for the present discs, with these histories
+    void rebuild_lists(const std::vector<DiscContact>& dd, const std::vector<WallContact>& dw);
+    void index_bonds();
     // the parts of the world that depend on the contact law, as templates over it
     template <typename Law>
     void build_law_tables();
@@ -349,6 +383,9 @@ private:
     std::vector<Vec2> pos_, vel_;
     std::vector<double> radius_, mass_, inv_mass_, inertia_, inv_inertia_, angle_, omega_;
     std::vector<int32_t> material_;
+    std::vector<int32_t> id_;           // the index each disc had when added (disc_ids)
+    std::vector<LostDiscEvent> lost_;
+    double lost_energy_ = 0.0, lost_potential_ = 0.0;  // J/m, the ledger's share of the lost discs
     std::vector<double> rr_factor_;     // Preh-Poisel factor per disc, 1/m (0 without rolling resistance)
     // what each disc's contacts add up to in a step (DiscLoad, pair_kernel.h)
     std::vector<DiscLoad> load_;
@@ -518,6 +555,7 @@ private:
     double bond_k0_ = 0.0, bond_k_max_ = 0.0;
     double bond_break_loss_ = 0.0;
     std::vector<BondBreakEvent> bond_breaks_;
+    size_t bonds_at_start_ = 0, bonds_lost_ = 0;
 
     // energy ledger
     double diss_contacts_ = 0, diss_local_ = 0, diss_rotation_ = 0, work_walls_ = 0, removed_walls_ = 0, last_dt_ = 0;

@@ -27,7 +27,7 @@
 namespace demlab {
 
 namespace {
-constexpr uint32_t kWorldStateVersion = 1;
+constexpr uint32_t kWorldStateVersion = 2;  // 2: the lost discs
 
 // A contact's history: the law's fields (LinearLaw::for_each_history_field).
 template <typename Fn, typename... Contact>
@@ -54,6 +54,22 @@ void copy_history(const Contact& from, Contact& to) {
 void World::save_state(BinaryWriter& out) const {
     out.tag("WRLD");
     out.put(kWorldStateVersion);
+    // the discs taken out so far first: a world built from the set-up takes them out before
+    // the rest is read (load_state)
+    out.tag("LOST");
+    out.put(uint64_t(lost_.size()));
+    for (const LostDiscEvent& e : lost_) {
+        out.put(e.t);
+        out.put(e.id);
+        out.put(e.pos);
+        out.put(e.vel);
+        out.put(e.omega);
+        out.put(e.mass);
+        out.put(e.energy);
+    }
+    out.put(uint64_t(bonds_lost_));
+    out.put(lost_energy_);
+    out.put(lost_potential_);
     out.put(uint64_t(pos_.size()));
     out.put(uint64_t(walls_.size()));
     out.put(time_);
@@ -114,7 +130,7 @@ void World::save_state(BinaryWriter& out) const {
     out.put(work_walls_);
     out.put(removed_walls_);
     // the bonds (a world without them writes nothing more: its checkpoints keep their layout)
-    if (!bonds_.empty()) {
+    if (bonds_at_start_ > 0) {
         out.tag("BOND");
         out.put(uint64_t(bonds_.size()));
         for (const Bond& b : bonds_) {
@@ -163,9 +179,33 @@ void merge_histories(const std::vector<Contact>& saved, std::vector<Contact>& fr
 
 void World::load_state(BinaryReader& in) {
     if (!finalized_) finalize();
-    const size_t n = pos_.size(), nw = walls_.size();
     in.expect_tag("WRLD");
     if (in.get<uint32_t>() != kWorldStateVersion) throw InputError("checkpoint: written by another version of demlab");
+    in.expect_tag("LOST");
+    const uint64_t lost = in.get<uint64_t>();
+    if (lost > pos_.size()) throw InputError("checkpoint: corrupt list of lost discs");
+    std::vector<LostDiscEvent> events(static_cast<size_t>(lost));
+    std::vector<size_t> gone;
+    for (LostDiscEvent& e : events) {
+        in.get(e.t);
+        in.get(e.id);
+        in.get(e.pos);
+        in.get(e.vel);
+        in.get(e.omega);
+        in.get(e.mass);
+        in.get(e.energy);
+        const long i = disc_index(e.id);
+        if (i < 0) throw InputError("checkpoint: its lost disc " + std::to_string(e.id) + " is not a disc of this set-up");
+        gone.push_back(size_t(i));
+    }
+    std::sort(gone.begin(), gone.end());
+    if (std::adjacent_find(gone.begin(), gone.end()) != gone.end()) throw InputError("checkpoint: corrupt list of lost discs");
+    if (!gone.empty()) compact_discs(gone);
+    lost_ = std::move(events);
+    bonds_lost_ = size_t(in.get<uint64_t>());
+    in.get(lost_energy_);
+    in.get(lost_potential_);
+    const size_t n = pos_.size(), nw = walls_.size();
     if (in.get<uint64_t>() != n || in.get<uint64_t>() != nw)
         throw InputError("checkpoint: its disc or wall count differs from the scenario's");
     in.get(time_);
@@ -232,7 +272,7 @@ void World::load_state(BinaryReader& in) {
     in.get(diss_rotation_);
     in.get(work_walls_);
     in.get(removed_walls_);
-    if (!bonds_.empty()) {
+    if (bonds_at_start_ > 0) {
         // the same bonds as this world's (built from the same set-up), with their state
         in.expect_tag("BOND");
         if (in.get<uint64_t>() != bonds_.size()) throw InputError("checkpoint: its bonds are not this set-up's");
@@ -264,7 +304,12 @@ void World::load_state(BinaryReader& in) {
         }
     }
 
-    // the broad phase from the restored positions, then the histories
+    rebuild_lists(dd, dw);
+}
+
+// The broad phase from the present positions, then the histories (a restored checkpoint, or
+// the discs left after some were lost).
+void World::rebuild_lists(const std::vector<DiscContact>& dd, const std::vector<WallContact>& dw) {
     broad_.init(margin_target(), wall_piece_target(), pos_, radius_, geom_, wall_active_);
     dd_.clear();
     dw_.clear();

@@ -86,8 +86,8 @@ void RunSeries::sample(const World& w, const MeasureContext& m, RunState& st, Ru
                   << e.dissipated_rotation << ',' << e.work_by_walls << ',' << e.removed_with_walls << ','
                   << e.balance();
     if (has_bonds_) {
-        const size_t total = w.bonds().size(), broken = w.bond_breaks().size();
-        energy_.out() << ',' << e.bond_elastic << ',' << e.bond_break_loss << ',' << double(total - broken) / double(total);
+        const size_t total = w.bonds_at_start(), gone = w.bond_breaks().size() + w.bonds_lost_with_discs();
+        energy_.out() << ',' << e.bond_elastic << ',' << e.bond_break_loss << ',' << double(total - gone) / double(total);
     }
     energy_.out() << '\n';
     if (m.path) {
@@ -101,7 +101,7 @@ void RunSeries::sample(const World& w, const MeasureContext& m, RunState& st, Ru
             path.project(w.positions()[i], si, hi_);
             if (si > s_front) {
                 s_front = si;
-                disp = (w.positions()[i] - m.start_pos[i]).norm();
+                disp = (w.positions()[i] - m.start_pos[size_t(w.disc_ids()[i])]).norm();
             }
             if (si > m.barrier.s_barrier) runup = std::max(runup, w.positions()[i].y() + w.radii()[i] - m.barrier.foot.y());
         }
@@ -110,7 +110,9 @@ void RunSeries::sample(const World& w, const MeasureContext& m, RunState& st, Ru
         if (sum.t_front_at_barrier < 0 && s_front >= m.barrier.s_barrier) sum.t_front_at_barrier = t;
     }
     for (long id : m.scenario.output.track) {
-        const size_t i = size_t(id);
+        const long index = w.disc_index(id);
+        if (index < 0) continue;  // lost (lost.csv)
+        const size_t i = size_t(index);
         track_.out() << t << ',' << id << ',' << w.positions()[i].x() << ',' << w.positions()[i].y() << ','
                      << w.velocities()[i].x() << ',' << w.velocities()[i].y() << ',' << w.angles()[i] << ','
                      << w.omegas()[i] << '\n';
@@ -136,7 +138,7 @@ void RunSeries::sample(const World& w, const MeasureContext& m, RunState& st, Ru
 // Checked every kEnergyWatchSteps steps, and when a step fails (a lost disc, an overlap), so
 // that a runaway is named as one: every 100 steps, as first, the check cost 1.3 % of a
 // 2-thread flume run (one World::energy() took 225 us on geometry A, more than a step).
-double energy_put_in(const EnergyReport& e, double e0) { return e0 - e.potential + e.work_by_walls; }
+double energy_put_in(const EnergyReport& e, double e0) { return e0 - e.potential - e.lost_potential + e.work_by_walls; }
 
 void check_energy_growth(const Solver& w, double e0, double max_gain, double noise, double& peak_put_in) {
     const EnergyReport e = w.energy();
@@ -194,6 +196,15 @@ void write_bond_breaks(const World& w, const std::string& dir) {
     write_file_atomic(dir + "/bonds_broken.csv", o.str());
 }
 
+void write_lost_discs(const World& w, const std::string& dir) {
+    std::ostringstream o;
+    o << "t_s,id,x_m,y_m,vx_m_per_s,vy_m_per_s,omega_rad_per_s,mass_kg_per_m,kinetic_J_per_m\n";
+    for (const LostDiscEvent& e : w.lost_discs())
+        o << e.t << ',' << e.id << ',' << e.pos.x() << ',' << e.pos.y() << ',' << e.vel.x() << ',' << e.vel.y() << ','
+          << e.omega << ',' << e.mass << ',' << e.energy << '\n';
+    write_file_atomic(dir + "/lost.csv", o.str());
+}
+
 void write_summary(const std::string& path, const Scenario& s, const RunSummary& sum, const ReleaseFigures& release,
                    const SlopeAngles* angles) {
     const bool r = release.generated;
@@ -201,6 +212,7 @@ void write_summary(const std::string& path, const Scenario& s, const RunSummary&
     j << "{\n"
       << "  \"scenario\": \"" << s.name << "\",\n"
       << "  \"n_discs\": " << sum.n_discs << ",\n"
+      << "  \"lost_discs\": " << sum.lost_discs << ",\n"
       << "  \"total_mass\": " << json_number(sum.total_mass) << ",\n"
       << "  \"porosity\": " << json_number(sum.porosity) << ",\n"
       << "  \"release_porosity_generated\": " << json_number(r ? release.porosity_generated : NAN) << ",\n"
@@ -235,7 +247,9 @@ void write_summary(const std::string& path, const Scenario& s, const RunSummary&
       << "  \"force_pass_one_range_cuts\": " << sum.force_pass_one_range_cuts << ",\n"
       << "  \"force_pass_busy_share\": " << json_number(sum.force_pass_busy_share) << ",\n"
       << "  \"force_pass_busy_fallbacks\": " << sum.force_pass_busy_fallbacks;
-    if (sum.bonds >= 0) j << ",\n  \"bonds\": " << sum.bonds << ",\n  \"bonds_broken\": " << sum.bonds_broken;
+    if (sum.bonds >= 0)
+        j << ",\n  \"bonds\": " << sum.bonds << ",\n  \"bonds_broken\": " << sum.bonds_broken
+          << ",\n  \"bonds_lost_with_discs\": " << sum.bonds_lost_with_discs;
     if (angles) {
         j << ",\n  \"gamma_ges\": " << json_number(angles->gamma_ges);
         for (int i = 0; i < 5; ++i) j << ",\n  \"gamma_" << i + 1 << "\": " << json_number(angles->gamma[i]);

@@ -74,6 +74,9 @@ void write_deposit(const World& w, const MeasureContext& m, const std::string& d
 // envelope.csv and the slope angles of a dam break's deposit over [0, length].
 SlopeAngles write_envelope(const World& w, double gap, double length, const std::string& dir, RunSummary& sum);
 
+// lost.csv: each disc taken out when it left the domain (world.lost_discs): when, its id,
+// where, its velocity and spin, mass and kinetic energy then.
+void write_lost_discs(const World& w, const std::string& dir);
 // bonds_broken.csv: t_s, k, l, strain, energy_J_per_m of each bond that broke, in order.
 void write_bond_breaks(const World& w, const std::string& dir);
 

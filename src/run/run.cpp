@@ -229,10 +229,13 @@ void write_results(const Scenario& s, const Setup& setup, const World& w, const 
     if (measure.path) write_deposit(w, measure, dir, sum);
     SlopeAngles angles{};
     if (setup.measures_envelope()) angles = write_envelope(w, measure.front_gap, setup.envelope_length(), dir, sum);
-    if (!w.bonds().empty()) {
+    write_lost_discs(w, dir);
+    sum.lost_discs = long(w.lost_discs().size());
+    if (w.bonds_at_start() > 0) {
         write_bond_breaks(w, dir);
-        sum.bonds = long(w.bonds().size());
+        sum.bonds = long(w.bonds_at_start());
         sum.bonds_broken = long(w.bond_breaks().size());
+        sum.bonds_lost_with_discs = long(w.bonds_lost_with_discs());
     }
     // a settled lattice reports its settling (it has no generated porosity)
     const bool settled_lattice = s.lattice_release.enabled && s.lattice_release.settle;
@@ -296,7 +299,9 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
     DemSolver dem(w);
     Solver& solver = dem;
     const size_t n = w.disc_count();
+    // the discs at the start, by id (disc_ids: a lost disc leaves the world, not these)
     const std::vector<Vec2> start_pos = w.positions();
+    const std::vector<double> start_radius = w.radii();
     double r_max = 0, total_mass = 0, ledger_noise = 0;
     for (size_t i = 0; i < n; ++i) {
         r_max = std::max(r_max, w.radii()[i]);
@@ -338,7 +343,7 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
         out.tag("RUN ");
         // what rebuilds this world: the discs at the start
         out.put(start_pos);
-        out.put(w.radii());
+        out.put(start_radius);
         out.put(layer);
         out.put(grid);
         out.put(mass.porosity_settled);
@@ -363,6 +368,7 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
     // whether the series were sampled at the current time (the last row is not written twice
     // when the run ends at a sample time)
     bool sampled_now = false;
+    size_t lost_seen = w.lost_discs().size();
     while (true) {
         if (solver.time() >= st.next_series - 1e-12) {
             series.sample(w, measure, st, sum);
@@ -382,6 +388,11 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
             throw;
         }
         sampled_now = false;
+        // a disc thrown out by created energy is a blow-up, not a stray: look at once
+        if (w.lost_discs().size() != lost_seen) {
+            lost_seen = w.lost_discs().size();
+            check_energy_growth(solver, st.e0, s.stop.max_energy_gain, ledger_noise, st.peak_put_in);
+        }
         // a step so small that the run would not end in any time is refused at once
         if (solver.step_count() == steps_start + 1 && (s.stop.t_max - solver.time()) / solver.dt() > kMaxRunSteps)
             throw RunError(s.source + ": the run would take " + format_number((s.stop.t_max - solver.time()) / solver.dt()) +

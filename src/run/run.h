@@ -43,7 +43,8 @@ CheckpointInfo read_checkpoint_info(const std::string& run_dir);
 bool same_scenario(const std::string& stored, const std::string& resolved_now);
 
 struct RunSummary {
-    long n_discs = 0;
+    long n_discs = 0;                   // at the start
+    long lost_discs = 0;                // taken out when they left the domain (lost.csv)
     double total_mass = 0;              // kg per metre of thickness
     double porosity = 0;                // of the release mass (settled), -1 for explicit discs
     double dt = 0;                      // s, the last step (automatic steps vary)
@@ -76,6 +77,7 @@ struct RunSummary {
     long force_pass_busy_fallbacks = 0;       // times the pass fell back to one range for a busy machine (World)
     long bonds = -1;                    // cohesive bonds at the start (-1: none)
     long bonds_broken = 0;              // of which broken by the end
+    long bonds_lost_with_discs = 0;     // intact ones that went with a lost disc
 };
 
 RunSummary run_scenario(const Scenario& s, const RunOptions& o);

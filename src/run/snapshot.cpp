@@ -92,9 +92,11 @@ void SnapshotWriter::write(const World& w) {
     data_array(o, "Float64", "speed", 1, n, [&](std::string& s, size_t i) { put_g(s, w.velocities()[i].norm(), 9); });
     data_array(o, "Float64", "angle", 1, n, [&](std::string& s, size_t i) { put_g(s, w.angles()[i], 9); });
     data_array(o, "Float64", "omega", 1, n, [&](std::string& s, size_t i) { put_g(s, w.omegas()[i], 9); });
-    data_array(o, "Int32", "layer", 1, n, [&](std::string& s, size_t i) { put_int(s, i < layer_.size() ? layer_[i] : 0); });
-    data_array(o, "Int32", "grid", 1, n, [&](std::string& s, size_t i) { put_int(s, i < grid_.size() ? grid_[i] : 0); });
-    data_array(o, "Int32", "id", 1, n, [&](std::string& s, size_t i) { put_int(s, long(i)); });
+    // by the id each disc was added with (a lost disc leaves the world: World::disc_ids)
+    const std::vector<int32_t>& ids = w.disc_ids();
+    data_array(o, "Int32", "layer", 1, n, [&](std::string& s, size_t i) { const size_t k = size_t(ids[i]); put_int(s, k < layer_.size() ? layer_[k] : 0); });
+    data_array(o, "Int32", "grid", 1, n, [&](std::string& s, size_t i) { const size_t k = size_t(ids[i]); put_int(s, k < grid_.size() ? grid_[k] : 0); });
+    data_array(o, "Int32", "id", 1, n, [&](std::string& s, size_t i) { put_int(s, long(ids[i])); });
     if (!bonds.empty()) {
         data_array(o, "Int32", "bonds_intact", 1, n, [&](std::string& s, size_t i) { put_int(s, intact[i]); });
         data_array(o, "Int32", "bonds_broken", 1, n, [&](std::string& s, size_t i) { put_int(s, broken[i]); });

@@ -203,6 +203,7 @@ void add_dynamics_keys(std::vector<Key>& k) {
     k.push_back(vec2("world.gravity", "m/s2", "gravity vector", [](Scenario& s) -> Vec2& { return s.world.gravity; }));
     k.push_back(real("world.broadphase_margin", "m", "smallest pad of the broad phase's fat boxes (moving discs get wider ones); 0 = half the smallest radius", [](Scenario& s) -> double& { return s.world.broadphase_margin; }, 0, 1));
     k.push_back(real("world.joint_tolerance", "m", "wall ends closer than this are joined", [](Scenario& s) -> double& { return s.world.joint_tolerance; }, 0, 0.1));
+    k.push_back(choice<LostDiscs>("world.lost_discs", "a disc whose centre leaves the domain (the walls' box padded by 0.5 m: over a wall's free end, off a profile's end): remove (taken out, recorded in lost.csv, its energy booked in the ledger) or stop (the run ends with exit 3)", [](Scenario& s) -> LostDiscs& { return s.world.lost_discs; }, {{"remove", LostDiscs::Remove}, {"stop", LostDiscs::Stop}}));
     k.push_back(real("world.max_overlap_ratio", "-", "an overlap beyond this fraction of the smaller radius stops the run (blow-up)", [](Scenario& s) -> double& { return s.world.max_overlap_ratio; }, 0, 2, true));
 }
 

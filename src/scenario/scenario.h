@@ -104,12 +104,20 @@ struct OutputDef {
     double front_neighbour_gap = 0.0;      // m, a front disc must have a neighbour within this gap; 0 = r_max
 };
 
+// A scenario's world starts from the engine's defaults but takes a stray disc out
+// (world.lost_discs): one disc over a barrier's end should not end a run.
+inline WorldDef scenario_world() {
+    WorldDef d;
+    d.lost_discs = LostDiscs::Remove;
+    return d;
+}
+
 struct Scenario {
     std::string source;                    // file it was read from (for messages)
     std::string name = "unnamed";
     std::string description;
     unsigned long long seed = 1;
-    WorldDef world;                        // gravity, damping, time step, rotation model, rules
+    WorldDef world = scenario_world();     // gravity, damping, time step, rotation model, rules
     MaterialDef disc;                      // disc material (friction as a coefficient)
     double disc_friction_deg = 15.5;
     double wall_friction_deg = 21.7;

@@ -1,0 +1,113 @@
+// Discs that leave the domain (WorldDef::lost_discs = Remove): a disc thrown over a barrier's
+// free end, or off the end of a terrain profile, flies on with nothing to meet; it is taken out
+// at the end of the step in which its centre left the domain, so that one stray disc does not
+// end a run of thousands.
+//
+// Taking a disc out squeezes it out of every per-disc array, renumbers the contacts and bonds
+// of the others (the order of the discs is kept, so every list stays sorted and every sum
+// keeps its order) and rebuilds the candidate lists as a restored checkpoint does
+// (world_state.cpp says why that changes no bit). What the disc had (its kinetic and
+// potential energy, its contacts' and intact bonds' elastic energy) leaves the ledger as
+// EnergyReport::lost_with_discs: the difference of the balance before and after, so the
+// balance stays where it was. Its record keeps the index it was added with (disc_ids()).
+#include <algorithm>
+
+#include "dem/world.h"
+
+namespace demlab {
+
+long World::disc_index(long id) const {
+    const auto it = std::lower_bound(id_.begin(), id_.end(), int32_t(id));
+    return it != id_.end() && *it == id ? long(it - id_.begin()) : -1;
+}
+
+void World::take_out_lost_discs() {
+    std::vector<size_t> gone;
+    gone.swap(lost_pending_);  // ascending: the scan's order (integrate_finish)
+    const EnergyReport before = energy();
+    for (size_t i : gone) {
+        const double kinetic = 0.5 * mass_[i] * vel_[i].squaredNorm() + 0.5 * inertia_[i] * omega_[i] * omega_[i];
+        lost_.push_back({time_, id_[i], pos_[i], vel_[i], omega_[i], mass_[i], kinetic});
+    }
+    compact_discs(gone);
+    const EnergyReport after = energy();
+    // (both balances hold the same lost_with_discs so far: the difference is these discs')
+    lost_energy_ += before.balance() - after.balance();
+    lost_potential_ += before.potential - after.potential;
+    // the rest watch's kinetic energy without them (the next step sums it afresh)
+    kinetic_ = after.kinetic_translation + after.kinetic_rotation;
+}
+
+void World::compact_discs(const std::vector<size_t>& gone) {
+    const size_t n = pos_.size();
+    std::vector<int32_t> to(n, 0);
+    for (size_t i : gone) to[i] = -1;
+    int32_t next = 0;
+    for (size_t i = 0; i < n; ++i)
+        if (to[i] == 0) to[i] = next++;
+        else to[i] = -1;
+    auto squeeze = [&](auto& v) {
+        if (v.size() != n) return;  // (an array not in use: rr_factor_ without rolling resistance is full of 0 still)
+        size_t o = 0;
+        for (size_t i = 0; i < n; ++i)
+            if (to[i] >= 0) v[o++] = v[i];
+        v.resize(o);
+    };
+    squeeze(pos_);
+    squeeze(vel_);
+    squeeze(radius_);
+    squeeze(mass_);
+    squeeze(inv_mass_);
+    squeeze(inertia_);
+    squeeze(inv_inertia_);
+    squeeze(angle_);
+    squeeze(omega_);
+    squeeze(material_);
+    squeeze(id_);
+    squeeze(rr_factor_);
+    squeeze(load_);
+    squeeze(external_force_);
+    any_external_force_ = std::any_of(external_force_.begin(), external_force_.end(),
+                                      [](const Vec2& f) { return f.squaredNorm() > 0.0; });
+
+    // the others' contacts, renumbered (the map keeps the order: the lists stay sorted)
+    std::vector<DiscContact> dd;
+    dd.reserve(dd_.size());
+    for (DiscContact c : dd_) {
+        if (to[size_t(c.i)] < 0 || to[size_t(c.j)] < 0) continue;
+        c.i = to[size_t(c.i)];
+        c.j = to[size_t(c.j)];
+        dd.push_back(c);
+    }
+    std::vector<WallContact> dw;
+    dw.reserve(dw_.size());
+    for (WallContact c : dw_) {
+        if (to[size_t(c.disc)] < 0) continue;
+        c.disc = to[size_t(c.disc)];
+        dw.push_back(c);
+    }
+
+    // the others' bonds; an intact bond of a lost disc goes with it (counted, its energy in the
+    // difference the caller books)
+    if (!bonds_.empty()) {
+        std::vector<Bond> bonds;
+        std::vector<Vec2> dashpot_last;
+        for (size_t b = 0; b < bonds_.size(); ++b) {
+            Bond bond = bonds_[b];
+            if (to[size_t(bond.k)] < 0 || to[size_t(bond.l)] < 0) {
+                if (!bond.broken) ++bonds_lost_;
+                continue;
+            }
+            bond.k = to[size_t(bond.k)];
+            bond.l = to[size_t(bond.l)];
+            bonds.push_back(bond);
+            if (def_.bond.predict) dashpot_last.push_back(bond_dashpot_last_[b]);
+        }
+        bonds_.swap(bonds);
+        index_bonds();
+        if (def_.bond.predict) bond_dashpot_last_.swap(dashpot_last);
+    }
+    rebuild_lists(dd, dw);
+}
+
+}  // namespace demlab
