@@ -24,6 +24,7 @@
 
 using namespace demlab;
 using demlab::test::expect_refused;
+using demlab::test::csv_column;
 using demlab::test::read_file;
 using demlab::test::temp_dir;
 namespace fs = std::filesystem;
@@ -151,7 +152,7 @@ TEST(Cohesion, SnowSlabCountsOutputsAndResume) {
     EXPECT_EQ(r.bonds, 3802);
     EXPECT_LT(r.energy_balance_error, 0.01);
     const std::string energy = read_file(ref / "energy.csv");
-    EXPECT_NE(energy.find(",bond_elastic,bond_break_loss,bonds_intact_fraction\n"), std::string::npos);
+    EXPECT_NE(energy.find(",bond_elastic_J_per_m,bond_break_loss_J_per_m,bonds_intact_fraction\n"), std::string::npos);
     EXPECT_TRUE(fs::exists(ref / "bonds_broken.csv"));
     EXPECT_NE(read_file(ref / "summary.json").find("\"bonds\": 3802"), std::string::npos);
     // the snapshots carry the intact bonds as line cells and each disc's intact and broken
@@ -223,15 +224,9 @@ TEST(Cohesion, ShippedSnowSlideSlidesWholeThenBreaksAtTheSlopeBreak) {
     const RunSummary r = run_scenario(s, {dir.string(), false, {}});
     EXPECT_EQ(r.n_discs, 1388);
     EXPECT_EQ(r.bonds, 3802);
-    std::ifstream in(dir / "bonds_broken.csv");
-    std::string line;
-    std::getline(in, line);
-    double first = INFINITY;
-    long broken = 0;
-    while (std::getline(in, line)) {
-        first = std::min(first, std::stod(line.substr(0, line.find(','))));
-        ++broken;
-    }
+    const std::vector<double> breaks = csv_column(dir / "bonds_broken.csv", "t_s");
+    const double first = breaks.empty() ? INFINITY : *std::min_element(breaks.begin(), breaks.end());
+    const long broken = long(breaks.size());
     EXPECT_GT(first, 2.9);
     EXPECT_GT(double(broken), 0.05 * 3802);
     EXPECT_LT(r.energy_balance_error, 0.01);
@@ -250,12 +245,8 @@ TEST(Cohesion, LedgerClosesWhileBreaking) {
     EXPECT_EQ(r.n_discs, 160);  // 4 rows of 40
     EXPECT_EQ(r.bonds, 3 * 160 - 2 * 40 - 2 * 4 + 1);
     EXPECT_GT(r.bonds_broken, 0);  // 178 when measured
-    // energy.csv's last row: bond_break_loss (the second-last column) > 0
-    std::ifstream in(dir / "energy.csv");
-    std::string line, last;
-    while (std::getline(in, line)) last = line;
-    const size_t c2 = last.rfind(','), c1 = last.rfind(',', c2 - 1);
-    EXPECT_GT(std::stod(last.substr(c1 + 1, c2 - c1 - 1)), 0.0);
+    // energy.csv's last row: bond_break_loss > 0
+    EXPECT_GT(csv_column(dir / "energy.csv", "bond_break_loss_J_per_m").back(), 0.0);
     EXPECT_LT(r.energy_balance_error, 0.01);
     fs::remove_all(dir);
 }
@@ -314,15 +305,9 @@ snapshot_interval = 0.5
         const RunSummary r = run_scenario(s, {dir.string(), false, {}});
         EXPECT_GT(r.bonds, 300);
         // energy.csv's first row: no kinetic energy, no bond energy (bonds from the settled state)
-        std::ifstream in(dir / "energy.csv");
-        std::string header, first;
-        std::getline(in, header);
-        std::getline(in, first);
-        std::vector<double> v;
-        std::stringstream row(first);
-        for (std::string cell; std::getline(row, cell, ',');) v.push_back(std::stod(cell));
-        EXPECT_EQ(v[1], 0.0);  // kinetic_translation
-        EXPECT_LT(v[11], 1e-20);  // bond_elastic: round-off of the lengths only
+        EXPECT_EQ(csv_column(dir / "energy.csv", "kinetic_translation_J_per_m").front(), 0.0);
+        // bond_elastic: round-off of the lengths only
+        EXPECT_LT(csv_column(dir / "energy.csv", "bond_elastic_J_per_m").front(), 1e-20);
         const std::string summary = read_file(dir / "summary.json");
         EXPECT_EQ(summary.find("\"release_settle_time\": null"), std::string::npos) << summary;
         // the discs left their nodes: the first snapshot is not the lattice
@@ -369,12 +354,7 @@ TEST(Cohesion, CheckpointWhileBreakingResumesToTheBytes) {
     EXPECT_THROW(run_scenario(s, ro), Interrupted);
     // the interrupted run had broken some bonds, not all that break: its energy series' last
     // intact fraction lies between 1 and the end's
-    auto last_fraction = [](const fs::path& energy) {
-        std::ifstream in(energy);
-        std::string line, last;
-        while (std::getline(in, line)) last = line;
-        return std::stod(last.substr(last.rfind(',') + 1));
-    };
+    auto last_fraction = [](const fs::path& energy) { return csv_column(energy, "bonds_intact_fraction").back(); };
     fs::path partial;
     for (const auto& e : fs::directory_iterator(cut))
         if (e.path().filename().string().rfind("energy.csv", 0) == 0) partial = e.path();

@@ -15,26 +15,12 @@
 #include "scenario/scenario.h"
 
 using namespace demlab;
+using demlab::test::csv_column;
 using demlab::test::read_file;
 using demlab::test::temp_dir;
 namespace fs = std::filesystem;
 
 namespace {
-std::vector<std::vector<double>> read_csv(const fs::path& p) {
-    std::ifstream in(p);
-    std::string line;
-    std::getline(in, line);  // header
-    std::vector<std::vector<double>> rows;
-    while (std::getline(in, line)) {
-        std::vector<double> row;
-        std::stringstream s(line);
-        std::string cell;
-        while (std::getline(s, cell, ',')) row.push_back(std::stod(cell));
-        rows.push_back(row);
-    }
-    return rows;
-}
-
 struct FlumeRun {
     RunSummary summary;
     fs::path dir;
@@ -168,18 +154,19 @@ TEST(GeometryA20, GenerationToRestBalancesAndDeterminism) {
             ASSERT_TRUE(strip(i - 1) < strip(i) || (strip(i - 1) == strip(i) && m.pos[i - 1].y() <= m.pos[i].y()))
                 << "disc " << i;
     }
-    const auto rows = read_csv(first.dir / "forces.csv");
-    const auto& last = rows.back();
+    const fs::path forces = first.dir / "forces.csv";
+    auto last = [&](const char* column) { return csv_column(forces, column).back(); };
     const double weight = s.total_mass * 9.81;
     {
         SCOPED_TRACE("at rest the walls carry the weight");
-        // fy_total (column 8): force of the discs on W1 + W2 + W3; the gate has gone
-        EXPECT_NEAR(-last[8], weight, 0.01 * weight);
+        // fy_total: force of the discs on W1 + W2 + W3; the gate has gone
+        EXPECT_NEAR(-last("fy_total_N_per_m"), weight, 0.01 * weight);
     }
     {
         SCOPED_TRACE("the walls' impulse balances gravity's over the run (rest to rest)");
-        const double t = last[0];
-        const double ix = last[15] + last[19], iy = last[16] + last[20];  // W1..W3 plus the gate
+        const double t = last("t_s");
+        // W1..W3 plus the gate
+        const double ix = last("ix_total_Ns_per_m") + last("ix_gate_Ns_per_m"), iy = last("iy_total_Ns_per_m") + last("iy_gate_Ns_per_m");
         EXPECT_NEAR(iy, -weight * t, 0.01 * weight * t);
         EXPECT_NEAR(ix, 0.0, 0.01 * weight * t);
     }
@@ -221,15 +208,17 @@ end = [1.0, -5.0]
     const fs::path dir = temp_dir("freefall");
     const RunSummary r = run_scenario(s, {dir.string(), false, {}});
     EXPECT_EQ(r.stop_reason, "t_max");
-    const auto rows = read_csv(dir / "track.csv");
-    ASSERT_GT(rows.size(), 20u);
-    for (const auto& row : rows) {
-        const double t = row[0];
+    const fs::path track = dir / "track.csv";
+    const std::vector<double> ts = csv_column(track, "t_s"), x = csv_column(track, "x_m"), y = csv_column(track, "y_m"),
+                              vy = csv_column(track, "vy_m_per_s");
+    ASSERT_GT(ts.size(), 20u);
+    for (size_t k = 0; k < ts.size(); ++k) {
+        const double t = ts[k];
         // central differences with v(dt/2) = v0 + g dt: x = x0 + vx t, y = y0 - g t (t + dt) / 2
-        EXPECT_NEAR(row[2], 0.5 * t, 1e-9);
-        EXPECT_NEAR(row[3], 1.0 - 0.5 * 9.81 * t * (t + 1e-5), 1e-9);
+        EXPECT_NEAR(x[k], 0.5 * t, 1e-9);
+        EXPECT_NEAR(y[k], 1.0 - 0.5 * 9.81 * t * (t + 1e-5), 1e-9);
         // the initial velocity stands at t = -dt/2 (PFC), so v(t - dt/2) = v0 - g t
-        EXPECT_NEAR(row[5], -9.81 * t, 1e-9);
+        EXPECT_NEAR(vy[k], -9.81 * t, 1e-9);
     }
     fs::remove_all(dir);
 }

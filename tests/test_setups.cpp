@@ -19,6 +19,7 @@
 
 using namespace demlab;
 using demlab::test::expect_refused;
+using demlab::test::csv_column;
 using demlab::test::read_file;
 using demlab::test::temp_dir;
 namespace fs = std::filesystem;
@@ -167,17 +168,11 @@ TEST(TerrainProfile, SnowSlabLoadsTheDam) {
     EXPECT_LT(r.peak_fx_barrier, 2e6);
     EXPECT_GT(r.max_runup_height_during_run, 1.0);
     // forces.csv's fx_barrier: zero before the front arrives, the peak among its samples
-    std::ifstream in(dir / "forces.csv");
-    std::string line;
-    std::getline(in, line);
+    const std::vector<double> t = csv_column(dir / "forces.csv", "t_s"), fx = csv_column(dir / "forces.csv", "fx_barrier_N_per_m");
     double peak = 0.0, before = 0.0;
-    while (std::getline(in, line)) {
-        std::stringstream row(line);
-        std::string cell;
-        std::vector<double> v;
-        while (std::getline(row, cell, ',')) v.push_back(std::stod(cell));
-        peak = std::max(peak, std::abs(v[5]));
-        if (v[0] < r.t_front_at_barrier - 0.1) before = std::max(before, std::abs(v[5]));
+    for (size_t k = 0; k < t.size(); ++k) {
+        peak = std::max(peak, std::abs(fx[k]));
+        if (t[k] < r.t_front_at_barrier - 0.1) before = std::max(before, std::abs(fx[k]));
     }
     EXPECT_EQ(before, 0.0);
     EXPECT_NEAR(peak, r.peak_fx_barrier, 1e-9 * peak);  // (forces.csv has 10 digits)
@@ -199,19 +194,11 @@ TEST(TerrainProfile, ShippedScenarioRunsDownTheProfile) {
     EXPECT_GT(r.n_discs, 20);
     EXPECT_EQ(setup_kind_of_run(o.out_dir), "terrain");
     // the front: monotone enough to have moved well down the 1.6 m slope in 1 s
-    std::ifstream front(fs::path(o.out_dir) / "front.csv");
-    std::string line;
-    std::getline(front, line);
-    EXPECT_EQ(line, "t,s_front,displacement");
-    double s_first = NAN, s_last = NAN;
-    while (std::getline(front, line)) {
-        std::stringstream row(line);
-        std::string t, sf;
-        std::getline(row, t, ',');
-        std::getline(row, sf, ',');
-        if (std::isnan(s_first)) s_first = std::stod(sf);
-        s_last = std::stod(sf);
-    }
+    const fs::path front = fs::path(o.out_dir) / "front.csv";
+    EXPECT_EQ(demlab::test::read_file_header(front), "t_s,s_front_m,displacement_m");
+    const std::vector<double> sf = csv_column(front, "s_front_m");
+    ASSERT_FALSE(sf.empty());
+    const double s_first = sf.front(), s_last = sf.back();
     EXPECT_LT(s_first, 0.6);   // the polygon ends 0.45 m along x: s < 0.52 m
     EXPECT_GT(s_last, 1.0);    // g sin 30 - friction: well over a metre in 1 s
     EXPECT_GT(r.runout_s, s_last - 0.1);
@@ -220,6 +207,6 @@ TEST(TerrainProfile, ShippedScenarioRunsDownTheProfile) {
     EXPECT_FALSE(read_file(fs::path(o.out_dir) / "deposit.csv").empty());
     // the profile's load is in forces.csv's slope columns and the total: it carries the weight
     const std::string forces = read_file(fs::path(o.out_dir) / "forces.csv");
-    EXPECT_NE(forces.find("fx_slope"), std::string::npos);
+    EXPECT_NE(forces.find("fx_slope_N_per_m"), std::string::npos);
     fs::remove_all(o.out_dir);
 }

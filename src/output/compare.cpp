@@ -2,10 +2,12 @@
 
 #include <cmath>
 #include <cstdlib>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 
+#include "core/csv.h"
 #include "core/error.h"
 #include "core/fileio.h"
 #include "core/output_dir.h"
@@ -47,6 +49,21 @@ RunInfo read_run(const std::string& dir) {
         r.label += ")";
     }
     return r;
+}
+
+// gnuplot's "using a:b" for two columns of a run's CSV series, found by name (a run folder
+// of an earlier build has the names without their units)
+std::string columns(const std::string& path, const std::string& x, const std::string& y) {
+    std::string line;
+    std::getline(std::ifstream(path) >> std::ws, line);
+    const CsvHeader h(line, path);
+    auto legacy = [](const std::string& n) {
+        for (const char* unit : {"_N_per_m", "_m", "_s"})
+            if (n.size() > std::strlen(unit) && n.compare(n.size() - std::strlen(unit), std::string::npos, unit) == 0)
+                return n.substr(0, n.size() - std::strlen(unit));
+        return n;
+    };
+    return std::to_string(h.column(x, legacy(x)) + 1) + ":" + std::to_string(h.column(y, legacy(y)) + 1);
 }
 
 std::string quoted(const std::string& s) {
@@ -98,6 +115,8 @@ std::vector<std::string> compare_runs(const CompareOptions& o) {
             std::ifstream in(src);
             std::string line;
             std::getline(in, line);
+            const CsvHeader header(line, src);
+            const size_t cs = header.column("s_m"), ch = header.column("height_m");
             std::ostringstream surf;
             surf << "x_m,y_m\n";
             const DanPath* path = nullptr;
@@ -108,11 +127,9 @@ std::vector<std::string> compare_runs(const CompareOptions& o) {
             }
             double last_x = -INFINITY;
             while (std::getline(in, line)) {
-                std::istringstream c(line);
-                std::string a, h;
-                std::getline(c, a, ',');
-                std::getline(c, h, ',');
-                const double s = std::stod(a), height = std::stod(h);
+                const std::vector<std::string> c = csv_cells(line);
+                if (std::max(cs, ch) >= c.size()) throw InputError(src + ": a short row '" + line + "'");
+                const double s = std::stod(c[cs]), height = std::stod(c[ch]);
                 if (path) {
                     const DanPathPoint q = path->at(s);
                     if (height <= 0.0) {
@@ -144,19 +161,22 @@ std::vector<std::string> compare_runs(const CompareOptions& o) {
        << "set ylabel 's of the front (m)'\nplot ";
     for (size_t k = 0; k < runs.size(); ++k) {
         const RunInfo& r = runs[k];
-        gp << (k ? ", " : "") << "'" << r.dir << "/front.csv' every ::1 using 1:2 with lines lw 2 title " << quoted(r.label);
+        gp << (k ? ", " : "") << "'" << r.dir << "/front.csv' every ::1 using " << columns(r.dir + "/front.csv", "t_s", "s_front_m")
+           << " with lines lw 2 title " << quoted(r.label);
         if (fs::exists(r.dir + "/front_synced.csv"))
-            gp << ", '" << r.dir << "/front_synced.csv' every ::1 using 1:2 with lines lw 2 dt 2 title "
+            gp << ", '" << r.dir << "/front_synced.csv' every ::1 using " << columns(r.dir + "/front_synced.csv", "t_s", "s_front_m")
+               << " with lines lw 2 dt 2 title "
                << quoted(r.label + ", synchronised at " + cell(r.scenario.dan.sync_time, 2) + " s");
     }
     gp << "\n";
     made.push_back(o.out + "/front.png");
     // the barrier's force histories
-    for (const auto& [column, axis] : {std::pair<int, const char*>{6, "x"}, std::pair<int, const char*>{7, "y"}}) {
+    for (const char* axis : {"x", "y"}) {
+        const std::string column = std::string("f") + axis + "_barrier_N_per_m";
         gp << "set output '" << o.out << "/barrier_f" << axis << ".png'\nset title 'Force on the barrier, " << axis
            << " (per metre of width)'\nset ylabel 'f" << axis << " (N/m)'\nplot ";
         for (size_t k = 0; k < runs.size(); ++k)
-            gp << (k ? ", " : "") << "'" << runs[k].dir << "/forces.csv' every ::1 using 1:" << column << " with lines lw 1.5 title "
+            gp << (k ? ", " : "") << "'" << runs[k].dir << "/forces.csv' every ::1 using " << columns(runs[k].dir + "/forces.csv", "t_s", column) << " with lines lw 1.5 title "
                << quoted(runs[k].label);
         gp << "\n";
         made.push_back(o.out + "/barrier_f" + axis + ".png");
@@ -170,7 +190,8 @@ std::vector<std::string> compare_runs(const CompareOptions& o) {
     std::ostringstream md, csv;
     md << "# Comparison\n\n| run | front at the barrier (s) | run-out s (m) | run-up (m) | highest run-up (m) | peak fx on the "
           "barrier (N/m) | at (s) | at rest (s) | stop |\n|---|---|---|---|---|---|---|---|---|\n";
-    csv << "run,model,t_front_at_barrier,runout_s,runup_height,max_runup_height_during_run,peak_fx_barrier,t_peak_fx_barrier,t_end,stop_reason\n";
+    csv << "run,model,t_front_at_barrier_s,runout_s_m,runup_height_m,max_runup_height_during_run_m,peak_fx_barrier_N_per_m,"
+           "t_peak_fx_barrier_s,t_end_s,stop_reason\n";
     for (const RunInfo& r : runs) {
         const SummaryFile& s = r.summary;
         const double shift = s.number("sync_shift");

@@ -10,6 +10,7 @@
 #include <string_view>
 #include <type_traits>
 
+#include "core/csv.h"
 #include "core/error.h"
 #include "core/fileio.h"
 #include "run/dan_run.h"
@@ -162,7 +163,9 @@ std::vector<Frame> read_dan_frames(const std::string& run_dir) {
     if (!in) throw InputError(run_dir + ": no blocks.csv (was output.snapshot_interval 0?)");
     std::string line;
     std::getline(in, line);
-    if (line != "t,i,s,x,y,v,H,k") throw InputError(blocks_file + ": not a DAN blocks.csv");
+    const CsvHeader header(line, blocks_file);
+    const size_t ct = header.column("t_s", "t"), cs = header.column("s_m", "s"), ch = header.column("H_m", "H");
+    const size_t columns = header.names().size();
     std::vector<Frame> frames;
     std::vector<std::pair<Vec2, Vec2>> column;  // bed point, surface point of each boundary block
     double t_now = NAN;
@@ -180,18 +183,19 @@ std::vector<Frame> read_dan_frames(const std::string& run_dir) {
     long row = 1;
     while (std::getline(in, line)) {
         ++row;
-        std::istringstream c(line);
         std::vector<double> v;
-        for (std::string cell; std::getline(c, cell, ',');) v.push_back(std::stod(cell));
-        if (v.size() != 8) throw InputError(blocks_file + ":" + std::to_string(row) + ": expected 8 columns");
-        if (v[0] != t_now) {
+        for (const std::string& cell : csv_cells(line)) v.push_back(std::stod(cell));
+        if (v.size() != columns)
+            throw InputError(blocks_file + ":" + std::to_string(row) + ": expected " + std::to_string(columns) + " columns");
+        if (v[ct] != t_now) {
             close_frame();
-            t_now = v[0];
+            t_now = v[ct];
         }
         // H is the thickness normal to the bed; a vertical column's surface lies H / cos(alpha)
         // straight above its bed point
-        const DanPathPoint q = path.at(v[2]);
-        const Vec2 up = s.dan.columns == DanColumns::Vertical ? Vec2(0.0, v[6] / std::cos(q.alpha)) : Vec2(v[6] * q.normal());
+        const DanPathPoint q = path.at(v[cs]);
+        const double H = v[ch];
+        const Vec2 up = s.dan.columns == DanColumns::Vertical ? Vec2(0.0, H / std::cos(q.alpha)) : Vec2(H * q.normal());
         column.emplace_back(q.p, q.p + up);
     }
     close_frame();

@@ -5,45 +5,53 @@
 #include <fstream>
 #include <sstream>
 
+#include "core/csv.h"
 #include "core/error.h"
 #include "core/fileio.h"
 
 namespace demlab {
 
-// A centred moving average (window in s) of the first `columns` columns of a CSV with a
-// header; column 1 (time) is kept.
-static std::string moving_average_csv(const std::string& path, int columns, double window) {
-    std::ifstream in(path);
-    std::string header, line;
-    std::getline(in, header);
+// A centred moving average (window in s) of columns of a CSV series: a CSV of t_s and the
+// smoothed columns in that order, under these names.
+static std::string moving_average_csv(const std::string& path, const std::vector<size_t>& columns,
+                                      const std::vector<std::string>& names, size_t time_column, double window) {
+    const CsvTable table = read_csv_table(path);
     std::vector<std::vector<double>> rows;
-    while (std::getline(in, line)) {
-        std::vector<double> r;
-        std::stringstream s(line);
-        std::string cell;
-        while (std::getline(s, cell, ',') && int(r.size()) < columns) r.push_back(std::stod(cell));
-        if (int(r.size()) == columns) rows.push_back(r);
+    for (const std::vector<double>& r : table.rows) {
+        std::vector<double> picked{r.at(time_column)};
+        for (size_t c : columns) picked.push_back(r.at(c));
+        rows.push_back(std::move(picked));
     }
+    const size_t width = columns.size() + 1;
     std::ostringstream out;
     out.precision(8);
-    out << header.substr(0, header.find(',', 0)) << ",smoothed\n";
+    out << "t_s";
+    for (const std::string& n : names) out << ',' << n << "_smoothed";
+    out << '\n';
     size_t lo = 0, hi = 0;
-    std::vector<double> sum(size_t(columns), 0.0);
+    std::vector<double> sum(width, 0.0);
     for (size_t k = 0; k < rows.size(); ++k) {
         const double t = rows[k][0];
         while (hi < rows.size() && rows[hi][0] <= t + 0.5 * window) {
-            for (int c = 1; c < columns; ++c) sum[size_t(c)] += rows[hi][size_t(c)];
+            for (size_t c = 1; c < width; ++c) sum[c] += rows[hi][c];
             ++hi;
         }
         while (rows[lo][0] < t - 0.5 * window) {
-            for (int c = 1; c < columns; ++c) sum[size_t(c)] -= rows[lo][size_t(c)];
+            for (size_t c = 1; c < width; ++c) sum[c] -= rows[lo][c];
             ++lo;
         }
         out << t;
-        for (int c = 1; c < columns; ++c) out << ',' << sum[size_t(c)] / double(hi - lo);
+        for (size_t c = 1; c < width; ++c) out << ',' << sum[c] / double(hi - lo);
         out << '\n';
     }
     return out.str();
+}
+
+// The header of a run's CSV series (its first line).
+static CsvHeader header_of(const std::string& path) {
+    std::string line;
+    std::getline(std::ifstream(path) >> std::ws, line);
+    return CsvHeader(line, path);
 }
 
 bool gnuplot_available() { return std::system("gnuplot --version >/dev/null 2>&1") == 0; }
@@ -62,23 +70,33 @@ std::vector<std::string> make_plots(const std::string& run_dir, int width, int h
     std::vector<std::string> made;
     const std::string forces = run_dir + "/forces.csv";
     if (fs::exists(forces)) {
-        // forces.csv columns: t, fx/fy slope (2,3), arc (4,5), barrier (6,7), total (8,9). The
-        // samples are instantaneous (single impacts show); a 50 ms centred moving average is
-        // drawn on top of the faint raw curves.
+        // forces.csv, by name: the samples are instantaneous (single impacts show); a 50 ms
+        // centred moving average is drawn on top of the faint raw curves
+        const CsvHeader h = header_of(forces);
+        const size_t ct = h.column("t_s", "t");
         const std::string smooth = dir + "/forces_smoothed.csv";
-        write_file_atomic(smooth, moving_average_csv(forces, 9, 0.05));
+        // total, arc, barrier, slope of x, then of y: raw columns of forces.csv, smoothed
+        // columns 2-5 (x) and 6-9 (y) of forces_smoothed.csv
+        std::vector<size_t> cols;
+        std::vector<std::string> names;
+        for (const char* f : {"fx_", "fy_"})
+            for (const char* part : {"total", "arc", "barrier", "slope"}) {
+                names.push_back(std::string(f) + part + "_N_per_m");
+                cols.push_back(h.column(names.back(), std::string(f) + part));
+            }
+        write_file_atomic(smooth, moving_average_csv(forces, cols, names, ct, 0.05));
         for (const char axis : {'x', 'y'}) {
-            const int off = axis == 'x' ? 0 : 1;
+            const size_t o = axis == 'x' ? 0 : 4;
             gp << "set output '" << dir << "/forces_" << axis << ".png'\n"
                << "set title 'Force of the mass on the flume, " << axis
                << " (per metre of width; lines: 50 ms moving average, faint: 5 ms samples)'\n"
                << "set ylabel 'F_" << axis << " (N/m)'\n"
-               << "plot '" << forces << "' using 1:" << 8 + off << " with lines lc rgb '#d0b0e0' notitle, '' using 1:"
-               << 4 + off << " with lines lc rgb '#a0d8c8' notitle, '' using 1:" << 6 + off
-               << " with lines lc rgb '#b0d8f0' notitle, '" << smooth << "' using 1:" << 8 + off
-               << " with lines lw 2 lc rgb '#8000c0' title 'path (total)', '' using 1:" << 4 + off
-               << " with lines lw 2 lc rgb '#009070' title 'arc W2', '' using 1:" << 6 + off
-               << " with lines lw 2 lc rgb '#3090d0' title 'barrier W3', '' using 1:" << 2 + off
+               << "plot '" << forces << "' using " << ct + 1 << ":" << cols[o] + 1 << " with lines lc rgb '#d0b0e0' notitle, '' using "
+               << ct + 1 << ":" << cols[o + 1] + 1 << " with lines lc rgb '#a0d8c8' notitle, '' using " << ct + 1 << ":"
+               << cols[o + 2] + 1 << " with lines lc rgb '#b0d8f0' notitle, '" << smooth << "' using 1:" << o + 2
+               << " with lines lw 2 lc rgb '#8000c0' title 'path (total)', '' using 1:" << o + 3
+               << " with lines lw 2 lc rgb '#009070' title 'arc W2', '' using 1:" << o + 4
+               << " with lines lw 2 lc rgb '#3090d0' title 'barrier W3', '' using 1:" << o + 5
                << " with lines lw 1 lc rgb '#e0a000' title 'slope W1'\n";
         }
         made.push_back(dir + "/forces_x.png");
@@ -86,22 +104,29 @@ std::vector<std::string> make_plots(const std::string& run_dir, int width, int h
     }
     const std::string front = run_dir + "/front.csv";
     if (fs::exists(front)) {
+        const CsvHeader h = header_of(front);
+        const size_t ct = h.column("t_s", "t") + 1, cs = h.column("s_front_m", "s_front") + 1,
+                     cd = h.column("displacement_m", "displacement") + 1;
         gp << "set output '" << dir << "/front.png'\nset title 'Front of the mass along the flume path'\n"
-           << "set ylabel 's (m)'\nplot '" << front << "' using 1:2 with lines lw 2 title 'front s', '' using 1:3 "
-              "with lines lw 2 title 'front displacement'\n";
+           << "set ylabel 's (m)'\nplot '" << front << "' using " << ct << ":" << cs << " with lines lw 2 title 'front s', '' using "
+           << ct << ":" << cd << " with lines lw 2 title 'front displacement'\n";
         made.push_back(dir + "/front.png");
     }
     const std::string energy = run_dir + "/energy.csv";
     if (fs::exists(energy)) {
-        std::string header;
-        std::getline(std::ifstream(energy) >> std::ws, header);
+        const CsvHeader h = header_of(energy);
+        const size_t ct = h.column("t_s", "t") + 1;
         gp << "set output '" << dir << "/kinetic_energy.png'\nset title 'Kinetic energy (per metre of width)'\n"
            << "set ylabel 'E (J/m)'\n";
-        if (header.rfind("t,kinetic,", 0) == 0)  // a DAN run: one kinetic energy
-            gp << "plot '" << energy << "' using 1:2 with lines lw 2 title 'kinetic'\n";
-        else
-            gp << "plot '" << energy << "' using 1:($2+$3) with lines lw 2 title 'total', '' using "
-                  "1:2 with lines title 'translation', '' using 1:3 with lines title 'rotation'\n";
+        if (h.has("kinetic_J_per_m") || h.has("kinetic")) {  // a DAN run: one kinetic energy
+            gp << "plot '" << energy << "' using " << ct << ":" << h.column("kinetic_J_per_m", "kinetic") + 1
+               << " with lines lw 2 title 'kinetic'\n";
+        } else {
+            const size_t tr = h.column("kinetic_translation_J_per_m", "kinetic_translation") + 1,
+                         ro = h.column("kinetic_rotation_J_per_m", "kinetic_rotation") + 1;
+            gp << "plot '" << energy << "' using " << ct << ":($" << tr << "+$" << ro << ") with lines lw 2 title 'total', '' using "
+               << ct << ":" << tr << " with lines title 'translation', '' using " << ct << ":" << ro << " with lines title 'rotation'\n";
+        }
         made.push_back(dir + "/kinetic_energy.png");
     }
     if (made.empty()) throw InputError(run_dir + ": no forces.csv, front.csv or energy.csv to plot");

@@ -7,6 +7,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "core/csv.h"
 #include "core/error.h"
 #include "core/fileio.h"
 #include "core/machine.h"
@@ -15,6 +16,8 @@
 #include "core/validate.h"
 #include "dem/world.h"
 #include "run/run_folder.h"
+#include "run/series_columns.h"
+#include "run/summary_file.h"
 #include "setups/flume.h"
 #include "setups/setup.h"
 
@@ -49,20 +52,19 @@ FrontSeries read_front(const std::string& path) {
     std::istringstream in(read_input_file(path, kMaxScenarioBytes * 4, "reference front"));
     std::string line;
     std::getline(in, line);
-    if (line.rfind("t,s_front", 0) != 0) throw InputError(path + ": not a front.csv (its header must start with t,s_front)");
+    const CsvHeader header(line, path);
+    const size_t ct = header.column("t_s", "t"), cs = header.column("s_front_m", "s_front");
     long row = 1;
     while (std::getline(in, line)) {
         ++row;
         if (line.empty()) continue;
-        std::istringstream cells(line);
-        std::string a, b;
-        std::getline(cells, a, ',');
-        std::getline(cells, b, ',');
+        const std::vector<std::string> cells = csv_cells(line);
         try {
-            f.t.push_back(std::stod(a));
-            f.s.push_back(std::stod(b));
+            if (std::max(ct, cs) >= cells.size()) throw InputError("short row");
+            f.t.push_back(std::stod(cells[ct]));
+            f.s.push_back(std::stod(cells[cs]));
         } catch (const std::exception&) {
-            throw InputError(path + ":" + std::to_string(row) + ": not two numbers t,s_front");
+            throw InputError(path + ":" + std::to_string(row) + ": no numbers in its t_s and s_front_m columns");
         }
     }
     if (f.t.size() < 2) throw InputError(path + ": fewer than two rows");
@@ -123,11 +125,10 @@ RunSummary run_dan(const Scenario& s, const RunOptions& o) {
     const double s_front0 = dan.s().back();
 
     std::ostringstream forces, front, energy, blocks;
-    forces << "t,fx_slope,fy_slope,fx_arc,fy_arc,fx_barrier,fy_barrier,fx_total,fy_total,"
-              "ix_slope,iy_slope,ix_arc,iy_arc,ix_barrier,iy_barrier,ix_total,iy_total,fx_gate,fy_gate,ix_gate,iy_gate\n";
-    front << "t,s_front,displacement,s_tail,v_front\n";
-    energy << "t,kinetic,potential,dissipated_friction,other,balance\n";
-    blocks << "t,i,s,x,y,v,H,k\n";
+    forces << kForcesColumns << '\n';
+    front << kDanFrontColumns << '\n';
+    energy << kDanEnergyColumns << '\n';
+    blocks << kDanBlockColumns << '\n';
     for (auto* o2 : {&forces, &front, &energy, &blocks}) o2->precision(10);
 
     // each block's bed force split between slope, arc and barrier by the share of its
@@ -291,7 +292,7 @@ RunSummary run_dan(const Scenario& s, const RunOptions& o) {
             sync_shift = d.sync_time - t_dan;
             std::ostringstream synced;
             synced.precision(10);
-            synced << "t,s_front,displacement,s_tail,v_front\n";
+            synced << kDanFrontColumns << '\n';
             for (size_t k = 0; k < lines.size(); ++k) synced << ft[k] + sync_shift << lines[k].substr(lines[k].find(',')) << '\n';
             write_file_atomic(dir + "/front_synced.csv", synced.str());
         } else {
@@ -305,37 +306,35 @@ RunSummary run_dan(const Scenario& s, const RunOptions& o) {
     write_file_atomic(dir + "/energy.csv", energy.str());
     if (s.output.snapshot_interval > 0) write_file_atomic(dir + "/blocks.csv", blocks.str());
     write_file_atomic(dir + "/deposit.csv", dep.str());
-    std::ostringstream j;
-    j << "{\n"
-      << "  \"scenario\": " << json_string(s.name) << ",\n"
-      << "  \"model\": \"dan\",\n"
-      << "  \"blocks\": " << n << ",\n"
-      << "  \"columns\": \"" << (d.columns == DanColumns::Vertical ? "vertical" : "normal") << "\",\n"
-      << "  \"volume\": " << json_number(volume) << ",\n"
-      << "  \"total_mass\": " << json_number(total_mass) << ",\n"
-      << "  \"dt\": " << json_number(sum.dt) << ",\n"
-      << "  \"dt_min\": " << json_number(sum.dt_min) << ",\n"
-      << "  \"dt_max\": " << json_number(sum.dt_max) << ",\n"
-      << "  \"steps\": " << sum.steps << ",\n"
-      << "  \"t_end\": " << json_number(sum.t_end) << ",\n"
-      << "  \"stop_reason\": \"" << sum.stop_reason << "\",\n"
-      << "  \"wall_seconds\": " << json_number(sum.wall_seconds) << ",\n"
-      << "  \"machine\": " << json_string(machine_summary(machine_info())) << ",\n"
-      << "  \"runout_s\": " << json_number(sum.runout_s) << ",\n"
-      << "  \"max_front_s\": " << json_number(max_front) << ",\n"
-      << "  \"runup_height\": " << json_number(sum.runup_height) << ",\n"
-      << "  \"max_runup_height_during_run\": " << json_number(sum.max_runup_height_during_run) << ",\n"
-      << "  \"t_front_at_barrier\": " << json_number(sum.t_front_at_barrier) << ",\n"
-      << "  \"t_peak_fx_barrier\": " << json_number(sum.t_peak_fx_barrier) << ",\n"
-      << "  \"t_peak_fy_arc\": " << json_number(sum.t_peak_fy_arc) << ",\n"
-      << "  \"peak_fx_barrier\": " << json_number(sum.peak_fx_barrier) << ",\n"
-      << "  \"peak_fy_arc\": " << json_number(sum.peak_fy_arc) << ",\n"
-      << "  \"left_flume\": " << (left_flume ? "true" : "false") << ",\n"
-      << "  \"sync_shift\": " << json_number(sync_shift) << ",\n"
-      << "  \"max_cfl\": " << json_number(dan.max_cfl()) << ",\n"
-      << "  \"momentum_corrected\": " << json_number(dan.momentum_corrected()) << ",\n"
-      << "  \"note\": \"DAN releases the mass at once: release.variant (the gate) does not apply\"\n"
-      << "}\n";
+    SummaryJson j;
+    j.text("scenario", s.name);
+    j.text("model", "dan");
+    j.integer("blocks", long(n));
+    j.text("columns", d.columns == DanColumns::Vertical ? "vertical" : "normal");
+    j.number("volume", volume, "m2");
+    j.number("total_mass", total_mass, "kg/m");
+    j.number("dt", sum.dt, "s");
+    j.number("dt_min", sum.dt_min, "s");
+    j.number("dt_max", sum.dt_max, "s");
+    j.integer("steps", sum.steps);
+    j.number("t_end", sum.t_end, "s");
+    j.text("stop_reason", sum.stop_reason);
+    j.number("wall_seconds", sum.wall_seconds, "s");
+    j.text("machine", machine_summary(machine_info()));
+    j.number("runout_s", sum.runout_s, "m");
+    j.number("max_front_s", max_front, "m");
+    j.number("runup_height", sum.runup_height, "m");
+    j.number("max_runup_height_during_run", sum.max_runup_height_during_run, "m");
+    j.number("t_front_at_barrier", sum.t_front_at_barrier, "s");
+    j.number("t_peak_fx_barrier", sum.t_peak_fx_barrier, "s");
+    j.number("t_peak_fy_arc", sum.t_peak_fy_arc, "s");
+    j.number("peak_fx_barrier", sum.peak_fx_barrier, "N/m");
+    j.number("peak_fy_arc", sum.peak_fy_arc, "N/m");
+    j.boolean("left_flume", left_flume);
+    j.number("sync_shift", sync_shift, "s");
+    j.number("max_cfl", dan.max_cfl(), "-");
+    j.number("momentum_corrected", dan.momentum_corrected(), "kg/s");  // momentum per metre of width
+    j.text("note", "DAN releases the mass at once: release.variant (the gate) does not apply");
     write_file_atomic(dir + "/summary.json", j.str());
     lock->release_and_remove();
     remove_replaced_output(dir);  // a forced run's old folder, now that the new one is complete

@@ -6,7 +6,9 @@
 #include "core/error.h"
 #include "core/machine.h"
 #include "core/validate.h"
+#include "run/series_columns.h"
 #include "run/solver.h"
+#include "run/summary_file.h"
 
 namespace demlab {
 
@@ -25,19 +27,16 @@ Vec2 group_sum(const std::vector<int>& walls, Get get) {
 
 void RunSeries::open() {
     forces_.open(dir_ + "/forces.csv");
-    forces_.out() << "t,fx_slope,fy_slope,fx_arc,fy_arc,fx_barrier,fy_barrier,fx_total,fy_total,"
-                     "ix_slope,iy_slope,ix_arc,iy_arc,ix_barrier,iy_barrier,ix_total,iy_total,fx_gate,fy_gate,ix_gate,iy_gate\n";
+    forces_.out() << kForcesColumns << '\n';
     energy_.open(dir_ + "/energy.csv");
-    energy_.out() << "t,kinetic_translation,kinetic_rotation,potential,elastic,dissipated_contacts,dissipated_local,"
-                     "dissipated_rotation,work_by_walls,removed_with_walls,balance"
-                  << (has_bonds_ ? ",bond_elastic,bond_break_loss,bonds_intact_fraction" : "") << '\n';
+    energy_.out() << kEnergyColumns << (has_bonds_ ? kEnergyBondColumns : "") << '\n';
     if (has_front_) {
         front_.open(dir_ + "/front.csv");
-        front_.out() << "t,s_front,displacement\n";
+        front_.out() << kFrontColumns << '\n';
     }
     if (has_track_) {
         track_.open(dir_ + "/track.csv");
-        track_.out() << "t,id,x,y,vx,vy,angle,omega\n";
+        track_.out() << kTrackColumns << '\n';
     }
 }
 
@@ -84,7 +83,7 @@ void RunSeries::sample(const World& w, const MeasureContext& m, RunState& st, Ru
     energy_.out() << t << ',' << e.kinetic_translation << ',' << e.kinetic_rotation << ',' << e.potential << ','
                   << e.elastic << ',' << e.dissipated_contacts << ',' << e.dissipated_local << ','
                   << e.dissipated_rotation << ',' << e.work_by_walls << ',' << e.removed_with_walls << ','
-                  << e.balance();
+                  << e.lost_with_discs << ',' << e.balance();
     if (has_bonds_) {
         const size_t total = w.bonds_at_start(), gone = w.bond_breaks().size() + w.bonds_lost_with_discs();
         energy_.out() << ',' << e.bond_elastic << ',' << e.bond_break_loss << ',' << double(total - gone) / double(total);
@@ -208,54 +207,55 @@ void write_lost_discs(const World& w, const std::string& dir) {
 void write_summary(const std::string& path, const Scenario& s, const RunSummary& sum, const ReleaseFigures& release,
                    const SlopeAngles* angles) {
     const bool r = release.generated;
-    std::ostringstream j;
-    j << "{\n"
-      << "  \"scenario\": \"" << s.name << "\",\n"
-      << "  \"n_discs\": " << sum.n_discs << ",\n"
-      << "  \"lost_discs\": " << sum.lost_discs << ",\n"
-      << "  \"total_mass\": " << json_number(sum.total_mass) << ",\n"
-      << "  \"porosity\": " << json_number(sum.porosity) << ",\n"
-      << "  \"release_porosity_generated\": " << json_number(r ? release.porosity_generated : NAN) << ",\n"
-      << "  \"release_settle_time\": " << json_number(r ? release.settle_time : NAN) << ",\n"
-      << "  \"release_settle_ratio\": " << json_number(r ? release.settle_ratio : NAN) << ",\n"
-      << "  \"release_wall_seconds\": " << json_number(r ? release.wall_seconds : NAN) << ",\n"
-      << "  \"dt\": " << json_number(sum.dt) << ",\n"
-      << "  \"dt_min\": " << json_number(sum.dt_min) << ",\n"
-      << "  \"dt_max\": " << json_number(sum.dt_max) << ",\n"
-      << "  \"steps\": " << sum.steps << ",\n"
-      << "  \"t_end\": " << json_number(sum.t_end) << ",\n"
-      << "  \"stop_reason\": \"" << sum.stop_reason << "\",\n"
-      << "  \"wall_seconds\": " << json_number(sum.wall_seconds) << ",\n"
-      << "  \"particle_steps_per_second\": " << json_number(sum.particle_steps_per_second) << ",\n"
-      // the machine the timings above come from (a resumed run: the one that finished it)
-      << "  \"machine\": " << json_string(machine_summary(machine_info())) << ",\n"
-      << "  \"runout_s\": " << json_number(sum.runout_s) << ",\n"
-      << "  \"runup_height\": " << json_number(sum.runup_height) << ",\n"
-      << "  \"max_runup_height_during_run\": " << json_number(sum.max_runup_height_during_run) << ",\n"
-      << "  \"t_front_at_barrier\": " << json_number(sum.t_front_at_barrier) << ",\n"
-      << "  \"t_peak_fx_barrier\": " << json_number(sum.t_peak_fx_barrier) << ",\n"
-      << "  \"t_peak_fy_arc\": " << json_number(sum.t_peak_fy_arc) << ",\n"
-      << "  \"peak_fx_barrier\": " << json_number(sum.peak_fx_barrier) << ",\n"
-      << "  \"peak_fy_arc\": " << json_number(sum.peak_fy_arc) << ",\n"
-      << "  \"energy_balance_error\": " << json_number(sum.energy_balance_error) << ",\n"
-      << "  \"broadphase_margin\": " << json_number(sum.broadphase_margin) << ",\n"
-      << "  \"broadphase_updates\": " << sum.broadphase_updates << ",\n"
-      << "  \"broadphase_reinserts\": " << sum.broadphase_reinserts << ",\n"
-      << "  \"broadphase_mean_candidates\": " << json_number(sum.broadphase_mean_candidates) << ",\n"
-      << "  \"broadphase_mean_touching\": " << json_number(sum.broadphase_mean_touching) << ",\n"
-      << "  \"broadphase_update_seconds\": " << json_number(sum.broadphase_update_seconds) << ",\n"
-      << "  \"force_pass_one_range_cuts\": " << sum.force_pass_one_range_cuts << ",\n"
-      << "  \"force_pass_busy_share\": " << json_number(sum.force_pass_busy_share) << ",\n"
-      << "  \"force_pass_busy_fallbacks\": " << sum.force_pass_busy_fallbacks;
-    if (sum.bonds >= 0)
-        j << ",\n  \"bonds\": " << sum.bonds << ",\n  \"bonds_broken\": " << sum.bonds_broken
-          << ",\n  \"bonds_lost_with_discs\": " << sum.bonds_lost_with_discs;
-    if (angles) {
-        j << ",\n  \"gamma_ges\": " << json_number(angles->gamma_ges);
-        for (int i = 0; i < 5; ++i) j << ",\n  \"gamma_" << i + 1 << "\": " << json_number(angles->gamma[i]);
-        j << ",\n  \"toe_x\": " << json_number(angles->toe_x) << ",\n  \"surface_at_back_wall\": " << json_number(angles->h_wall);
+    SummaryJson j;
+    j.text("scenario", s.name);
+    j.integer("n_discs", sum.n_discs);
+    j.integer("lost_discs", sum.lost_discs);
+    j.number("total_mass", sum.total_mass, "kg/m");
+    j.number("porosity", sum.porosity, "-");
+    j.number("release_porosity_generated", r ? release.porosity_generated : NAN, "-");
+    j.number("release_settle_time", r ? release.settle_time : NAN, "s");
+    j.number("release_settle_ratio", r ? release.settle_ratio : NAN, "-");
+    j.number("release_wall_seconds", r ? release.wall_seconds : NAN, "s");
+    j.number("dt", sum.dt, "s");
+    j.number("dt_min", sum.dt_min, "s");
+    j.number("dt_max", sum.dt_max, "s");
+    j.integer("steps", sum.steps);
+    j.number("t_end", sum.t_end, "s");
+    j.text("stop_reason", sum.stop_reason);
+    j.number("wall_seconds", sum.wall_seconds, "s");
+    j.number("particle_steps_per_second", sum.particle_steps_per_second, "1/s");
+    // the machine the timings above come from (a resumed run: the one that finished it)
+    j.text("machine", machine_summary(machine_info()));
+    j.number("runout_s", sum.runout_s, "m");
+    j.number("runup_height", sum.runup_height, "m");
+    j.number("max_runup_height_during_run", sum.max_runup_height_during_run, "m");
+    j.number("t_front_at_barrier", sum.t_front_at_barrier, "s");
+    j.number("t_peak_fx_barrier", sum.t_peak_fx_barrier, "s");
+    j.number("t_peak_fy_arc", sum.t_peak_fy_arc, "s");
+    j.number("peak_fx_barrier", sum.peak_fx_barrier, "N/m");
+    j.number("peak_fy_arc", sum.peak_fy_arc, "N/m");
+    j.number("energy_balance_error", sum.energy_balance_error, "-");
+    j.number("broadphase_margin", sum.broadphase_margin, "m");
+    j.integer("broadphase_updates", sum.broadphase_updates);
+    j.integer("broadphase_reinserts", sum.broadphase_reinserts);
+    j.number("broadphase_mean_candidates", sum.broadphase_mean_candidates, "-");
+    j.number("broadphase_mean_touching", sum.broadphase_mean_touching, "-");
+    j.number("broadphase_update_seconds", sum.broadphase_update_seconds, "s");
+    j.integer("force_pass_one_range_cuts", sum.force_pass_one_range_cuts);
+    j.number("force_pass_busy_share", sum.force_pass_busy_share, "-");
+    j.integer("force_pass_busy_fallbacks", sum.force_pass_busy_fallbacks);
+    if (sum.bonds >= 0) {
+        j.integer("bonds", sum.bonds);
+        j.integer("bonds_broken", sum.bonds_broken);
+        j.integer("bonds_lost_with_discs", sum.bonds_lost_with_discs);
     }
-    j << "\n}\n";
+    if (angles) {
+        j.number("gamma_ges", angles->gamma_ges, "deg");
+        for (int i = 0; i < 5; ++i) j.number("gamma_" + std::to_string(i + 1), angles->gamma[i], "deg");
+        j.number("toe_x", angles->toe_x, "m");
+        j.number("surface_at_back_wall", angles->h_wall, "m");
+    }
     write_file_atomic(path, j.str());
 }
 

@@ -3,7 +3,38 @@
 #include <cmath>
 #include <fstream>
 
+#include "core/fileio.h"
+
 namespace demlab {
+
+void SummaryJson::number(const std::string& key, double v, const std::string& unit) {
+    entries_.emplace_back(key, json_number(v));
+    units_.emplace_back(key, unit);
+}
+
+void SummaryJson::integer(const std::string& key, long v, const std::string& unit) {
+    entries_.emplace_back(key, std::to_string(v));
+    units_.emplace_back(key, unit);
+}
+
+void SummaryJson::text(const std::string& key, const std::string& v) { entries_.emplace_back(key, json_string(v)); }
+
+void SummaryJson::boolean(const std::string& key, bool v) { entries_.emplace_back(key, v ? "true" : "false"); }
+
+std::string SummaryJson::str() const {
+    std::string o = "{\n";
+    for (const auto& [key, value] : entries_) o += "  " + json_string(key) + ": " + value + ",\n";
+    o += "  \"units\": {\n";
+    for (size_t k = 0; k < units_.size(); ++k)
+        o += "    " + json_string(units_[k].first) + ": " + json_string(units_[k].second) + (k + 1 < units_.size() ? ",\n" : "\n");
+    o += "  }\n}\n";
+    return o;
+}
+
+std::string SummaryFile::unit(const std::string& key) const {
+    const auto it = units.find(key);
+    return it == units.end() ? std::string() : it->second;
+}
 
 double SummaryFile::number(const std::string& key) const {
     const auto it = numbers.find(key);
@@ -19,12 +50,26 @@ SummaryFile read_summary_file(const std::string& path) {
     std::ifstream in(path);
     SummaryFile out;
     std::string line;
+    bool in_units = false;
     while (std::getline(in, line)) {
+        if (line.find("\"units\": {") != std::string::npos) {
+            in_units = true;
+            continue;
+        }
+        if (in_units && line.find('}') != std::string::npos) {
+            in_units = false;
+            continue;
+        }
         const size_t q1 = line.find('"'), q2 = line.find('"', q1 + 1), colon = line.find(':', q2);
         if (q1 == std::string::npos || q2 == std::string::npos || colon == std::string::npos) continue;
         const std::string key = line.substr(q1 + 1, q2 - q1 - 1);
         std::string value = line.substr(colon + 1);
         const size_t v1 = value.find('"');
+        if (in_units) {
+            const size_t v2 = value.rfind('"');
+            if (v1 != std::string::npos && v2 > v1) out.units[key] = value.substr(v1 + 1, v2 - v1 - 1);
+            continue;
+        }
         if (v1 != std::string::npos) {
             const size_t v2 = value.rfind('"');
             out.strings[key] = v2 > v1 ? value.substr(v1 + 1, v2 - v1 - 1) : std::string();

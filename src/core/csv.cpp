@@ -1,0 +1,76 @@
+#include "core/csv.h"
+
+#include <cstdlib>
+#include <fstream>
+#include <sstream>
+
+#include "core/error.h"
+
+namespace demlab {
+
+namespace {
+bool parse_double(const std::string& c, double& x) {
+    if (c.empty()) return false;
+    char* end = nullptr;
+    x = std::strtod(c.c_str(), &end);
+    return end == c.c_str() + c.size();
+}
+}  // namespace
+
+std::vector<std::string> csv_cells(const std::string& line) {
+    std::vector<std::string> out;
+    std::string cell;
+    std::istringstream in(line);
+    while (std::getline(in, cell, ',')) {
+        if (!cell.empty() && cell.back() == '\r') cell.pop_back();
+        out.push_back(cell);
+    }
+    if (!line.empty() && line.back() == ',') out.emplace_back();
+    return out;
+}
+
+CsvHeader::CsvHeader(const std::string& header_line, std::string file) : names_(csv_cells(header_line)), file_(std::move(file)) {}
+
+bool CsvHeader::has(const std::string& name) const {
+    for (const std::string& n : names_)
+        if (n == name) return true;
+    return false;
+}
+
+size_t CsvHeader::column(const std::string& name, const std::string& legacy) const {
+    for (size_t k = 0; k < names_.size(); ++k)
+        if (names_[k] == name) return k;
+    if (!legacy.empty())
+        for (size_t k = 0; k < names_.size(); ++k)
+            if (names_[k] == legacy) return k;
+    std::string have;
+    for (const std::string& n : names_) have += (have.empty() ? "" : ", ") + n;
+    throw InputError(file_ + ": no column '" + name + "' (its columns: " + have + ")");
+}
+
+CsvTable read_csv_table(const std::string& path) {
+    std::ifstream in(path);
+    if (!in) throw InputError(path + ": cannot be read");
+    CsvTable t;
+    std::string line;
+    if (!std::getline(in, line)) throw InputError(path + ": empty (no header line)");
+    t.names = csv_cells(line);
+    long row = 1;
+    while (std::getline(in, line)) {
+        ++row;
+        if (line.empty()) continue;
+        const std::vector<std::string> cells = csv_cells(line);
+        std::vector<double> v;
+        v.reserve(cells.size());
+        for (const std::string& c : cells) {
+            double x = 0.0;
+            if (!parse_double(c, x))
+                throw InputError(path + ":" + std::to_string(row) + ": '" + c + "' is not a number");
+            v.push_back(x);
+        }
+        t.rows.push_back(std::move(v));
+    }
+    return t;
+}
+
+}  // namespace demlab
