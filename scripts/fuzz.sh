@@ -1,16 +1,29 @@
 #!/usr/bin/env bash
-# Fuzzes scenario parsing and validation with libFuzzer (clang) under ASan and UBSan,
-# seeded with scenarios/*.toml.   usage: scripts/fuzz.sh [RUNS]   (default 10000 inputs)
+# Fuzzes with libFuzzer (clang) under ASan and UBSan:
+#  - fuzz_scenario: scenario parsing and validation, seeded with scenarios/*.toml, RUNS inputs;
+#  - fuzz_run: small random scenarios built and run (explicit discs and walls, any model,
+#    dashpot mode and time step, a few hundred steps, every output written), RUNS/5 inputs.
+# usage: scripts/fuzz.sh [RUNS]   (default 10000)
 # Findings (crashing inputs) are written to build-fuzz/ as crash-*; the run fails on one.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 runs="${1:-10000}"
 cmake -S . -B build-fuzz -G Ninja -DCMAKE_BUILD_TYPE=Debug -DCMAKE_CXX_COMPILER=clang++ -DCMAKE_CXX_FLAGS=-O1 \
   -DDEMLAB_FUZZ=ON -DDEMLAB_SANITIZE=ON -DDEMLAB_TESTS=OFF >/dev/null
-cmake --build build-fuzz --target fuzz_scenario -j "$(nproc)"
+cmake --build build-fuzz --target fuzz_scenario fuzz_run -j "$(nproc)"
 corpus=build-fuzz/corpus
-mkdir -p "$corpus"
+mkdir -p "$corpus" build-fuzz/corpus-run
 cp scenarios/*.toml "$corpus/"
+# fuzz_run draws a scenario from its input's bytes: seeds of 512 pseudo-random bytes (fixed)
+for k in $(seq 1 20); do
+  LC_ALL=C awk -v s="$k" 'BEGIN { srand(s); for (i = 0; i < 512; i++) printf "%c", int(rand() * 256) }' \
+    > build-fuzz/corpus-run/seed-$k
+done
 cd build-fuzz
-UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1 ./fuzz_scenario -runs="$runs" -max_total_time=600 \
-  -timeout=10 -rss_limit_mb=2048 -print_final_stats=1 corpus 2>&1 | tail -25
+export UBSAN_OPTIONS=halt_on_error=1:print_stacktrace=1
+echo "fuzz_scenario: $runs inputs"
+./fuzz_scenario -runs="$runs" -max_total_time=600 -timeout=10 -rss_limit_mb=2048 -print_final_stats=1 corpus 2>&1 | tail -25
+echo "fuzz_run: $((runs / 5)) random scenarios run"
+./fuzz_run -runs="$((runs / 5))" -max_total_time=600 -timeout=20 -rss_limit_mb=2048 -max_len=512 -len_control=0 \
+  -print_final_stats=1 \
+  corpus-run 2>&1 | tail -25

@@ -19,6 +19,6 @@ if [ "${DEMLAB_SANITIZE:-1}" = "1" ]; then
   LSAN_OPTIONS="suppressions=$PWD/tests/lsan.supp" \
   UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
     ctest --test-dir build-asan --output-on-failure -j "$jobs" -LE slow
-  echo "== a short fuzz pass over scenario parsing (libFuzzer, 10,000 inputs)"
+  echo "== a short fuzz pass: scenario parsing (10,000 inputs) and random scenarios run (2,000) (libFuzzer)"
   bash scripts/fuzz.sh 10000
 fi

@@ -206,6 +206,10 @@ RunSummary run_dan(const Scenario& s, const RunOptions& o) {
     Progress progress(s.stop.t_max, "s");
     sum.stop_reason = "t_max";
     while (dan.time() < s.stop.t_max - 1e-12) {
+        if (s.stop.max_steps > 0 && dan.step_count() >= s.stop.max_steps) {
+            sum.stop_reason = "max_steps";
+            break;
+        }
         dan.step();
         sum.dt_min = std::min(sum.dt_min, dan.dt());
         sum.dt_max = std::max(sum.dt_max, dan.dt());

@@ -380,6 +380,10 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
             st.next_snap += s.output.snapshot_interval;
         }
         if (solver.time() >= s.stop.t_max) break;
+        if (s.stop.max_steps > 0 && solver.step_count() >= s.stop.max_steps) {
+            sum.stop_reason = "max_steps";
+            break;
+        }
         try {
             solver.step();
         } catch (const RunError&) {

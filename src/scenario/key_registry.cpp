@@ -350,6 +350,7 @@ void add_run_keys(std::vector<Key>& k) {
     // stop
     k.push_back(real("stop.t_max", "s", "simulated time after the release at most", [](Scenario& s) -> double& { return s.stop.t_max; }, 0, 1e4, true));
     k.push_back(real("stop.rest_ke_fraction", "-", "at rest when the kinetic energy stays below this fraction of its peak ...", [](Scenario& s) -> double& { return s.stop.rest_ke_fraction; }, 0, 1, true));
+    k.push_back(integer("stop.max_steps", "-", "steps at most, counted from t = 0 (0: no limit); a run that reaches it ends with stop_reason \"max_steps\" and its outputs complete (a bound on the work of a trial or a scripted run)", [](Scenario& s) -> int& { return s.stop.max_steps; }, 0, 2000000000));
     k.push_back(real("stop.rest_duration", "s", "... for this long", [](Scenario& s) -> double& { return s.stop.rest_duration; }, 0, 100));
     k.push_back(real("stop.max_energy_gain", "-", "blow-up watch: the run stops when the energy balance (kinetic + potential + elastic + dissipated - work of moving walls) has risen by more than this multiple of the energy turned over (peak kinetic + peak elastic + dissipated): the numerics are creating energy", [](Scenario& s) -> double& { return s.stop.max_energy_gain; }, 0, 10, true));
     // output

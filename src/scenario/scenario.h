@@ -94,6 +94,7 @@ struct StopDef {
     double rest_ke_fraction = 1e-3;        // at rest: kinetic energy below this fraction of its peak ...
     double rest_duration = 0.2;            // s ... for this long
     double max_energy_gain = 1.0;          // -, energy created beyond this multiple of the energy turned over stops the run
+    int max_steps = 0;                     // steps at most (0: no limit); stop_reason "max_steps"
 };
 
 struct OutputDef {
