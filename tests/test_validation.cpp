@@ -358,3 +358,27 @@ TEST(Validation, TruncatedSeriesOnResumeIsAnInputError) {
     expect_refused([&] { run_scenario(again, rr); }, {"energy.csv.part", "shorter than at the checkpoint"});
     std::filesystem::remove_all(dir);
 }
+
+// stop.max_steps ends a run after that many steps, with its outputs complete (DEM and DAN).
+TEST(Validation, MaxStepsEndsTheRunWithItsOutputs) {
+    Scenario s = parse_scenario("[[discs]]\nposition = [0, 1]\nradius = 0.01\n[[walls]]\nstart = [-1, 0]\nend = [1, 0]\n"
+                                "[stop]\nt_max = 10\nmax_steps = 50\n[output]\nsnapshot_interval = 0\n",
+                                "max-steps.toml");
+    finish_scenario(s);
+    const auto dir = std::filesystem::temp_directory_path() / ("demlab-max-steps-" + std::to_string(::getpid()));
+    std::filesystem::remove_all(dir);
+    const RunSummary r = run_scenario(s, {dir.string(), false, {}});
+    EXPECT_EQ(r.steps, 50);
+    EXPECT_EQ(r.stop_reason, "max_steps");
+    EXPECT_TRUE(std::filesystem::exists(dir / "summary.json"));
+    std::filesystem::remove_all(dir);
+    Scenario d = load_scenario(std::string(DEMLAB_SOURCE_DIR) + "/scenarios/geometry-A.toml");
+    apply_override(d, "scenario.solver=\"dan\"");
+    apply_override(d, "stop.max_steps=30");
+    finish_scenario(d);
+    const RunSummary rd = run_scenario(d, {dir.string(), false, {}});
+    EXPECT_EQ(rd.steps, 30);
+    EXPECT_EQ(rd.stop_reason, "max_steps");
+    std::filesystem::remove_all(dir);
+    expect_refused([] { parse_scenario("[stop]\nmax_steps = -1\n", "bad.toml"); }, {"stop.max_steps", "-1"});
+}
