@@ -43,7 +43,7 @@ EnergyReport World::energy_with() const {
             const double overlap = radius_[i] + radius_[j] - (pos_[j] - pos_[i]).norm();
             if (overlap <= 0.0) continue;
             const typename Law::Params& pm = tables<Law>().disc_disc[size_t(material_[i]) * nm + size_t(material_[j])];
-            s.elastic += Law::elastic_energy(pm, overlap, c);
+            s.elastic += Law::elastic_energy(pm, overlap, c, radius_[i], radius_[j]);
         }
     };
     const int threads = pool_->size();

@@ -91,7 +91,10 @@ static inline void prefetch_lines(const void* from, const void* to) {
 static inline void add_to_i(DiscLoad* load, size_t i, const PairOut& o) {
     DiscLoad& l = load[i];
     l.dissipated += 0.5 * o.dissipated;  // the ledger: half to each disc (exact)
-    if (!o.touching) return;
+    if (!o.touching) {
+        l.k_tran += o.k_tran;  // +0, but for a law whose closing pairs set the step (kStepAhead)
+        return;
+    }
     l.force -= o.f;
     l.torque += o.torque_i;
     l.k_tran += o.k_tran;
@@ -101,7 +104,10 @@ static inline void add_to_i(DiscLoad* load, size_t i, const PairOut& o) {
 static inline void add_to_j(DiscLoad* load, size_t j, const PairOut& o) {
     DiscLoad& l = load[j];
     l.dissipated += 0.5 * o.dissipated;
-    if (!o.touching) return;
+    if (!o.touching) {
+        l.k_tran += o.k_tran;
+        return;
+    }
     l.force += o.f;
     l.torque += o.torque_j;
     l.k_tran += o.k_tran;
@@ -387,6 +393,7 @@ void World::range_pass(int t, const PassContext<Law>& ctx) {
             add_to_i(load, size_t(c.i), o);
             add_to_j(load, size_t(c.j), o);
         }
+        if constexpr (Law::kDiscFriction) std::fill(wall_reaction_.begin() + ptrdiff_t(b0), wall_reaction_.begin() + ptrdiff_t(fb.disc_end), Vec2::Zero());
         n_wall_sums = wall_contacts<Law>(kw, fb.wall_end, t, ctx, wall_sums, n_wall_sums);
         if (!bonds_.empty()) add_bond_terms(b0, fb.disc_end);
         if (any_external_force_) add_external_forces(b0, fb.disc_end);
@@ -422,12 +429,13 @@ size_t World::wall_contacts(size_t& kw, size_t end, int t, const PassContext<Law
         WallOut o;
         double overlap = 0.0;
         if (!disc_wall_force<Law>(geom_[w], wall_active_[w] != 0, vwall, pos_[i], vel_[i], omega_[i], radius_[i], pm,
-                             ctx.pp.mode, ctx.pp.dt, ctx.pp.last_dt, ctx.pp.max_overlap_ratio, c, o, overlap)) {
+                             ctx.pp.mode, ctx.pp.dt, ctx.pp.last_dt, ctx.pp.max_overlap_ratio, c, o, overlap, def_.gravity)) {
             note_wall_fault(kw, overlap, t);
             continue;
         }
         if (!o.touching) {
             if (o.dissipated != 0.0) sums[n++] = WallSum{0.0, 0.0, 0.0, o.dissipated, -1};
+            if constexpr (Law::kStepAhead) load[i].k_tran += o.k_tran;  // closing in (DebrisLaw)
             continue;
         }
         sums[n++] = WallSum{o.force.x(), o.force.y(), cross(o.point, o.force), o.dissipated, int32_t(w)};
@@ -438,6 +446,7 @@ size_t World::wall_contacts(size_t& kw, size_t end, int t, const PassContext<Law
         l.k_rot += o.k_rot;
         l.wall_normal += o.fn_spring;
         ++l.n_wall;
+        if constexpr (Law::kDiscFriction) wall_reaction_[i] += o.force;
     }
     return n;
 }

@@ -19,6 +19,8 @@ World::DtFactors World::dt_factors() const {
     const double local = corr ? local_damping_factor(def_.damping.local_alpha) : 1.0;
     const double phi = local * (corr ? rotational_damping_factor(def_.damping.beta_s) : 1.0);
     const double phi_t = local * (corr ? translational_damping_factor(def_.damping.beta_n) : 1.0);
+    // DEBRIS: no dashpots, translation only
+    if (def_.law == ContactLawKind::Debris) return {false, 1.0, 1.0};
     return {def_.rotation.model != 1, phi * phi, phi_t * phi_t};
 }
 
@@ -40,6 +42,13 @@ double World::critical_step_squared_of(size_t i, const DtFactors& f) const {
 }
 
 double World::step_from_critical_squared(double best_sq) const {
+    // DEBRIS: the rule capped by debris.dt_max, which a disc without contacts takes (D12)
+    // and grown by at most half a step a step: the closing contacts are looked for one step
+    // of the present size ahead (DebrisLaw::k_ahead), so the next may not be much longer
+    if (def_.law == ContactLawKind::Debris) {
+        const double rule = std::isfinite(best_sq) ? def_.timestep.safety * std::sqrt(best_sq) : INFINITY;
+        return std::min({def_.debris.dt_max, rule, dt_ > 0.0 ? 1.5 * dt_ : INFINITY});
+    }
     if (!std::isfinite(best_sq)) return def_.timestep.fixed;  // no discs
     return def_.timestep.safety * std::sqrt(best_sq);
 }
@@ -63,10 +72,12 @@ World::IntegrateConsts World::integrate_prepare() {
 }
 
 bool World::avx2_integration() const {
-    return avx2_ && !(def_.rotation.model == 3 && def_.rotation.damping_per != RotDampingPer::Disc);
+    return avx2_ && def_.law != ContactLawKind::Debris &&
+           !(def_.rotation.model == 3 && def_.rotation.damping_per != RotDampingPer::Disc);
 }
 
 void World::integrate_discs(size_t begin, size_t end, int chunk, const IntegrateConsts& k) {
+    if (def_.law == ContactLawKind::Debris) return integrate_discs_debris(begin, end, chunk, k);
     // four (AVX2) or eight (AVX-512) discs at a time where those loops have every rule the run
     // uses (per-disc rotational damping; local damping or none), the same bits
     if (avx2_integration()) {

@@ -67,6 +67,7 @@ void World::compact_discs(const std::vector<size_t>& gone) {
     squeeze(rr_factor_);
     squeeze(load_);
     squeeze(external_force_);
+    squeeze(wall_reaction_);
     any_external_force_ = std::any_of(external_force_.begin(), external_force_.end(),
                                       [](const Vec2& f) { return f.squaredNorm() > 0.0; });
 

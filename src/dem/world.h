@@ -74,6 +74,7 @@ struct WorldDef {
                                            // when the CPU has AVX-512 (pair_kernel_avx512.cpp,
                                            // integrate_avx512.cpp); the same bits again
     BondDef bond;                          // the bonds' law (World::add_bond), if any bonds are added
+    DebrisDef debris;                      // law = Debris: its modulus, friction and step ceiling (debris_law.h)
     Prefetch prefetch = Prefetch::Auto;    // the force pass asks for its arrays' lines ahead of use
                                            // (force_pass.cpp, kPrefetchContacts); never changes a result
 };
@@ -331,6 +332,7 @@ private:
     void note_wall_fault(size_t kw, double overlap, int chunk);
     IntegrateConsts integrate_prepare();
     void integrate_discs(size_t begin, size_t end, int chunk, const IntegrateConsts& k);
+    void integrate_discs_debris(size_t begin, size_t end, int chunk, const IntegrateConsts& k);  // integrate_debris.cpp
     // does integrate_discs use the AVX2 (or AVX-512) loop? (per-disc rotational damping)
     bool avx2_integration() const;
     void integrate_note(int chunk, size_t fault, double best_sq, bool any_escaped, double speed_l1, double extent_l1);
@@ -389,6 +391,9 @@ private:
     std::vector<double> rr_factor_;     // Preh-Poisel factor per disc, 1/m (0 without rolling resistance)
     // what each disc's contacts add up to in a step (DiscLoad, pair_kernel.h)
     std::vector<DiscLoad> load_;
+    // DebrisLaw: the sum of each disc's bed reactions this step (N/m; its friction's N),
+    // zeroed per block before the wall contacts
+    std::vector<Vec2> wall_reaction_;
 
     // walls
     std::vector<WallDef> walls_;

@@ -359,8 +359,26 @@ void finish_lattice(Scenario& s) {
                          format_number(2.0 * l.r_max) + " m: neighbouring discs would overlap");
 }
 
+// The keys the linear law reads and DEBRIS does not: set to anything but their defaults with
+// contact.law = "debris", they would be silently unused.
+static void refuse_linear_keys_with_debris(const Scenario& s) {
+    if (s.world.law != ContactLawKind::Debris) return;
+    const Scenario defaults;
+    for (const Key& k : registry()) {
+        const bool linear_only = k.name.rfind("damping.", 0) == 0 || k.name == "material.kn" || k.name == "material.ks" ||
+                                 k.name == "material.wall_kn" || k.name == "material.wall_ks" ||
+                                 k.name.rfind("material.friction_", 0) == 0 || k.name == "rotation.u_rr" ||
+                                 k.name == "rotation.mu_br";
+        if (linear_only && k.get(s) != k.get(defaults))
+            throw InputError(s.source + ": " + k.name + " = " + k.get(s) +
+                             ": not used by contact.law = \"debris\" (its elastic force comes from debris.youngs_modulus, "
+                             "its friction from debris.mu and debris.eta); remove it");
+    }
+}
+
 void finish_scenario(Scenario& s) {
     const std::string where = s.source + ": ";
+    refuse_linear_keys_with_debris(s);
     s.disc.friction = std::tan(deg_to_rad(s.disc_friction_deg));
     ReleaseDef& r = s.release;
     if (r.r_min == 0.0) r.r_min = scale_r_min(r.scale);
@@ -435,6 +453,7 @@ static bool section_in_use(const Scenario& s, const std::string& sec) {
     if (sec == "cohesion") return s.cohesion.given;
     if (sec == "lattice_release") return s.lattice_release.enabled;
     if (sec == "dan") return s.dan_given || s.solver == "dan";
+    if (sec == "debris") return s.world.law == ContactLawKind::Debris;
     return true;
 }
 

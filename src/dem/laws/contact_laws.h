@@ -9,19 +9,21 @@
 #include <tuple>
 #include <vector>
 
+#include "dem/laws/debris_law.h"
 #include "dem/laws/linear_law.h"
 
 namespace demlab {
 
-enum class ContactLawKind { Linear };
+enum class ContactLawKind { Linear, Debris };
 
-using RegisteredLaws = std::tuple<LinearLaw>;
+using RegisteredLaws = std::tuple<LinearLaw, DebrisLaw>;
 
 // Calls f(Law{}) for the law of `kind` and returns what it returns.
 template <typename F>
 decltype(auto) with_contact_law(ContactLawKind kind, F&& f) {
     switch (kind) {
         case ContactLawKind::Linear: break;
+        case ContactLawKind::Debris: return f(DebrisLaw{});
     }
     return f(LinearLaw{});
 }

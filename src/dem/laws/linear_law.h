@@ -13,6 +13,8 @@
 //   elastic_energy  the energy a touching contact stores
 //   k_tran, k_rot   what a touching contact adds to the automatic step's stiffness sums
 //   open_work       what an opening contact's history still does (its last dashpot force)
+//   kDiscFriction   whether the law's friction acts per disc in the integrator (DebrisLaw)
+//                   rather than at the contacts
 //   kWideKernels    whether the AVX2 and AVX-512 pair kernels (pair_kernel_avx2.cpp,
 //                   pair_kernel_avx512.cpp) compute this law; a law without them runs the
 //                   scalar kernels
@@ -44,6 +46,9 @@ struct LinearLaw {
     using Params = PairMaterial;
     static constexpr const char* kName = "linear";
     static constexpr bool kWideKernels = true;
+    static constexpr bool kDiscFriction = false;  // friction at the contacts (DebrisLaw: per disc)
+    static constexpr bool kStepAhead = false;     // open contacts add nothing to the step (DebrisLaw: they may)
+    static double k_ahead(const Params&, double, double, double, double, double) { return 0.0; }
 
     // kn, ks: the series stiffnesses (N/m); mu: the combined friction coefficient
     static Params params(double kn, double ks, double mu) { return {kn, ks, mu, std::max(kn, ks), 1.0 / ks}; }
@@ -90,7 +95,8 @@ struct LinearLaw {
     // first half of the velocity interval, the last step's over the second half).
     template <typename Contact>
     static LinearContactForce step(const Params& pm, DashpotMode mode, double overlap, double vn, double vs, double dt,
-                                   double last_dt, Contact& c, double& dissipated) {
+                                   double last_dt, Contact& c, double& dissipated, double /*ri*/ = 0.0,
+                                   double /*rj: 0 for a wall*/ = 0.0) {
         const LinearContactParams p{pm.kn, pm.ks, pm.mu, c.cn, c.cs, mode, pm.inv_ks};
         const LinearContactForce f = linear_contact(p, overlap, vn, vs, dt, c.fs);
         c.fs = f.fs_spring;
@@ -121,15 +127,15 @@ struct LinearLaw {
     // The energy a touching contact stores: the normal spring's (kn U^2 / 2, from the secant
     // overlap) and the shear spring's (fs^2 / (2 ks)), J per metre of thickness.
     template <typename Contact>
-    static double elastic_energy(const Params& p, double overlap, const Contact& c) {
+    static double elastic_energy(const Params& p, double overlap, const Contact& c, double /*ri*/ = 0.0, double /*rj*/ = 0.0) {
         return 0.5 * p.kn * overlap * overlap + 0.5 * c.fs * c.fs / p.ks;
     }
 
     // A touching contact's share of the automatic step (timestep.h): translational and
     // rotational stiffness, N/m. A disc without contacts takes its material's own
     // (default_k_tran, default_k_rot).
-    static double k_tran(const Params& p) { return p.k_tran; }
-    static double k_rot(const Params& p) { return p.ks; }
+    static double k_tran(const Params& p, const LinearContactForce& = {}) { return p.k_tran; }
+    static double k_rot(const Params& p, const LinearContactForce& = {}) { return p.ks; }
     static double default_k_tran(double kn, double ks) { return std::max(kn, ks); }
     static double default_k_rot(double /*kn*/, double ks) { return ks; }
 };

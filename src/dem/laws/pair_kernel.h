@@ -67,6 +67,7 @@ template <typename Law = LinearLaw>
     const double dist2 = dx.squaredNorm();
     out.touching = false;
     out.dissipated = 0.0;
+    out.k_tran = 0.0;
     if (dist2 >= rsum * rsum) {
         if (Law::open_work_due(c)) {
             const Vec2 vrel = d.vel[j] - d.vel[i];
@@ -75,6 +76,11 @@ template <typename Law = LinearLaw>
             out.dissipated = Law::open_work(c, vrel.dot(nrm), vs, p.last_dt);
         }
         Law::clear_history(c);
+        if constexpr (Law::kStepAhead) {
+            const double dist = std::sqrt(dist2);
+            const typename Law::Params& pm = p.materials[size_t(d.material[i]) * p.n_materials + size_t(d.material[j])];
+            out.k_tran = Law::k_ahead(pm, dist - rsum, (d.vel[j] - d.vel[i]).dot(dx / dist), p.dt, d.radius[i], d.radius[j]);
+        }
         return true;
     }
     const double dist = std::sqrt(dist2);
@@ -89,13 +95,13 @@ template <typename Law = LinearLaw>
     // eq. 2.46: tangential velocity of B relative to A at the contact point
     const double vs = vrel.dot(t) - (d.omega[i] * ra + d.omega[j] * rb);
     const typename Law::Params& pm = p.materials[size_t(d.material[i]) * p.n_materials + size_t(d.material[j])];
-    const auto f = Law::step(pm, p.mode, overlap, vn, vs, p.dt, p.last_dt, c, out.dissipated);
+    const auto f = Law::step(pm, p.mode, overlap, vn, vs, p.dt, p.last_dt, c, out.dissipated, d.radius[i], d.radius[j]);
     out.f = f.fn * nrm + f.ft * t;
     // torque = lever x force; both levers give -r * ft (docs/engine.md)
     out.torque_i = -ra * f.ft;
     out.torque_j = -rb * f.ft;
-    out.k_tran = Law::k_tran(pm);
-    out.k_rot = Law::k_rot(pm);
+    out.k_tran = Law::k_tran(pm, f);
+    out.k_rot = Law::k_rot(pm, f);
     out.touching = true;
     return true;
 }

@@ -36,7 +36,8 @@ template <typename Law = LinearLaw>
                                                    const Vec2& vel, double omega, double radius,
                                                    const typename Law::Params& pm,
                                                    DashpotMode mode, double dt, double last_dt, double max_ratio,
-                                                   WallContact& c, WallOut& out, double& overlap) {
+                                                   WallContact& c, WallOut& out, double& overlap,
+                                                   const Vec2& gravity = Vec2::Zero()) {
     WallHit hit;
     if (!active || !disc_wall_contact(g, pos, radius, hit)) {
         out.touching = false;
@@ -50,6 +51,18 @@ template <typename Law = LinearLaw>
             out.dissipated = Law::open_work(c, vrel.dot(nrm), vs, last_dt);
         }
         Law::clear_history(c);
+        if constexpr (Law::kStepAhead) {
+            if (active) {
+                const Vec2 q = closest_point(g, pos);
+                const double dist = (pos - q).norm();
+                // towards the wall at the speed one step of gravity gives (a disc at rest on it
+                // would otherwise see nothing coming)
+                if (dist > 0.0) {
+                    const Vec2 nrm = (pos - q) / dist;
+                    out.k_tran = Law::k_ahead(pm, dist - radius, (vel - vwall + dt * gravity).dot(nrm), dt, radius, 0.0);
+                }
+            }
+        }
         return true;
     }
     overlap = hit.overlap;
@@ -61,13 +74,13 @@ template <typename Law = LinearLaw>
     const Vec2 vrel = vel - vwall;
     const double vn = vrel.dot(nrm);
     const double vs = vrel.dot(tan) - omega * rb;
-    const auto f = Law::step(pm, mode, hit.overlap, vn, vs, dt, last_dt, c, out.dissipated);
+    const auto f = Law::step(pm, mode, hit.overlap, vn, vs, dt, last_dt, c, out.dissipated, radius, 0.0);
     out.force = f.fn * nrm + f.ft * tan;
     out.point = pos - rb * nrm;
     out.torque = -rb * f.ft;
     out.fn_spring = f.fn_spring;
-    out.k_tran = Law::k_tran(pm);
-    out.k_rot = Law::k_rot(pm);
+    out.k_tran = Law::k_tran(pm, f);
+    out.k_rot = Law::k_rot(pm, f);
     out.touching = true;
     return true;
 }
@@ -78,7 +91,7 @@ inline double wall_contact_elastic_energy(const WallGeom& g, const Vec2& pos, do
                                           const typename Law::Params& pm, const WallContact& c) {
     WallHit hit;
     if (!disc_wall_contact(g, pos, radius, hit)) return 0.0;
-    return Law::elastic_energy(pm, hit.overlap, c);
+    return Law::elastic_energy(pm, hit.overlap, c, radius, 0.0);
 }
 
 }  // namespace demlab

@@ -1,0 +1,197 @@
+// DEBRIS (Mikhailov 2010; docs/debris.md, DEBRIS.md): equal discs that do not rotate, an
+// elastic normal force scaled by Young's modulus and the geometric contact area, and one
+// friction force per disc against its own velocity (integrate.cpp, debris_friction).
+//
+// 2-D, per metre of thickness t = 1 m (the disc a cylinder lying on the bed, cut by the bed in
+// a rectangle 2a x t where a sphere is cut in a circle pi a^2):
+//   bed  (D2): delta = R - d > 0,  F = E S delta / R,            S = 2a, a^2 = R^2 - d^2
+//   pair (D3): delta = Ri + Rj - d, F = E S delta / (Ri + Rj),   S = 2a, a = half the common chord
+//   "diameter" (comparison only): S = 2R (bed), 2 min(Ri, Rj) (pair): linear springs
+//   energy (D8): U = int_0^delta F, by 8-point Gauss-Legendre in w = sqrt(delta) (the
+//   integrand is smooth in w; no cancellation at small overlaps)
+//   tangent stiffness (D12): dF/d delta, closed form, at the overlap one step ahead, also of a
+//   pair or wall not touching yet but closing in (kStepAhead): impacts set the step
+// No tangential force, no history, no dissipation at the contacts: the friction is the disc's
+// (D4), applied by the integrator from the two sums of its contacts' forces: the walls'
+// (WorldDef::debris, World::wall_reaction_) and the discs' (the rest of the contact force).
+#pragma once
+#include <algorithm>
+#include <array>
+#include <cmath>
+
+#include "dem/laws/contact_law.h"
+#include "dem/material.h"
+#include "geometry/wall.h"
+
+namespace demlab {
+
+enum class DebrisArea { Chord, Diameter };
+enum class DebrisNormal { Resultant, Sum };       // |sum F| or sum |F| (D4; DEBRIS.md sec. 7 item 3)
+enum class DebrisDirection { Trial, Previous };   // friction against v* or v(n-1/2) (sec. 4.2)
+
+struct DebrisDef {
+    double youngs_modulus = 4e10;  // Pa, E (Mikhailov, Attabad: 40 GPa)
+    double mu = 0.3;               // -, dry friction coefficient in [0, 1]
+    double eta = 0.0;              // N s/m per metre of thickness, viscous friction
+    DebrisArea contact_area = DebrisArea::Chord;
+    DebrisNormal friction_normal = DebrisNormal::Resultant;
+    DebrisDirection friction_direction = DebrisDirection::Trial;
+    double dt_max = 0.01;          // s, the automatic step's ceiling (Mikhailov's step)
+};
+
+// The force of a contact and its tangent stiffness (pair or bed; rj = 0 for a bed).
+struct DebrisContactForce {
+    double fn = 0.0;         // N/m, repulsive, along n
+    double ft = 0.0;         // always 0 (no tangential force)
+    double fn_spring = 0.0;  // = fn
+    double k = 0.0;          // N/m, dF/d delta at the overlap one step ahead (D12)
+    double pair_force = 0.0; // N/m, fn of a disc pair, 0 of a wall ("sum": P, the pairs' moduli)
+};
+
+namespace debris {
+
+// a^2 of the contact for overlap delta: bed a^2 = delta (2R - delta); pair, with
+// d = Ri + Rj - delta and x the distance of the chord from i's centre,
+// a^2 = Ri^2 - x^2 = delta (Rj + d - Ri)(Ri + x) / (2 d) (written so: no cancellation)
+inline double half_width_sq(double delta, double ri, double rj) {
+    if (rj <= 0.0) return std::max(delta * (2.0 * ri - delta), 0.0);
+    const double d = ri + rj - delta;
+    const double x = (d * d + ri * ri - rj * rj) / (2.0 * d);
+    return std::max(delta * (rj + d - ri) * (ri + x) / (2.0 * d), 0.0);
+}
+
+// F(delta), N/m (t = 1 m)
+inline double force(double E, DebrisArea area, double delta, double ri, double rj) {
+    if (!(delta > 0.0)) return 0.0;
+    const double rsum = rj > 0.0 ? ri + rj : ri;
+    if (area == DebrisArea::Diameter) return E * 2.0 * (rj > 0.0 ? std::min(ri, rj) : ri) * delta / rsum;
+    return E * 2.0 * std::sqrt(half_width_sq(delta, ri, rj)) * delta / rsum;
+}
+
+// dF/d delta, N/m per m. Bed: F = (2E/R) a delta, a^2 = delta q with q = 2R - delta, da/d delta
+// = d/a; pair: F = 2E a delta/(Ri + Rj), a^2 = delta q with q = (Rj + d - Ri)(Ri + x)/(2d),
+// da/d delta = x (1 - x/d)/a. The term delta da/d delta is written with delta/a = sqrt(delta/q),
+// finite as delta -> 0 (where the form tends to Hertz's D7, k = 3 E sqrt(2 R* delta)/(Ri + Rj)).
+inline double stiffness(double E, DebrisArea area, double delta, double ri, double rj) {
+    const double rsum = rj > 0.0 ? ri + rj : ri;
+    if (area == DebrisArea::Diameter) return E * 2.0 * (rj > 0.0 ? std::min(ri, rj) : ri) / rsum;
+    if (!(delta > 0.0)) return 0.0;
+    double a, delta_da;
+    if (rj <= 0.0) {
+        const double q = 2.0 * ri - delta;
+        a = std::sqrt(delta * q);
+        delta_da = (ri - delta) * std::sqrt(delta / q);
+    } else {
+        const double d = rsum - delta;
+        const double x = (d * d + ri * ri - rj * rj) / (2.0 * d);
+        const double q = (rj + d - ri) * (ri + x) / (2.0 * d);
+        a = std::sqrt(delta * q);
+        delta_da = x * (1.0 - x / d) * std::sqrt(delta / q);
+    }
+    return 2.0 * E * (a + delta_da) / rsum;
+}
+
+// U(delta) = int_0^delta F, J/m: 8-point Gauss-Legendre over w in [0, sqrt(delta)], F(w^2) 2w dw
+inline double energy(double E, DebrisArea area, double delta, double ri, double rj) {
+    if (!(delta > 0.0)) return 0.0;
+    static constexpr std::array<double, 4> x = {0.1834346424956498, 0.5255324099163290, 0.7966664774136267,
+                                                0.9602898564975363};
+    static constexpr std::array<double, 4> wt = {0.3626837833783620, 0.3137066458778873, 0.2223810344533745,
+                                                 0.1012285362903763};
+    const double h = 0.5 * std::sqrt(delta);
+    double u = 0.0;
+    for (size_t k = 0; k < 4; ++k)
+        for (const double sgn : {-1.0, 1.0}) {
+            const double w = h * (1.0 + sgn * x[k]);
+            u += wt[k] * force(E, area, w * w, ri, rj) * 2.0 * w;
+        }
+    return h * u;
+}
+
+}  // namespace debris
+
+struct DebrisLaw {
+    struct Params {
+        double E = 0.0;  // Pa
+        DebrisArea area = DebrisArea::Chord;
+    };
+    static constexpr const char* kName = "debris";
+    static constexpr bool kWideKernels = false;  // the scalar kernels only (no AVX2 / AVX-512 form yet)
+    static constexpr bool kDiscFriction = true;  // friction per disc, by the integrator
+    static constexpr bool kStepAhead = true;     // open contacts closing in count for the step (D12)
+
+    // The tangent stiffness of an open contact that may touch by the end of the next step (0
+    // otherwise): a disc falling at 40 m/s onto the bed with the 0.01 s ceiling would otherwise
+    // go 0.4 m into it in its first step of contact. The pass at x_n sets the step after this
+    // one, which moves from x_(n+1) to x_(n+2): dt_n + dt_(n+1) <= 2.5 dt_n ahead (the step grows
+    // by at most 1.5 a step, World::step_from_critical_squared).
+    static constexpr double kAheadSteps = 2.5;
+    static double k_ahead(const Params& p, double gap, double vn, double dt, double ri, double rj) {
+        const double ahead = -gap + kAheadSteps * dt * std::max(0.0, -vn);
+        if (!(ahead > 0.0)) return 0.0;
+        return debris::stiffness(p.E, p.area, std::min(ahead, 0.999 * (rj > 0.0 ? std::min(ri, rj) : ri)), ri, rj);
+    }
+
+    // E is the scenario's [debris] modulus for every contact, walls included (Mikhailov: the
+    // bed's reaction with "E of the material of particle i"): set by the world after the tables
+    static Params pair_params(const MaterialDef&, const MaterialDef&, FrictionRule) { return {}; }
+    static Params wall_params(const MaterialDef&, const WallDef&, FrictionRule) { return {}; }
+
+    // no history: every field of DiscContact / WallContact stays 0
+    template <typename Contact>
+    static void start_history(Contact& c, const Params&, double, double, double) {
+        c.fs = 0.0;
+        c.cn = c.cs = 0.0;
+        c.damp_n = c.damp_s = 0.0f;
+    }
+    template <typename Contact>
+    static void refresh_dashpots(Contact&, const Params&, double, double, double) {}
+    template <typename Fn, typename... Contact>
+    static void for_each_history_field(Fn fn, Contact&... c) {
+        fn(c.fs...);
+        fn(c.cn...);
+        fn(c.cs...);
+        fn(c.damp_n...);
+        fn(c.damp_s...);
+    }
+
+    // One step of a touching contact (ri, rj: the radii; rj = 0 for a wall). The tangent
+    // stiffness is taken at the overlap one step ahead, delta + dt max(0, -vn) (D12).
+    template <typename Contact>
+    static DebrisContactForce step(const Params& p, DashpotMode, double overlap, double vn, double, double dt, double,
+                                   Contact&, double& dissipated, double ri, double rj) {
+        DebrisContactForce f;
+        f.fn = f.fn_spring = debris::force(p.E, p.area, overlap, ri, rj);
+        f.pair_force = rj > 0.0 ? f.fn : 0.0;
+        const double ahead = overlap + kAheadSteps * dt * std::abs(vn);
+        f.k = debris::stiffness(p.E, p.area, std::min(ahead, 0.999 * (rj > 0.0 ? std::min(ri, rj) : ri)), ri, rj);
+        dissipated = 0.0;
+        return f;
+    }
+    template <typename Contact>
+    static bool open_work_due(const Contact&) {
+        return false;
+    }
+    template <typename Contact>
+    static double open_work(const Contact&, double, double, double) {
+        return 0.0;
+    }
+    template <typename Contact>
+    static void clear_history(Contact&) {}
+
+    template <typename Contact>
+    static double elastic_energy(const Params& p, double overlap, const Contact&, double ri, double rj) {
+        return debris::energy(p.E, p.area, overlap, ri, rj);
+    }
+
+    // the automatic step: translation only (rotation is locked), the tangent stiffness. With
+    // rotation locked no rotational stiffness is needed, and the discs' k_rot sums carry the
+    // moduli of their pair forces instead (P of friction_normal = "sum"; the walls add 0).
+    static double k_tran(const Params&, const DebrisContactForce& f) { return f.k; }
+    static double k_rot(const Params&, const DebrisContactForce& f) { return f.pair_force; }
+    // a disc without contacts: no stiffness (its step is debris.dt_max)
+    static double default_k_tran(double, double) { return 0.0; }
+    static double default_k_rot(double, double) { return 0.0; }
+};
+
+}  // namespace demlab

@@ -1,0 +1,389 @@
+// DEBRIS (debris_law.h, integrate_debris.cpp) against DEBRIS.md section 5: the force law's
+// numbers, rest, impacts (restitution sqrt((1 - mu)/(1 + mu))), the Hertz-like contact time,
+// sliding with and without eta, stopping, static friction on a slope, the pair forces feeding
+// the friction, energy, ledger, momentum, the time step and determinism.
+// E = 4e10 Pa, t = 1 m, rho = 2000 kg/m3, R = 1 m (m = 6283.19 kg) unless said.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "core/error.h"
+#include "dem/world.h"
+#include "helpers.h"
+#include "scenario/scenario.h"
+
+using namespace demlab;
+using demlab::test::expect_refused;
+
+namespace {
+
+constexpr double kE = 4e10, kRho = 2000.0, kG = 9.81;
+const double kMass = kRho * kPi;  // R = 1 m, t = 1 m
+
+WorldDef debris_world(double mu = 0.3, double eta = 0.0, Vec2 g = Vec2(0.0, -kG)) {
+    WorldDef def;
+    def.law = ContactLawKind::Debris;
+    def.rotation.model = 1;
+    def.gravity = g;
+    def.debris.youngs_modulus = kE;
+    def.debris.mu = mu;
+    def.debris.eta = eta;
+    def.domain_lo = Vec2(-1000, -1000);
+    def.domain_hi = Vec2(1000, 1000);
+    return def;
+}
+
+int rock(World& w) {
+    MaterialDef m;
+    m.density = kRho;
+    return w.add_material(m);
+}
+
+void floor_wall(World& w, double x0 = -50.0, double x1 = 500.0) {
+    WallDef f;
+    f.p0 = Vec2(x0, 0.0);
+    f.p1 = Vec2(x1, 0.0);
+    w.add_wall(f);
+}
+
+// the overlap at which the bed carries `load` (N/m), by bisection of the law
+double bed_overlap_for(double load, double r = 1.0) {
+    double lo = 0.0, hi = 0.1 * r;
+    for (int k = 0; k < 200; ++k) {
+        const double mid = 0.5 * (lo + hi);
+        (debris::force(kE, DebrisArea::Chord, mid, r, 0.0) < load ? lo : hi) = mid;
+    }
+    return 0.5 * (lo + hi);
+}
+
+}  // namespace
+
+TEST(Debris, ForceLaw) {
+    const DebrisArea chord = DebrisArea::Chord;
+    EXPECT_NEAR(debris::force(kE, chord, 1e-4, 1.0, 0.0), 113134.26, 0.01);
+    EXPECT_NEAR(debris::force(kE, chord, 1e-4, 1.0, 1.0), 39999.50, 0.01);
+    EXPECT_NEAR(std::sqrt(debris::half_width_sq(1e-4, 1.0, 1.0)), 9.99987e-3, 1e-8);
+    // unequal: R 1 and 0.5 at d = 1.49
+    EXPECT_NEAR(debris::force(kE, chord, 0.01, 1.0, 0.5) / 4.343724e7, 1.0, 1e-6);
+    EXPECT_NEAR(std::sqrt(debris::half_width_sq(0.01, 1.0, 0.5)), 0.0814448, 1e-7);
+    EXPECT_NEAR(std::sqrt(debris::half_width_sq(0.01, 0.5, 1.0)), 0.0814448, 1e-7);  // the common chord
+    EXPECT_NEAR(debris::energy(kE, chord, 1e-3, 1.0, 0.0), 1430.828, 1e-3);
+    EXPECT_NEAR(debris::energy(kE, chord, 1e-3, 1.0, 1.0), 505.919, 1e-3);
+    EXPECT_NEAR(debris::energy(kE, chord, 0.01, 1.0, 0.5) / 173874.05, 1.0, 1e-7);
+    // D7, Hertz's exponent, within 0.1 % below 1e-3 R; the tangent stiffness is dF/d delta
+    for (double delta : {1e-6, 1e-5, 1e-4, 9e-4}) {
+        EXPECT_NEAR(debris::force(kE, chord, delta, 1.0, 0.0) / (2.0 * std::sqrt(2.0) * kE * std::pow(delta, 1.5)), 1.0, 1e-3);
+        EXPECT_NEAR(debris::force(kE, chord, delta, 1.0, 1.0) / (kE * std::pow(delta, 1.5)), 1.0, 1e-3);
+        EXPECT_NEAR(debris::stiffness(kE, chord, delta, 1.0, 0.0) / (3.0 * kE * std::sqrt(2.0 * delta)), 1.0, 1e-3);
+        EXPECT_NEAR(debris::stiffness(kE, chord, delta, 1.0, 1.0) / (1.5 * kE * std::sqrt(delta)), 1.0, 1e-3);
+    }
+    for (double delta : {2e-3, 0.01, 0.1}) {
+        for (double rj : {0.0, 1.0, 0.5}) {
+            const double h = 1e-7 * delta;
+            const double numeric = (debris::force(kE, chord, delta + h, 1.0, rj) - debris::force(kE, chord, delta - h, 1.0, rj)) / (2 * h);
+            EXPECT_NEAR(debris::stiffness(kE, chord, delta, 1.0, rj) / numeric, 1.0, 1e-6) << delta << " " << rj;
+        }
+    }
+    // "diameter": linear springs
+    EXPECT_DOUBLE_EQ(debris::stiffness(kE, DebrisArea::Diameter, 1e-4, 1.0, 0.0), 2.0 * kE);
+    EXPECT_DOUBLE_EQ(debris::stiffness(kE, DebrisArea::Diameter, 1e-4, 1.0, 1.0), kE);
+}
+
+// A disc at the overlap where the bed carries its weight stays put; one dropped at zero
+// overlap comes to rest held by friction along the normal, with its bed force within
+// [m g/(1 + mu), m g/(1 - mu)].
+TEST(Debris, RestsOnBed) {
+    const double delta = 6.67064e-5;
+    EXPECT_NEAR(debris::force(kE, DebrisArea::Chord, delta, 1.0, 0.0), kMass * kG, 1.0);
+    {
+        World w(debris_world());
+        const int m = rock(w);
+        w.add_disc({Vec2(0.0, 1.0 - delta), 1.0, Vec2::Zero(), 0, 0, m});
+        floor_wall(w);
+        w.finalize();
+        const double y0 = w.positions()[0].y();
+        while (w.time() < 1.0) w.step();
+        EXPECT_LT(std::abs(w.positions()[0].y() - y0), 1e-12);
+        EXPECT_EQ(w.positions()[0].x(), 0.0);
+    }
+    World w(debris_world());
+    const int m = rock(w);
+    w.add_disc({Vec2(0.0, 1.0), 1.0, Vec2::Zero(), 0, 0, m});
+    floor_wall(w);
+    w.finalize();
+    while (w.time() < 2.0) w.step();
+    const double overlap = 1.0 - w.positions()[0].y();
+    EXPECT_GE(overlap, 5.6002e-5);
+    EXPECT_LE(overlap, 8.4613e-5);
+    EXPECT_EQ(w.velocities()[0], Vec2::Zero());
+    const double f = w.force(0).y();
+    EXPECT_GE(f, kMass * kG / 1.3 * (1 - 1e-9));
+    EXPECT_LE(f, kMass * kG / 0.7 * (1 + 1e-9));
+}
+
+namespace {
+// restitution of a disc at 2 m/s normal to a floor, and of two equal discs at +-1 m/s
+double wall_restitution(double mu) {
+    WorldDef def = debris_world(mu, 0.0, Vec2::Zero());
+    def.timestep.automatic = false;
+    def.timestep.fixed = 1e-6;
+    World w(def);
+    const int m = rock(w);
+    w.add_disc({Vec2(0.0, 1.0 + 1e-5), 1.0, Vec2(0.0, -2.0), 0, 0, m});
+    floor_wall(w);
+    w.finalize();
+    w.run(20000);
+    EXPECT_EQ(w.touching_wall_pairs(), 0);
+    return w.velocities()[0].y() / 2.0;
+}
+double pair_restitution(double mu, double* contact_time = nullptr, double* max_overlap = nullptr) {
+    WorldDef def = debris_world(mu, 0.0, Vec2::Zero());
+    def.timestep.automatic = false;
+    def.timestep.fixed = 1e-6;
+    World w(def);
+    const int m = rock(w);
+    w.add_disc({Vec2(-1.0 - 1e-5, 0.0), 1.0, Vec2(1.0, 0.0), 0, 0, m});
+    w.add_disc({Vec2(1.0 + 1e-5, 0.0), 1.0, Vec2(-1.0, 0.0), 0, 0, m});
+    w.finalize();
+    long touching = 0;
+    double deepest = 0.0;
+    for (int k = 0; k < 20000; ++k) {
+        w.step();
+        if (w.touching_disc_pairs() > 0) ++touching;
+        deepest = std::max(deepest, 2.0 - (w.positions()[1] - w.positions()[0]).norm());
+    }
+    if (contact_time) *contact_time = double(touching) * 1e-6;
+    if (max_overlap) *max_overlap = deepest;
+    return (w.velocities()[1].x() - w.velocities()[0].x()) / 2.0;
+}
+}  // namespace
+
+TEST(Debris, ElasticImpact) {
+    EXPECT_NEAR(wall_restitution(0.0), 1.0, 1e-4);
+    EXPECT_NEAR(pair_restitution(0.0), 1.0, 1e-4);
+    const double e = std::sqrt(0.7 / 1.3);  // 0.733799
+    EXPECT_NEAR(wall_restitution(0.3) / e, 1.0, 0.005);
+    EXPECT_NEAR(pair_restitution(0.3) / e, 1.0, 0.005);
+}
+
+TEST(Debris, ContactDuration) {
+    double tc = 0.0, delta_max = 0.0;
+    pair_restitution(0.0, &tc, &delta_max);
+    EXPECT_NEAR(tc / 4.032e-3, 1.0, 0.005);
+    EXPECT_NEAR(delta_max / 2.7395e-3, 1.0, 0.005);
+    // D11: delta_max = (5 m_eff v^2 / (4 c))^0.4, c = E t / sqrt(R), t_c = 2 I delta_max / v
+    const double m_eff = 0.5 * kMass, c = kE;
+    const double d11 = std::pow(5.0 * m_eff * 4.0 / (4.0 * c), 0.4);
+    EXPECT_NEAR(tc / (2.0 * 1.47164 * d11 / 2.0), 1.0, 0.005);
+}
+
+namespace {
+// a disc on a floor tilted by gravity (alpha from the floor's normal), at its static overlap
+struct Slide {
+    double x, v, t_stop;
+};
+Slide slide(double alpha_deg, double eta, double v0, double t_end) {
+    const double a = alpha_deg * kPi / 180.0;
+    World w(debris_world(0.3, eta, kG * Vec2(std::sin(a), -std::cos(a))));
+    const int m = rock(w);
+    const double delta = bed_overlap_for(kMass * kG * std::cos(a));
+    w.add_disc({Vec2(0.0, 1.0 - delta), 1.0, Vec2(v0, 0.0), 0, 0, m});
+    floor_wall(w);
+    w.finalize();
+    Slide s{0, 0, -1};
+    while (w.time() < t_end - 1e-12) {
+        w.set_dt(std::min(1e-3, t_end - w.time()));
+        w.step();
+        if (s.t_stop < 0 && v0 > 0 && w.velocities()[0].x() == 0.0) s.t_stop = w.time();
+    }
+    s.x = w.positions()[0].x();
+    s.v = w.velocities()[0].x();
+    return s;
+}
+}  // namespace
+
+TEST(Debris, SlidesOnIncline) {
+    // eta = 0: a = g (sin 30 - 0.3 cos 30) = 2.35629 m/s2
+    const Slide dry = slide(30.0, 0.0, 0.0, 5.0);
+    EXPECT_NEAR(dry.x / 29.4536, 1.0, 0.005);
+    EXPECT_NEAR(dry.v / (2.35629 * 5.0), 1.0, 0.005);
+    // eta = 1000 N s/m: tau = m/eta = 6.28319 s, v_inf = 14.8050 m/s
+    const Slide wet = slide(30.0, 1000.0, 0.0, 5.0);
+    EXPECT_NEAR(wet.v / 8.12451, 1.0, 0.005);
+    EXPECT_NEAR(wet.x / 22.9771, 1.0, 0.005);
+}
+
+TEST(Debris, StopsOnFlat) {
+    const Slide s = slide(0.0, 0.0, 10.0, 4.0);
+    EXPECT_NEAR(s.t_stop / 3.3979, 1.0, 0.005);
+    EXPECT_NEAR(s.x / 16.9895, 1.0, 0.005);
+    const Slide later = slide(0.0, 0.0, 10.0, 14.0);
+    EXPECT_LT(std::abs(later.x - s.x), 1e-9);
+}
+
+TEST(Debris, StaysPutBelowFrictionAngle) {
+    const Slide s = slide(15.0, 0.0, 0.0, 10.0);  // tan 15 = 0.268 < 0.3
+    EXPECT_LT(std::abs(s.x), 1e-9);
+}
+
+// Two discs stacked on the floor, sliding at 5 m/s: the bottom one is braked by mu (N + P) =
+// mu (2 m g + m g), the top one by mu P = mu m g: the pair's force enters the friction.
+TEST(Debris, ElasticForceFeedsFriction) {
+    World w(debris_world());
+    const int m = rock(w);
+    const double bed = 1.05890e-4, pair = 1.33413e-4;
+    EXPECT_NEAR(debris::force(kE, DebrisArea::Chord, bed, 1.0, 0.0) / (2 * kMass * kG), 1.0, 1e-4);
+    EXPECT_NEAR(debris::force(kE, DebrisArea::Chord, pair, 1.0, 1.0) / (kMass * kG), 1.0, 1e-4);
+    w.add_disc({Vec2(0.0, 1.0 - bed), 1.0, Vec2(5.0, 0.0), 0, 0, m});
+    w.add_disc({Vec2(0.0, 1.0 - bed + 2.0 - pair), 1.0, Vec2(5.0, 0.0), 0, 0, m});
+    floor_wall(w);
+    w.finalize();
+    w.run(10);
+    const double t = w.time();
+    EXPECT_NEAR((5.0 - w.velocities()[0].x()) / t / (3 * 0.3 * kG), 1.0, 0.005);
+    EXPECT_NEAR((5.0 - w.velocities()[1].x()) / t / (0.3 * kG), 1.0, 0.005);
+}
+
+namespace {
+// discs of radius r on a grid in a box [0, 12] x [0, 20], with velocities
+World box(int n, double r, double mu, Vec2 g, int threads = 1) {
+    WorldDef def = debris_world(mu, 0.0, g);
+    def.threads = threads;
+    World w(def);
+    const int m = rock(w);
+    for (int k = 0; k < n; ++k) {
+        const int cols = int(10.0 / (2.5 * r));
+        const double x = 1.0 + 2.5 * r * (k % cols), y = 1.0 + 2.5 * r * (k / cols);
+        w.add_disc({Vec2(x, y), r, Vec2(std::sin(1.7 * k), std::cos(2.3 * k)), 0, 0, m});
+    }
+    for (auto [a, b] : {std::pair<Vec2, Vec2>{Vec2(0, 0), Vec2(12, 0)}, {Vec2(12, 0), Vec2(12, 40)}, {Vec2(0, 40), Vec2(0, 0)}}) {
+        WallDef wd;
+        wd.p0 = a;
+        wd.p1 = b;
+        w.add_wall(wd);
+    }
+    w.finalize();
+    return w;
+}
+}  // namespace
+
+// 30 undamped discs bouncing in a box for 2 s (impacts at up to 8 m/s, thousands of them):
+// KE + PE + U drifts by first order in the step: measured 3 % at safety 0.8, 1.9 % at 0.4,
+// 0.6 % at 0.2, 0.17 % at 0.1 (DEBRIS.md asks 0.1 % at 0.8: not reached, docs/debris.md).
+double box_drift(double safety) {
+    WorldDef def = debris_world(0.0, 0.0, Vec2(0.0, -kG));
+    def.timestep.safety = safety;
+    World w(def);
+    const int m = rock(w);
+    for (int k = 0; k < 30; ++k)
+        w.add_disc({Vec2(1.0 + 1.25 * (k % 8), 1.0 + 1.25 * (k / 8)), 0.5, Vec2(std::sin(1.7 * k), std::cos(2.3 * k)), 0, 0, m});
+    for (auto [a, b] : {std::pair<Vec2, Vec2>{Vec2(0, 0), Vec2(12, 0)}, {Vec2(12, 0), Vec2(12, 40)}, {Vec2(0, 40), Vec2(0, 0)}}) {
+        WallDef wd;
+        wd.p0 = a;
+        wd.p1 = b;
+        w.add_wall(wd);
+    }
+    w.finalize();
+    const EnergyReport e0 = w.energy();
+    const double total0 = e0.kinetic_translation + e0.potential + e0.elastic;
+    double worst = 0.0;
+    while (w.time() < 2.0) {
+        w.run(100);
+        const EnergyReport e = w.energy();
+        worst = std::max(worst, std::abs(e.kinetic_translation + e.potential + e.elastic - total0));
+        EXPECT_EQ(e.dissipated_contacts, 0.0);
+    }
+    return worst / std::abs(total0);
+}
+
+TEST(Debris, ConservesEnergy) {
+    const double coarse = box_drift(0.8), fine = box_drift(0.1);
+    EXPECT_LT(coarse, 0.05);
+    EXPECT_LT(fine, 0.003);
+    EXPECT_LT(fine, 0.25 * coarse);  // it converges with the step
+}
+
+TEST(Debris, LedgerCloses) {
+    World w = box(500, 0.2, 0.3, Vec2(0.0, -kG));
+    const double e0 = w.energy().balance();
+    double put_in = 0.0;
+    while (w.time() < 5.0) {
+        w.run(200);
+        const EnergyReport e = w.energy();
+        put_in = std::max(put_in, e0 - e.potential);
+    }
+    const EnergyReport e = w.energy();
+    EXPECT_GT(e.dissipated_contacts, 0.3 * put_in);  // the pile came down: friction took much of it
+    EXPECT_LT(std::abs(e.balance() - e0), 0.01 * put_in);
+}
+
+TEST(Debris, Momentum) {
+    World w = box(40, 0.5, 0.0, Vec2::Zero());
+    auto momentum = [&] {
+        Vec2 p = Vec2::Zero();
+        for (size_t i = 0; i < w.disc_count(); ++i) p += w.masses()[i] * w.velocities()[i];
+        return p;
+    };
+    // no walls touched yet in the first steps? the walls take momentum: count only while none touch
+    const Vec2 p0 = momentum();
+    long pair_contacts = 0;
+    for (int k = 0; k < 400 && w.touching_wall_pairs() == 0; ++k) {
+        w.step();
+        pair_contacts += w.touching_disc_pairs();
+        if (w.touching_wall_pairs() == 0) EXPECT_LT((momentum() - p0).norm(), 1e-9 * kMass) << k;
+    }
+    EXPECT_GT(pair_contacts, 0);
+}
+
+TEST(Debris, TimeStep) {
+    World w(debris_world());
+    const int m = rock(w);
+    w.add_disc({Vec2(0.0, 1.0 - 6.67064e-5), 1.0, Vec2::Zero(), 0, 0, m});
+    floor_wall(w);
+    w.finalize();
+    EXPECT_NEAR(debris::stiffness(kE, DebrisArea::Chord, 6.67064e-5, 1.0, 0.0) / 1.38601e9, 1.0, 1e-5);
+    EXPECT_NEAR(w.dt() / 1.70332e-3, 1.0, 1e-5);
+    World air(debris_world());
+    const int m2 = rock(air);
+    air.add_disc({Vec2(0.0, 5.0), 1.0, Vec2::Zero(), 0, 0, m2});
+    floor_wall(air);
+    air.finalize();
+    EXPECT_EQ(air.dt(), 0.01);
+}
+
+TEST(Debris, Determinism) {
+    World a = box(400, 0.2, 0.3, Vec2(0.0, -kG), 1), b = box(400, 0.2, 0.3, Vec2(0.0, -kG), 2);
+    a.run(3000);
+    b.run(3000);
+    EXPECT_EQ(a.positions(), b.positions());
+    EXPECT_EQ(a.velocities(), b.velocities());
+    EXPECT_EQ(a.energy().balance(), b.energy().balance());
+}
+
+TEST(Debris, ScenarioKeysAndRefusals) {
+    const std::string base = "[contact]\nlaw = \"debris\"\n[[discs]]\nposition = [0, 1]\nradius = 1\n[[walls]]\nstart = [-5, 0]\nend = [5, 0]\n";
+    Scenario ok = parse_scenario(base + "[rotation]\nmodel = 1\n[debris]\nmu = 0.2\n", "ok.toml");
+    finish_scenario(ok);
+    EXPECT_EQ(ok.world.law, ContactLawKind::Debris);
+    EXPECT_EQ(ok.world.debris.mu, 0.2);
+    // the resolved scenario reads back the same (a resume's check)
+    Scenario again = parse_scenario(resolved_toml(ok), "ok.toml");
+    finish_scenario(again);
+    EXPECT_EQ(resolved_toml(again), resolved_toml(ok));
+    expect_refused([&] {
+        Scenario s = parse_scenario(base + "[rotation]\nmodel = 1\n[material]\nkn = 1e9\n", "kn.toml");
+        finish_scenario(s);
+    }, {"material.kn", "not used by contact.law = \"debris\""});
+    expect_refused([&] {
+        Scenario s = parse_scenario(base + "[rotation]\nmodel = 1\n[damping]\nbeta_n = 0.1\n", "damp.toml");
+        finish_scenario(s);
+    }, {"damping.beta_n"});
+    expect_refused([&] { parse_scenario(base + "[debris]\nmu = 1.5\n", "mu.toml"); }, {"debris.mu", "1.5", "[0.0, 1.0]"});
+    expect_refused([&] {
+        Scenario s = parse_scenario(base, "rot.toml");  // rotation.model 3 by default
+        finish_scenario(s);
+        World w(s.world);
+        w.add_material(s.disc);
+        w.finalize();
+    }, {"rotation.model", "needs rotation.model = 1"});
+}
