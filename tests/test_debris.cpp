@@ -5,11 +5,20 @@
 // E = 4e10 Pa, t = 1 m, rho = 2000 kg/m3, R = 1 m (m = 6283.19 kg) unless said.
 #include <gtest/gtest.h>
 
+#include <unistd.h>
+
 #include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <tuple>
 
 #include "core/error.h"
 #include "dem/world.h"
+#include "files.h"
+#include "geometry/esri_grid.h"
 #include "helpers.h"
+#include "run/run.h"
 #include "scenario/scenario.h"
 
 using namespace demlab;
@@ -386,4 +395,99 @@ TEST(Debris, ScenarioKeysAndRefusals) {
         w.add_material(s.disc);
         w.finalize();
     }, {"rotation.model", "needs rotation.model = 1"});
+}
+
+namespace {
+std::string write_grid(const std::string& name, const std::string& text) {
+    const std::string path = (std::filesystem::temp_directory_path() / ("demlab-grid-" + std::to_string(::getpid()) + "-" + name)).string();
+    std::ofstream(path) << text;
+    return path;
+}
+}  // namespace
+
+// An ESRI ASCII grid of the plane z = 100 + 0.5 x - 0.25 y (cell centres, corner origin),
+// sampled along a diagonal: the plane exactly (bilinear is exact on a plane); the header's
+// faults, NODATA on the section and a section outside the grid are input errors.
+TEST(EsriGrid, PlaneSampledAlongASectionAndFaultsRefused) {
+    std::ostringstream t;
+    t << "ncols 5\nNROWS 4\nxllcorner 100\nyllcorner 200\ncellsize 10\nNODATA_value -9999\n";
+    for (int r = 3; r >= 0; --r) {  // the northernmost row first
+        for (int c = 0; c < 5; ++c) {
+            const double x = 105 + 10 * c, y = 205 + 10 * r;
+            t << (c ? " " : "") << 100 + 0.5 * x - 0.25 * y;
+        }
+        t << "\n";
+    }
+    const std::string plane = write_grid("plane.asc", t.str());
+    const EsriGrid g = read_esri_grid(plane);
+    EXPECT_EQ(g.ncols, 5);
+    EXPECT_EQ(g.nrows, 4);
+    EXPECT_DOUBLE_EQ(g.x0, 105.0);
+    const Vec2 a(105, 205), b(145, 235);
+    const std::vector<Vec2> s = sample_section(g, plane, a, b, 7.0);
+    ASSERT_EQ(s.size(), 9u);  // 50 m every 7 m, and the end
+    for (const Vec2& p : s) {
+        const Vec2 q = a + (b - a) * (p.x() / 50.0);
+        EXPECT_NEAR(p.y(), 100 + 0.5 * q.x() - 0.25 * q.y(), 1e-9);
+    }
+    EXPECT_DOUBLE_EQ(s.back().x(), 50.0);
+    expect_refused([&] { sample_section(g, plane, Vec2(100, 205), b, 5.0); }, {"outside the grid", "terrain.section"});
+    std::string holed = t.str();
+    const size_t south = holed.rfind("\n", holed.size() - 2) + 1;  // the south-west cell
+    holed.replace(south, holed.find(' ', south) - south, "-9999");
+    const std::string hole = write_grid("hole.asc", holed);
+    expect_refused([&] { sample_section(read_esri_grid(hole), hole, a, b, 5.0); }, {"NODATA"});
+    for (const auto& [name, text, fragment] :
+         {std::tuple<const char*, const char*, const char*>{"nohead.asc", "ncols 2\nnrows 2\ncellsize 1\n1 2\n3 4\n", "xllcorner"},
+          {"badkey.asc", "ncols 2\nnrows 2\nxllcorner 0\nyllcorner 0\ncells 1\n1 2\n3 4\n", "unknown header keyword"},
+          {"short.asc", "ncols 2\nnrows 2\nxllcorner 0\nyllcorner 0\ncellsize 1\n1 2\n3\n", "1 values, ncols = 2"},
+          {"rows.asc", "ncols 2\nnrows 3\nxllcorner 0\nyllcorner 0\ncellsize 1\n1 2\n3 4\n", "2 rows"},
+          {"text.asc", "ncols 2\nnrows 2\nxllcorner 0\nyllcorner 0\ncellsize 1\n1 x\n3 4\n", "'x' is not a number"},
+          {"zero.asc", "ncols 2\nnrows 2\nxllcorner 0\nyllcorner 0\ncellsize 0\n1 2\n3 4\n", "cellsize"}}) {
+        const std::string p = write_grid(name, text);
+        expect_refused([&] { read_esri_grid(p); }, {fragment});
+        std::filesystem::remove(p);
+    }
+    std::filesystem::remove(plane);
+    std::filesystem::remove(hole);
+}
+
+// The shipped demonstration on both terrain inputs: the grid's section is the profile where
+// its samples fall, the same number of discs, and 1 and 2 threads give the same bytes.
+TEST(Debris, ShippedAttabadScenarios) {
+    const std::string root = DEMLAB_SOURCE_DIR;
+    Scenario p = load_scenario(root + "/scenarios/attabad-2d.toml");
+    Scenario g = load_scenario(root + "/scenarios/attabad-2d-grid.toml");
+    finish_scenario(p);
+    finish_scenario(g);
+    EXPECT_EQ(p.world.law, ContactLawKind::Debris);
+    ASSERT_FALSE(g.terrain.points.empty());
+    // a sample every 10 m from x = -400; the profile's corners lie on 20 m grid nodes or between
+    for (const Vec2& q : g.terrain.points) {
+        const double x = q.x() - 400.0;
+        double y = NAN;
+        for (size_t k = 0; k + 1 < p.terrain.points.size(); ++k) {
+            const Vec2 a = p.terrain.points[k], b = p.terrain.points[k + 1];
+            if (x >= a.x() && x <= b.x()) y = a.y() + (b.y() - a.y()) * (x - a.x()) / (b.x() - a.x());
+        }
+        EXPECT_NEAR(q.y(), y, 5.0) << x;  // the grid's 20 m cells round the corners off
+    }
+    std::string bytes[2];
+    for (int threads : {1, 2}) {
+        Scenario s = load_scenario(root + "/scenarios/attabad-2d.toml");
+        apply_override(s, "stop.t_max=8");
+        apply_override(s, "stop.rest_duration=1");
+        apply_override(s, "output.snapshot_interval=4");
+        finish_scenario(s);
+        s.world.threads = threads;
+        const std::filesystem::path dir = demlab::test::temp_dir("attabad-" + std::to_string(threads));
+        const RunSummary r = run_scenario(s, {dir.string(), false, {}});
+        EXPECT_EQ(r.n_discs, 1489);
+        EXPECT_LT(r.energy_balance_error, 0.02);
+        bytes[threads - 1] = demlab::test::read_file(dir / "forces.csv") + demlab::test::read_file(dir / "energy.csv") +
+                             demlab::test::read_file(dir / "front.csv") + demlab::test::read_file(dir / "snapshots/discs_00002.vtp");
+        std::filesystem::remove_all(dir);
+    }
+    EXPECT_FALSE(bytes[0].empty());
+    EXPECT_EQ(bytes[0], bytes[1]);
 }

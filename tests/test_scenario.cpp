@@ -69,7 +69,7 @@ TEST(Scenario, EveryShippedScenarioLoadsAndResolves) {
                   resolved_toml(s).substr(resolved_toml(s).find('\n', 80)));
         ++count;
     }
-    EXPECT_EQ(count, 16);  // 8 rows of Table 2, the presets A, B, C, the dam break, the terrain profile, the snow slide, its dam and its disordered variant
+    EXPECT_EQ(count, 18);  // 8 rows of Table 2, the presets A, B, C, the dam break, the terrain profile, the snow slide, its dam, its disordered variant, and Attabad on a profile and on a grid
 }
 
 TEST(Release, CountFollowsPfcsRuleForTheThesisScales) {

@@ -172,6 +172,17 @@ void write_deposit(const World& w, const MeasureContext& m, const std::string& d
     std::ostringstream d;
     d << "s_m,height_m\n";
     for (int b = 0; b < bins; ++b) d << b * bin << ',' << top[size_t(b)] << '\n';
+    // the deposit's thickest point (normal to the bed) and its length: from its first bin to
+    // its last that holds mass, along the path
+    int first = -1, last = -1;
+    for (int b = 0; b < bins; ++b) {
+        sum.deposit_max_height = std::max(sum.deposit_max_height, top[size_t(b)]);
+        if (top[size_t(b)] > 0.0) {
+            if (first < 0) first = b;
+            last = b;
+        }
+    }
+    sum.deposit_length = first < 0 ? 0.0 : double(last - first + 1) * bin;
     write_file_atomic(dir + "/deposit.csv", d.str());
 }
 
@@ -228,6 +239,8 @@ void write_summary(const std::string& path, const Scenario& s, const RunSummary&
     // the machine the timings above come from (a resumed run: the one that finished it)
     j.text("machine", machine_summary(machine_info()));
     j.number("runout_s", sum.runout_s, "m");
+    j.number("deposit_max_height", sum.deposit_max_height, "m");
+    j.number("deposit_length", sum.deposit_length, "m");
     j.number("runup_height", sum.runup_height, "m");
     j.number("max_runup_height_during_run", sum.max_runup_height_during_run, "m");
     j.number("t_front_at_barrier", sum.t_front_at_barrier, "s");

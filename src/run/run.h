@@ -55,6 +55,8 @@ struct RunSummary {
     double wall_seconds = 0;            // of the run after the release mass was ready
     double particle_steps_per_second = 0;
     double runout_s = 0;                // m along the path: the deposit's front
+    double deposit_max_height = 0;      // m, the deposit's thickest point normal to the bed (deposit.csv)
+    double deposit_length = 0;          // m along the path, from its first bin with mass to its last
     double runup_height = 0;            // m: highest point of the deposit on the barrier above its foot
     double max_runup_height_during_run = 0;
     double t_front_at_barrier = -1;     // s, -1 if never

@@ -12,6 +12,7 @@
 #include "core/error.h"
 #include "core/fileio.h"
 #include "core/validate.h"
+#include "geometry/esri_grid.h"
 #include "geometry/profile.h"
 #include "scenario/key_registry.h"
 
@@ -197,13 +198,28 @@ void apply_override(Scenario& s, const std::string& assignment) {
 void finish_terrain(Scenario& s) {
     const std::string where = s.source + ": ";
     TerrainDef& t = s.terrain;
-    if (t.profile.empty()) throw InputError(where + "terrain.profile: a [terrain] needs its profile (a CSV file of x,y rows in m)");
+    if (t.profile.empty() == t.grid.empty())
+        throw InputError(where + (t.profile.empty() ? "terrain.profile: a [terrain] needs its profile (a CSV file of x,y rows in m) "
+                                                      "or an elevation grid (terrain.grid with terrain.section)"
+                                                    : "terrain.profile and terrain.grid: give one of the two"));
     // a relative path is the scenario file's neighbour; resolved, it is written absolute, so
     // the run folder's copy of the scenario (and a resume) reads the same file
-    const std::filesystem::path prof(t.profile);
-    if (prof.is_relative() && std::filesystem::is_regular_file(s.source))
-        t.profile = (std::filesystem::absolute(std::filesystem::path(s.source)).parent_path() / prof).lexically_normal().string();
-    t.points = read_profile_csv(t.profile);
+    auto beside_scenario = [&](std::string& file) {
+        const std::filesystem::path p(file);
+        if (p.is_relative() && std::filesystem::is_regular_file(s.source))
+            file = (std::filesystem::absolute(std::filesystem::path(s.source)).parent_path() / p).lexically_normal().string();
+    };
+    if (!t.profile.empty()) {
+        beside_scenario(t.profile);
+        t.points = read_profile_csv(t.profile);
+    } else {
+        beside_scenario(t.grid);
+        if (t.section.size() != 2)
+            throw InputError(where + "terrain.section: " + std::to_string(t.section.size()) +
+                             " points; a section through terrain.grid is a line of 2 points [[x0, y0], [x1, y1]]");
+        const EsriGrid g = read_esri_grid(t.grid);
+        t.points = sample_section(g, t.grid, t.section[0], t.section[1], t.spacing > 0.0 ? t.spacing : g.cellsize);
+    }
     if (!t.barrier.empty()) {
         const auto& b = t.barrier;
         if (b.size() < 2) throw InputError(where + "terrain.barrier: 1 point; a barrier needs at least 2 (its foot and its top)");

@@ -40,6 +40,9 @@ struct DamBreakDef {
 struct TerrainDef {
     bool enabled = false;                  // a [terrain] table was given
     std::string profile;                   // CSV file of x,y rows (m), x increasing
+    std::string grid;                      // or an ESRI ASCII grid (.asc) sampled along `section`
+    std::vector<Vec2> section;             // m, the section line's two ends in the grid's coordinates
+    double spacing = 0.0;                  // m, between the section's samples; 0 = the grid's cell size
     std::vector<Vec2> release;             // m, a convex polygon the release mass fills; empty: [[discs]]
     std::vector<Vec2> points;              // m, the profile as read (finish_scenario)
     // m, a barrier (a dam) standing on the profile: a polyline from its foot on the profile,
