@@ -30,6 +30,16 @@ MaterialDef sand() {
     return m;
 }
 
+// the ledge: a floor from x = 0 to 1 m with a free end
+void add_ledge(World& w) {
+    WallDef floor;
+    floor.p0 = Vec2(0, 0);
+    floor.p1 = Vec2(1, 0);
+    floor.kn = floor.ks = 1e6;
+    floor.friction = 0.3;
+    w.add_wall(floor);
+}
+
 // A disc resting on a ledge from x = 0 to 1 m, and (with the stray) one sliding off its free
 // end at 2 m/s, falling out of the domain [-0.5, 1.5] x [-0.5, 0.6].
 World ledge(bool with_stray, LostDiscs policy, int threads = 1) {
@@ -44,12 +54,7 @@ World ledge(bool with_stray, LostDiscs policy, int threads = 1) {
     w.add_disc({Vec2(0.3, 0.0101), 0.01, Vec2(0.0, 0.0), 0, 0, m});
     if (with_stray) w.add_disc({Vec2(0.9, 0.02), 0.01, Vec2(2.0, 0.0), 0, 0, m});
     w.add_disc({Vec2(0.5, 0.03), 0.012, Vec2(0.1, 0.0), 0, 0, m});
-    WallDef floor;
-    floor.p0 = Vec2(0, 0);
-    floor.p1 = Vec2(1, 0);
-    floor.kn = floor.ks = 1e6;
-    floor.friction = 0.3;
-    w.add_wall(floor);
+    add_ledge(w);
     w.finalize();
     return w;
 }
@@ -221,12 +226,7 @@ TEST(LostDiscs, BondsOfALostDiscGoWithIt) {
     w.add_disc({Vec2(0.22, 0.01), 0.01, Vec2::Zero(), 0, 0, m});
     w.add_disc({Vec2(0.9, 0.02), 0.01, Vec2(2.0, 0.0), 0, 0, m});
     w.add_disc({Vec2(0.92, 0.02), 0.01, Vec2(2.0, 0.0), 0, 0, m});
-    WallDef floor;
-    floor.p0 = Vec2(0, 0);
-    floor.p1 = Vec2(1, 0);
-    floor.kn = floor.ks = 1e6;
-    floor.friction = 0.3;
-    w.add_wall(floor);
+    add_ledge(w);
     w.add_bond(0, 1);
     w.add_bond(2, 3);
     w.finalize();

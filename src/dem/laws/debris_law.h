@@ -20,6 +20,7 @@
 #include <cmath>
 
 #include "dem/laws/contact_law.h"
+#include "dem/laws/linear_law.h"
 #include "dem/material.h"
 #include "geometry/wall.h"
 
@@ -146,13 +147,10 @@ struct DebrisLaw {
     }
     template <typename Contact>
     static void refresh_dashpots(Contact&, const Params&, double, double, double) {}
+    // (the records' fields, as the linear law lists them: checkpoints and copies move them whole)
     template <typename Fn, typename... Contact>
     static void for_each_history_field(Fn fn, Contact&... c) {
-        fn(c.fs...);
-        fn(c.cn...);
-        fn(c.cs...);
-        fn(c.damp_n...);
-        fn(c.damp_s...);
+        LinearLaw::for_each_history_field(fn, c...);
     }
 
     // One step of a touching contact (ri, rj: the radii; rj = 0 for a wall). The tangent
