@@ -1,6 +1,7 @@
 // libFuzzer target that builds and runs small random scenarios: explicit discs (up to 16) on a
-// floor with random walls, any rotation model, dashpot mode, damping, friction rule, time step
-// (automatic or fixed, stable or not), lost-disc policy and, at times, cohesive bonds, for
+// floor with random walls, either contact law (linear: any rotation model, dashpot mode,
+// damping, friction rule; DEBRIS: any modulus, friction, area, direction and ceiling), any
+// time step (automatic or fixed, stable or not), lost-disc policy and, at times, cohesive bonds, for
 // at most a few hundred steps (stop.max_steps), with every output written. Each run must end
 // normally, or with an InputError or RunError (a refusal or a diagnosed blow-up); and the
 // series and the summary of a run that ended must hold finite numbers only. Anything else (an
@@ -44,24 +45,36 @@ std::string draw_scenario(FuzzedDataProvider& in) {
       << "\nsnapshot_interval = " << (in.ConsumeBool() ? number(in.ConsumeFloatingPointInRange(1e-4, 0.01)) : "0") << "\n";
     const int discs = in.ConsumeIntegralInRange(1, 16);
     if (in.ConsumeBool()) t << "track = [" << in.ConsumeIntegralInRange(0, discs - 1) << "]\n";
-    t << "[rotation]\nmodel = " << in.ConsumeIntegralInRange(1, 3) << "\nmu_br = " << number(in.ConsumeFloatingPointInRange(0.01, 1.0))
-      << "\nrolling_form = \"" << (in.ConsumeBool() ? "literal" : "normal_force") << "\"\ndamping_per = \""
-      << (in.ConsumeBool() ? "disc" : "contact") << "\"\nu_rr = " << number(in.ConsumeFloatingPointInRange(0.0, 0.002)) << "\n";
-    t << "[damping]\nbeta_n = " << number(in.ConsumeFloatingPointInRange(0.0, 0.99)) << "\nbeta_s = "
-      << number(in.ConsumeFloatingPointInRange(0.0, 0.99)) << "\ndp_mode = \"" << in.ConsumeIntegralInRange(0, 3) << "\"\n";
     t << "[timestep]\nautomatic = " << (in.ConsumeBool() ? "true" : "false") << "\nsafety = "
       << number(in.ConsumeFloatingPointInRange(0.05, 1.0)) << "\nfixed = " << number(std::pow(10.0, in.ConsumeFloatingPointInRange(-7.0, -2.0)))
       << "\ndamping_correction = " << (in.ConsumeBool() ? "true" : "false") << "\n";
     t << "[world]\ngravity = [" << number(in.ConsumeFloatingPointInRange(-20.0, 20.0)) << ", "
       << number(in.ConsumeFloatingPointInRange(-20.0, 5.0)) << "]\nlost_discs = \"" << (in.ConsumeBool() ? "remove" : "stop")
       << "\"\nmax_overlap_ratio = " << number(in.ConsumeFloatingPointInRange(0.05, 2.0)) << "\n";
-    t << "[material]\ndensity = " << number(std::pow(10.0, in.ConsumeFloatingPointInRange(1.0, 4.5)))
-      << "\nkn = " << number(std::pow(10.0, in.ConsumeFloatingPointInRange(3.0, 9.0)))
-      << "\nks = " << number(std::pow(10.0, in.ConsumeFloatingPointInRange(3.0, 9.0)))
-      << "\nwall_kn = " << number(std::pow(10.0, in.ConsumeFloatingPointInRange(3.0, 9.0)))
-      << "\nfriction_disc_deg = " << number(in.ConsumeFloatingPointInRange(0.0, 60.0))
-      << "\nfriction_wall_deg = " << number(in.ConsumeFloatingPointInRange(0.0, 60.0))
-      << "\nfriction_rule_disc_disc = \"" << (in.ConsumeBool() ? "min" : "max") << "\"\n";
+    // one run in four with the DEBRIS law (no rotation, none of the linear law's keys)
+    const bool debris = in.ConsumeIntegralInRange(0, 3) == 0;
+    if (debris) {
+        t << "[contact]\nlaw = \"debris\"\n[rotation]\nmodel = 1\n[debris]\nyoungs_modulus = "
+          << number(std::pow(10.0, in.ConsumeFloatingPointInRange(5.0, 11.0))) << "\nmu = " << number(in.ConsumeFloatingPointInRange(0.0, 1.0))
+          << "\neta = " << number(in.ConsumeBool() ? 0.0 : std::pow(10.0, in.ConsumeFloatingPointInRange(0.0, 5.0)))
+          << "\ncontact_area = \"" << (in.ConsumeBool() ? "chord" : "diameter") << "\"\nfriction_normal = \""
+          << (in.ConsumeBool() ? "resultant" : "sum") << "\"\nfriction_direction = \"" << (in.ConsumeBool() ? "trial" : "previous")
+          << "\"\ndt_max = " << number(std::pow(10.0, in.ConsumeFloatingPointInRange(-5.0, -1.0))) << "\n";
+        t << "[material]\ndensity = " << number(std::pow(10.0, in.ConsumeFloatingPointInRange(1.0, 4.5))) << "\n";
+    } else {
+        t << "[rotation]\nmodel = " << in.ConsumeIntegralInRange(1, 3) << "\nmu_br = " << number(in.ConsumeFloatingPointInRange(0.01, 1.0))
+          << "\nrolling_form = \"" << (in.ConsumeBool() ? "literal" : "normal_force") << "\"\ndamping_per = \""
+          << (in.ConsumeBool() ? "disc" : "contact") << "\"\nu_rr = " << number(in.ConsumeFloatingPointInRange(0.0, 0.002)) << "\n";
+        t << "[damping]\nbeta_n = " << number(in.ConsumeFloatingPointInRange(0.0, 0.99)) << "\nbeta_s = "
+          << number(in.ConsumeFloatingPointInRange(0.0, 0.99)) << "\ndp_mode = \"" << in.ConsumeIntegralInRange(0, 3) << "\"\n";
+        t << "[material]\ndensity = " << number(std::pow(10.0, in.ConsumeFloatingPointInRange(1.0, 4.5)))
+          << "\nkn = " << number(std::pow(10.0, in.ConsumeFloatingPointInRange(3.0, 9.0)))
+          << "\nks = " << number(std::pow(10.0, in.ConsumeFloatingPointInRange(3.0, 9.0)))
+          << "\nwall_kn = " << number(std::pow(10.0, in.ConsumeFloatingPointInRange(3.0, 9.0)))
+          << "\nfriction_disc_deg = " << number(in.ConsumeFloatingPointInRange(0.0, 60.0))
+          << "\nfriction_wall_deg = " << number(in.ConsumeFloatingPointInRange(0.0, 60.0))
+          << "\nfriction_rule_disc_disc = \"" << (in.ConsumeBool() ? "min" : "max") << "\"\n";
+    }
     if (in.ConsumeIntegralInRange(0, 3) == 0)
         t << "[cohesion]\nenabled = true\nmodulus = " << number(std::pow(10.0, in.ConsumeFloatingPointInRange(3.0, 7.0)))
           << "\nmax_strain = " << number(in.ConsumeFloatingPointInRange(0.01, 0.5)) << "\nbreak_mode = \""
