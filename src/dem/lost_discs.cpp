@@ -47,7 +47,6 @@ void World::compact_discs(const std::vector<size_t>& gone) {
         if (to[i] == 0) to[i] = next++;
         else to[i] = -1;
     auto squeeze = [&](auto& v) {
-        if (v.size() != n) return;  // (an array not in use: rr_factor_ without rolling resistance is full of 0 still)
         size_t o = 0;
         for (size_t i = 0; i < n; ++i)
             if (to[i] >= 0) v[o++] = v[i];

@@ -15,6 +15,7 @@
 #include "core/progress.h"
 #include "core/validate.h"
 #include "dem/world.h"
+#include "run/measures.h"
 #include "run/run_folder.h"
 #include "run/series_columns.h"
 #include "run/summary_file.h"
@@ -327,13 +328,7 @@ RunSummary run_dan(const Scenario& s, const RunOptions& o) {
     j.text("machine", machine_summary(machine_info()));
     j.number("runout_s", sum.runout_s, "m");
     j.number("max_front_s", max_front, "m");
-    j.number("runup_height", sum.runup_height, "m");
-    j.number("max_runup_height_during_run", sum.max_runup_height_during_run, "m");
-    j.number("t_front_at_barrier", sum.t_front_at_barrier, "s");
-    j.number("t_peak_fx_barrier", sum.t_peak_fx_barrier, "s");
-    j.number("t_peak_fy_arc", sum.t_peak_fy_arc, "s");
-    j.number("peak_fx_barrier", sum.peak_fx_barrier, "N/m");
-    j.number("peak_fy_arc", sum.peak_fy_arc, "N/m");
+    put_landmarks(j, sum);  // the DEM's landmark keys, for `demlab compare`
     j.boolean("left_flume", left_flume);
     j.number("sync_shift", sync_shift, "s");
     j.number("max_cfl", dan.max_cfl(), "-");

@@ -206,6 +206,16 @@ void write_bond_breaks(const World& w, const std::string& dir) {
     write_file_atomic(dir + "/bonds_broken.csv", o.str());
 }
 
+void put_landmarks(SummaryJson& j, const RunSummary& sum) {
+    j.number("runup_height", sum.runup_height, "m");
+    j.number("max_runup_height_during_run", sum.max_runup_height_during_run, "m");
+    j.number("t_front_at_barrier", sum.t_front_at_barrier, "s");
+    j.number("t_peak_fx_barrier", sum.t_peak_fx_barrier, "s");
+    j.number("t_peak_fy_arc", sum.t_peak_fy_arc, "s");
+    j.number("peak_fx_barrier", sum.peak_fx_barrier, "N/m");
+    j.number("peak_fy_arc", sum.peak_fy_arc, "N/m");
+}
+
 void write_lost_discs(const World& w, const std::string& dir) {
     std::ostringstream o;
     o << "t_s,id,x_m,y_m,vx_m_per_s,vy_m_per_s,omega_rad_per_s,mass_kg_per_m,kinetic_J_per_m\n";
@@ -241,13 +251,7 @@ void write_summary(const std::string& path, const Scenario& s, const RunSummary&
     j.number("runout_s", sum.runout_s, "m");
     j.number("deposit_max_height", sum.deposit_max_height, "m");
     j.number("deposit_length", sum.deposit_length, "m");
-    j.number("runup_height", sum.runup_height, "m");
-    j.number("max_runup_height_during_run", sum.max_runup_height_during_run, "m");
-    j.number("t_front_at_barrier", sum.t_front_at_barrier, "s");
-    j.number("t_peak_fx_barrier", sum.t_peak_fx_barrier, "s");
-    j.number("t_peak_fy_arc", sum.t_peak_fy_arc, "s");
-    j.number("peak_fx_barrier", sum.peak_fx_barrier, "N/m");
-    j.number("peak_fy_arc", sum.peak_fy_arc, "N/m");
+    put_landmarks(j, sum);
     j.number("energy_balance_error", sum.energy_balance_error, "-");
     j.number("broadphase_margin", sum.broadphase_margin, "m");
     j.integer("broadphase_updates", sum.broadphase_updates);

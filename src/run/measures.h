@@ -74,6 +74,10 @@ void write_deposit(const World& w, const MeasureContext& m, const std::string& d
 // envelope.csv and the slope angles of a dam break's deposit over [0, length].
 SlopeAngles write_envelope(const World& w, double gap, double length, const std::string& dir, RunSummary& sum);
 
+// summary.json's landmarks of a flow, the same keys for DEM and DAN runs (`demlab compare`):
+// run-up, arrival at the barrier, the force peaks and their times
+class SummaryJson;
+void put_landmarks(SummaryJson& j, const RunSummary& sum);
 // lost.csv: each disc taken out when it left the domain (world.lost_discs): when, its id,
 // where, its velocity and spin, mass and kinetic energy then.
 void write_lost_discs(const World& w, const std::string& dir);

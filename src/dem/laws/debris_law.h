@@ -9,7 +9,7 @@
 //   "diameter" (comparison only): S = 2R (bed), 2 min(Ri, Rj) (pair): linear springs
 //   energy (D8): U = int_0^delta F, by 8-point Gauss-Legendre in w = sqrt(delta) (the
 //   integrand is smooth in w; no cancellation at small overlaps)
-//   tangent stiffness (D12): dF/d delta, closed form, at the overlap one step ahead, also of a
+//   tangent stiffness (D12): dF/d delta, closed form, at the overlap 2.5 steps ahead, also of a
 //   pair or wall not touching yet but closing in (kStepAhead): impacts set the step
 // No tangential force, no history, no dissipation at the contacts: the friction is the disc's
 // (D4), applied by the integrator from the two sums of its contacts' forces: the walls'
@@ -129,7 +129,11 @@ struct DebrisLaw {
     static constexpr double kAheadSteps = 2.5;
     static double k_ahead(const Params& p, double gap, double vn, double dt, double ri, double rj) {
         const double ahead = -gap + kAheadSteps * dt * std::max(0.0, -vn);
-        if (!(ahead > 0.0)) return 0.0;
+        return ahead > 0.0 ? stiffness_at(p, ahead, ri, rj) : 0.0;
+    }
+    // the tangent stiffness at an overlap ahead, kept below the smaller radius (the chord's
+    // half-width is not defined past it)
+    static double stiffness_at(const Params& p, double ahead, double ri, double rj) {
         return debris::stiffness(p.E, p.area, std::min(ahead, 0.999 * (rj > 0.0 ? std::min(ri, rj) : ri)), ri, rj);
     }
 
@@ -154,15 +158,15 @@ struct DebrisLaw {
     }
 
     // One step of a touching contact (ri, rj: the radii; rj = 0 for a wall). The tangent
-    // stiffness is taken at the overlap one step ahead, delta + dt max(0, -vn) (D12).
+    // stiffness is taken at the overlap ahead, delta + 2.5 dt |vn| (D12; k_ahead says why 2.5
+    // steps; |vn|: the step stays small while the contact opens again, as it closed).
     template <typename Contact>
     static DebrisContactForce step(const Params& p, DashpotMode, double overlap, double vn, double, double dt, double,
                                    Contact&, double& dissipated, double ri, double rj) {
         DebrisContactForce f;
         f.fn = f.fn_spring = debris::force(p.E, p.area, overlap, ri, rj);
         f.pair_force = rj > 0.0 ? f.fn : 0.0;
-        const double ahead = overlap + kAheadSteps * dt * std::abs(vn);
-        f.k = debris::stiffness(p.E, p.area, std::min(ahead, 0.999 * (rj > 0.0 ? std::min(ri, rj) : ri)), ri, rj);
+        f.k = stiffness_at(p, overlap + kAheadSteps * dt * std::abs(vn), ri, rj);
         dissipated = 0.0;
         return f;
     }
