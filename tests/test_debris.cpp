@@ -439,6 +439,16 @@ TEST(EsriGrid, PlaneSampledAlongASectionAndFaultsRefused) {
         expect_refused([&] { read_esri_grid(p); }, {fragment});
         std::filesystem::remove(p);
     }
+    // the scenario keys: a grid and a profile at once, or a section that is not a line, are refused
+    const std::string terrain = "[lattice_release]\nregion = [[0, 1], [1, 1], [1, 2]]\norigin = [0, 1]\nr_min = 0.1\n[terrain]\n";
+    expect_refused([&] {
+        Scenario sc = parse_scenario(terrain + "grid = \"" + plane + "\"\nprofile = \"p.csv\"\nsection = [[105, 205], [145, 235]]\n", "both.toml");
+        finish_scenario(sc);
+    }, {"terrain.profile and terrain.grid", "one of the two"});
+    expect_refused([&] {
+        Scenario sc = parse_scenario(terrain + "grid = \"" + plane + "\"\nsection = [[105, 205], [145, 235], [145, 205]]\n", "three.toml");
+        finish_scenario(sc);
+    }, {"terrain.section", "3 points"});
     std::filesystem::remove(plane);
     std::filesystem::remove(hole);
 }

@@ -204,7 +204,21 @@ TEST(TerrainProfile, ShippedScenarioRunsDownTheProfile) {
     EXPECT_GT(r.runout_s, s_last - 0.1);
     EXPECT_LT(r.runout_s, 3.2);  // on the profile (3.12 m long)
     EXPECT_LT(r.energy_balance_error, 0.05);
-    EXPECT_FALSE(read_file(fs::path(o.out_dir) / "deposit.csv").empty());
+    // the summary's deposit figures are deposit.csv's: its largest height and the bins that hold mass
+    const std::vector<double> bins = csv_column(fs::path(o.out_dir) / "deposit.csv", "s_m"),
+                              heights = csv_column(fs::path(o.out_dir) / "deposit.csv", "height_m");
+    ASSERT_GE(bins.size(), 2u);
+    double highest = 0.0, first = NAN, last = NAN;
+    for (size_t k = 0; k < bins.size(); ++k) {
+        highest = std::max(highest, heights[k]);
+        if (heights[k] > 0.0) {
+            if (std::isnan(first)) first = bins[k];
+            last = bins[k];
+        }
+    }
+    EXPECT_GT(highest, 0.0);
+    EXPECT_NEAR(r.deposit_max_height, highest, 1e-5 * highest);  // (deposit.csv has 6 digits)
+    EXPECT_NEAR(r.deposit_length, last - first + (bins[1] - bins[0]), 1e-6);
     // the profile's load is in forces.csv's slope columns and the total: it carries the weight
     const std::string forces = read_file(fs::path(o.out_dir) / "forces.csv");
     EXPECT_NE(forces.find("fx_slope_N_per_m"), std::string::npos);
