@@ -26,6 +26,7 @@
 // boxes did not change), and only the escaped discs are queried. The lists are sorted by
 // key, so the contact loop's order does not depend on the tree's internal layout.
 #pragma once
+#include <memory>
 #include <box2d/b2_dynamic_tree.h>
 
 #include <algorithm>
@@ -166,7 +167,10 @@ private:
     struct alignas(64) PaddedTree {
         b2DynamicTree tree;
     };
-    PaddedTree trees_[kMaxTrees];
+    // On the heap, so that moving a World moves the pointer: a b2DynamicTree owns its nodes
+    // through a raw pointer and has no move of its own, so a tree moved by value would leave
+    // two owners of the same nodes.
+    std::unique_ptr<PaddedTree[]> trees_{new PaddedTree[kMaxTrees]};
     size_t tree_count_ = 1;
     size_t tree_size_ = 1;  // discs per tree (the last may hold fewer)
     b2DynamicTree& tree_of(size_t disc) { return trees_[std::min(disc / tree_size_, tree_count_ - 1)].tree; }
