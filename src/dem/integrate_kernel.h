@@ -37,7 +37,7 @@ struct IntegrateArrays {
 struct IntegrateParams {
     double dt;                  // s
     Vec2 g;                     // m/s^2
-    double alpha;               // local damping (eq. 2.51), 0: none (every flow run)
+    double alpha;               // local damping (eq. 2.51), 0: none (the flow unless damping.local_alpha is set)
     double g_abs;               // |g|, m/s^2
     int rotation_model;         // 1, 2 or 3
     bool rolling_literal;       // RollingForm::Literal: g_eff = |g|; else the wall's normal force / m

@@ -31,7 +31,7 @@ struct DampingDef {
     double beta_n = 0.5;                   // -, normal critical damping ratio in [0, 1) (Table 15)
     double beta_s = 0.5;                   // -, shear critical damping ratio in [0, 1)
     DashpotMode dp_mode = DashpotMode::Full;
-    double local_alpha = 0.0;              // -, PFC local damping (eq. 2.51) in [0, 1); settling only
+    double local_alpha = 0.0;              // -, PFC local damping (eq. 2.51) in [0, 1); the settling, and the flow if damping.local_alpha is set
 };
 
 struct TimeStepDef {

@@ -187,6 +187,7 @@ void add_dynamics_keys(std::vector<Key>& k) {
     // damping
     k.push_back(real("damping.beta_n", "-", "normal critical damping ratio (Table 15: 0.5)", [](Scenario& s) -> double& { return s.world.damping.beta_n; }, 0, 1, false, true));
     k.push_back(real("damping.beta_s", "-", "shear critical damping ratio (Table 15: 0.5)", [](Scenario& s) -> double& { return s.world.damping.beta_s; }, 0, 1, false, true));
+    k.push_back(real("damping.local_alpha", "-", "PFC local damping (eq. 2.51) during the flow, 0: none (the thesis' flow runs use the viscous dashpots only; the release's settling sets its own, release.settle_alpha)", [](Scenario& s) -> double& { return s.world.damping.local_alpha; }, 0, 1, false, true));
     k.push_back(choice<DashpotMode>("damping.dp_mode", "PFC dashpot mode: 0 both always; 1 no tensile normal force; 2 no shear dashpot while sliding; 3 both", [](Scenario& s) -> DashpotMode& { return s.world.damping.dp_mode; }, {{"0", DashpotMode::Full}, {"1", DashpotMode::NoTension}, {"2", DashpotMode::NoShearWhileSliding}, {"3", DashpotMode::NoTensionNoShearWhileSliding}}));
     // rotation
     k.push_back(integer("rotation.model", "-", "1: rotation locked; 2: free rotation with Preh-Poisel rolling resistance at walls; 3: 2 plus rotational damping at disc-disc contacts", [](Scenario& s) -> int& { return s.world.rotation.model; }, 1, 3));
