@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -14,6 +15,7 @@
 #include "core/error.h"
 #include "core/fileio.h"
 #include "run/dan_run.h"
+#include "run/vtk_zlib_blocks.h"
 #include "scenario/scenario.h"
 #include "setups/flume.h"
 
@@ -31,40 +33,108 @@ std::string slurp(const std::string& path) {
     return text;
 }
 
-// The text of every <DataArray Name="..."> ... </DataArray> of our own VTK files, as views
+// One <DataArray> of our own VTK files: its text (format="ascii"), or its decoded bytes
+// (format="appended": raw binary, zlib-compressed; vtk_zlib_blocks.h) and their type.
+struct ArrayRef {
+    std::string_view text;
+    bool binary = false;
+    std::string bytes;
+    std::string type;  // Float64, Int32, Int64
+};
+
+std::string attribute(std::string_view tag, const char* name) {
+    const std::string key = std::string(" ") + name + "=\"";
+    const size_t at = tag.find(key);
+    if (at == std::string_view::npos) return "";
+    const size_t end = tag.find('"', at + key.size());
+    return end == std::string_view::npos ? "" : std::string(tag.substr(at + key.size(), end - at - key.size()));
+}
+
+// Every <DataArray Name="..."> of a file, by name; a name met again (the bond lines'
+// connectivity after the vertices') is stored as NAME#1, NAME#2, ... Text arrays are views
 // into xml (no copies: a frame's text is about a megabyte).
-std::map<std::string, std::string_view> data_arrays(const std::string& xml, const std::string& path) {
-    std::map<std::string, std::string_view> out;
+std::map<std::string, ArrayRef> data_arrays(const std::string& xml, const std::string& path) {
+    std::map<std::string, ArrayRef> out;
     const std::string_view all(xml);
+    // the appended data: after "_" up to its closing tag (the arrays' offsets count from there)
+    std::string_view appended;
+    const size_t app = all.find("<AppendedData");
+    if (app != std::string_view::npos) {
+        const size_t start = all.find('_', app);
+        const size_t stop = all.rfind("</AppendedData>");
+        if (start == std::string_view::npos || stop == std::string_view::npos || stop < start)
+            throw InputError(path + ": malformed AppendedData");
+        appended = all.substr(start + 1, stop - start - 1);
+    }
+    const std::string_view head = all.substr(0, app);
+    const size_t root = head.find("<VTKFile");
+    const std::string_view root_tag = root == std::string_view::npos ? std::string_view() : head.substr(root, head.find('>', root) - root);
+    const bool zlib = attribute(root_tag, "compressor") == "vtkZLibDataCompressor";
     size_t pos = 0;
-    while ((pos = all.find("<DataArray", pos)) != std::string_view::npos) {
-        const size_t tag_end = all.find('>', pos);
-        const size_t name = all.find("Name=\"", pos);
-        if (tag_end == std::string_view::npos || name == std::string_view::npos || name > tag_end)
-            throw InputError(path + ": malformed DataArray");
-        const size_t name_end = all.find('"', name + 6);
-        const std::string key(all.substr(name + 6, name_end - name - 6));
-        const size_t close = all.find("</DataArray>", tag_end);
+    while ((pos = head.find("<DataArray", pos)) != std::string_view::npos) {
+        const size_t tag_end = head.find('>', pos);
+        if (tag_end == std::string_view::npos) throw InputError(path + ": malformed DataArray");
+        const std::string_view tag = head.substr(pos, tag_end - pos + 1);
+        std::string key = attribute(tag, "Name");
+        if (key.empty()) throw InputError(path + ": malformed DataArray");
+        for (int k = 1; out.count(key); ++k) key = attribute(tag, "Name") + "#" + std::to_string(k);
+        ArrayRef& a = out[key];
+        if (attribute(tag, "format") == "appended") {
+            if (!zlib || attribute(root_tag, "header_type") != "UInt64")
+                throw InputError(path + ": appended data other than demlab's (zlib-compressed, UInt64 headers)");
+            const std::string offset = attribute(tag, "offset");
+            size_t off = 0;
+            const auto r = std::from_chars(offset.data(), offset.data() + offset.size(), off);
+            if (r.ec != std::errc() || r.ptr != offset.data() + offset.size()) throw InputError(path + ": DataArray '" + key + "' has a bad offset");
+            a.binary = true;
+            a.type = attribute(tag, "type");
+            a.bytes = read_zlib_blocks(appended, off, path);
+            pos = tag_end;
+            continue;
+        }
+        const size_t close = head.find("</DataArray>", tag_end);
         if (close == std::string_view::npos) throw InputError(path + ": unterminated DataArray '" + key + "'");
-        out[key] = all.substr(tag_end + 1, close - tag_end - 1);
+        a.text = head.substr(tag_end + 1, close - tag_end - 1);
         pos = close;
     }
     return out;
 }
 
-std::map<std::string, std::string_view> data_arrays(std::string&&, const std::string&) = delete;  // views into a temporary
+std::map<std::string, ArrayRef> data_arrays(std::string&&, const std::string&) = delete;  // views into a temporary
+
+// The values of decoded bytes of type V as T, up to the first that is not finite.
+template <typename T, typename V>
+void decode(const std::string& bytes, std::vector<T>& v) {
+    const size_t n = bytes.size() / sizeof(V);
+    v.reserve(n);
+    for (size_t i = 0; i < n; ++i) {
+        V x;
+        std::memcpy(&x, bytes.data() + i * sizeof(V), sizeof(V));
+        if constexpr (std::is_floating_point_v<V>)
+            if (!std::isfinite(x)) break;
+        v.push_back(T(x));
+    }
+}
 
 // The numbers of an array, up to the first text that is not one (as reading it with
 // operator>> did; the callers check the lengths). std::from_chars rounds correctly, as
 // strtod under operator>> does, so the values are the same, and it takes a fifth of the time
 // (the parsing was a tenth of rendering a frame).
 template <typename T>
-std::vector<T> numbers(const std::map<std::string, std::string_view>& a, const std::string& key, const std::string& path) {
+std::vector<T> numbers(const std::map<std::string, ArrayRef>& a, const std::string& key, const std::string& path) {
     auto it = a.find(key);
     if (it == a.end()) throw InputError(path + ": no DataArray '" + key + "'");
-    const char* p = it->second.data();
-    const char* const end = p + it->second.size();
     std::vector<T> v;
+    if (it->second.binary) {
+        const ArrayRef& r = it->second;
+        if (r.type == "Float64") decode<T, double>(r.bytes, v);
+        else if (r.type == "Int32") decode<T, int32_t>(r.bytes, v);
+        else if (r.type == "Int64") decode<T, int64_t>(r.bytes, v);
+        else throw InputError(path + ": DataArray '" + key + "' of type '" + r.type + "' (Float64, Int32 or Int64 expected)");
+        return v;
+    }
+    const char* p = it->second.text.data();
+    const char* const end = p + it->second.text.size();
     while (true) {
         while (p < end && (*p == ' ' || *p == '\n' || *p == '\t' || *p == '\r')) ++p;
         if (p == end) break;
@@ -104,12 +174,10 @@ Frame read_frame(const std::string& discs_vtp, const std::string& walls_vtp) {
             f.bonds_broken = numbers<int>(a, "bonds_broken", discs_vtp);
             if (f.bonds_intact.size() != n || f.bonds_broken.size() != n)
                 throw InputError(discs_vtp + ": arrays of different lengths");
-            // the intact bonds: the connectivity of the <Lines> cells (pairs of disc ids)
-            const size_t lines = text.find("<Lines>"), lines_end = text.find("</Lines>");
-            if (lines != std::string::npos) {
-                if (lines_end == std::string::npos) throw InputError(discs_vtp + ": unterminated <Lines>");
-                const std::string cells = text.substr(lines, lines_end - lines);
-                const auto ends = numbers<long>(data_arrays(cells, discs_vtp), "connectivity", discs_vtp);
+            // the intact bonds: the connectivity of the <Lines> cells (pairs of disc ids), the
+            // second connectivity array after the vertices'
+            if (a.count("connectivity#1")) {
+                const auto ends = numbers<long>(a, "connectivity#1", discs_vtp);
                 if (ends.size() % 2) throw InputError(discs_vtp + ": a bond line without its second disc");
                 for (size_t k = 0; k + 1 < ends.size(); k += 2) {
                     if (ends[k] < 0 || ends[k + 1] < 0 || size_t(ends[k]) >= n || size_t(ends[k + 1]) >= n)

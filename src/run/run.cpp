@@ -314,7 +314,7 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
 
     RunSeries series(dir, path != nullptr, !s.output.track.empty(), !w.bonds().empty());
     std::unique_ptr<SnapshotWriter> snaps;
-    if (s.output.snapshot_interval > 0) snaps = std::make_unique<SnapshotWriter>(dir + "/snapshots", layer, grid);
+    if (s.output.snapshot_interval > 0) snaps = std::make_unique<SnapshotWriter>(dir + "/snapshots", layer, grid, s.output.snapshot_format == "binary");
     RunSummary sum;
     sum.n_discs = long(n);
     sum.total_mass = total_mass;
@@ -441,7 +441,8 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
     progress.finish();
     if (!sampled_now) series.sample(w, measure, st, sum);
     if (snaps) {
-        if (std::abs(solver.time() - (st.next_snap - s.output.snapshot_interval)) > 1e-12) snapshot();
+        // the last instant, unless the loop's last snapshot was taken at it already
+        if (snaps->times().empty() || snaps->times().back() != solver.time()) snapshot();
         snaps->finish();
     }
     sum.wall_seconds = elapsed();

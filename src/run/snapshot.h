@@ -1,4 +1,5 @@
-// Snapshots of a run as VTK XML PolyData (.vtp), one file for the discs and one for the
+// Snapshots of a run as VTK XML PolyData (.vtp: the arrays appended as zlib-compressed raw
+// binary, or as text with output.snapshot_format = "ascii"), one file for the discs and one for the
 // walls per instant, indexed by ParaView collections (discs.pvd, walls.pvd). Discs are points
 // with radius, velocity, angle, omega, speed, layer, grid and id; open them in ParaView with
 // "Point Gaussian" scaled by radius. A run with bonds adds per disc its intact and broken
@@ -15,8 +16,9 @@ namespace demlab {
 
 class SnapshotWriter {
 public:
-    // dir is created; layer and grid are per-disc colour tags (may be empty).
-    SnapshotWriter(std::string dir, std::vector<int> layer, std::vector<int> grid);
+    // dir is created; layer and grid are per-disc colour tags (may be empty); binary: the
+    // arrays appended raw and zlib-compressed (output.snapshot_format), else as text.
+    SnapshotWriter(std::string dir, std::vector<int> layer, std::vector<int> grid, bool binary = true);
     void write(const World& w);
     // Writes the .pvd collections (call at the end; also safe to call repeatedly).
     void finish();
@@ -32,6 +34,7 @@ private:
     std::string dir_;
     std::vector<int> layer_, grid_;
     std::vector<double> times_;
+    bool binary_;
 };
 
 }  // namespace demlab

@@ -103,6 +103,7 @@ struct StopDef {
 struct OutputDef {
     double series_interval = 0.005;        // s between rows of the CSV series
     double snapshot_interval = 0.05;       // s between snapshots (VTK)
+    std::string snapshot_format = "binary";  // "binary" (appended, zlib) or "ascii"
     std::vector<long> track;               // disc ids whose path is written to track.csv
     double deposit_bin = 0.01;             // m, spacing of deposit.csv along the flume path
     double front_neighbour_gap = 0.0;      // m, a front disc must have a neighbour within this gap; 0 = r_max
