@@ -13,6 +13,10 @@ namespace demlab {
 
 static_assert(std::endian::native == std::endian::little, "the snapshots declare byte_order=\"LittleEndian\"");
 
+// zlib's fastest level: on geometry A's snapshots (scale 8) it wrote them in 8 ms against level
+// 6's 12 ms for 0.5 % more bytes; the doubles' mantissas hardly compress at any level, the
+// gain is in the zero z components, the ids and the cell arrays
+constexpr int kLevel = Z_BEST_SPEED;
 void append_zlib_blocks(std::string& out, const void* bytes, size_t size) {
     const auto* in = static_cast<const unsigned char*>(bytes);
     const size_t blocks = (size + kVtkBlockBytes - 1) / kVtkBlockBytes;
@@ -25,8 +29,8 @@ void append_zlib_blocks(std::string& out, const void* bytes, size_t size) {
     for (size_t b = 0; b < blocks; ++b) {
         const size_t n = std::min(kVtkBlockBytes, size - b * kVtkBlockBytes);
         uLongf len = uLongf(buf.size());
-        // level 6, zlib's default: the same bytes for the same input with the same zlib
-        if (compress2(buf.data(), &len, in + b * kVtkBlockBytes, uLong(n), 6) != Z_OK)
+        // the same bytes for the same input with the same zlib
+        if (compress2(buf.data(), &len, in + b * kVtkBlockBytes, uLong(n), kLevel) != Z_OK)
             throw RunError("zlib could not compress a snapshot array");
         header[3 + b] = len;
         data.append(reinterpret_cast<const char*>(buf.data()), len);
