@@ -11,6 +11,7 @@ PKGS=(
   libosmesa6-dev libpng-dev libfreetype-dev fonts-dejavu-core
   libgtest-dev libtomlplusplus-dev libcli11-dev
   gnuplot-nox
+  pybind11-dev python3-dev python3-numpy python3-pytest python3-matplotlib zlib1g-dev
   clang libclang-rt-14-dev
 )
 if [ "${1:-}" = "--peer" ]; then PKGS+=(lammps openmpi-bin python3); fi

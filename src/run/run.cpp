@@ -332,7 +332,11 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
     const long steps_start = solver.step_count();
     Progress progress(s.stop.t_max, "s", solver.time(), steps_start);
     const auto t0 = std::chrono::steady_clock::now();
-    auto last_checkpoint = t0;
+    auto last_checkpoint = t0, last_progress_call = t0;
+    auto steps_per_second = [&] {
+        const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        return secs > 0 ? double(solver.step_count() - steps_start) / secs : 0.0;
+    };
     auto elapsed = [&] { return wall_seconds_before + std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(); };
 
     // Between two steps: everything the loop carries, written atomically. The series files
@@ -423,6 +427,13 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
                 st.rest_since = -1;
             }
             progress.update(solver.time(), solver.step_count());
+            if (o.on_progress) {
+                const auto now = std::chrono::steady_clock::now();
+                if (now - last_progress_call >= std::chrono::milliseconds(250)) {
+                    last_progress_call = now;
+                    o.on_progress(solver.time(), s.stop.t_max, steps_per_second());
+                }
+            }
         }
         if (const int sig = o.handle_signals ? pending_interrupt() : 0) {
             progress.finish();
@@ -439,6 +450,7 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
         }
     }
     progress.finish();
+    if (o.on_progress) o.on_progress(solver.time(), s.stop.t_max, steps_per_second());
     if (!sampled_now) series.sample(w, measure, st, sum);
     if (snaps) {
         // the last instant, unless the loop's last snapshot was taken at it already

@@ -20,6 +20,10 @@ struct RunOptions {
     double checkpoint_every = 0.0;  // s of wall-clock time between checkpoints; 0: none on a timer
     bool handle_signals = false;    // SIGINT/SIGTERM: a final checkpoint, then Interrupted (interrupt.h)
     bool resume = false;            // continue out_dir from its checkpoint (the scenario must be its scenario.toml)
+    // called from the run loop about four times a second of wall-clock time and once at the
+    // end, with the simulated time, stop.t_max and the steps per second so far (scripting: the
+    // Python module's progress callable); may throw to abandon the run
+    std::function<void(double t, double t_max, double steps_per_second)> on_progress = {};
     // recorded in the checkpoint for `demlab resume` (the caller acts on them)
     bool frames = false, plots = true;
 };
