@@ -10,6 +10,7 @@
 #include "core/error.h"
 #include "files.h"
 #include "geometry/bed_path.h"
+#include "geometry/packing.h"
 #include "geometry/profile.h"
 #include "helpers.h"
 #include "run/run.h"
@@ -223,4 +224,39 @@ TEST(TerrainProfile, ShippedScenarioRunsDownTheProfile) {
     const std::string forces = read_file(fs::path(o.out_dir) / "forces.csv");
     EXPECT_NE(forces.find("fx_slope_N_per_m"), std::string::npos);
     fs::remove_all(o.out_dir);
+}
+
+// The porosity inside a mass against the closed forms of two regular packings of equal discs
+// in a walled box: hexagonal 1 - pi / (2 sqrt 3) = 0.0931, square 1 - pi / 4 = 0.2146. The
+// points near the walls and the free surface are left out, so the box's gaps do not count.
+TEST(Packing, InteriorPorosityOfRegularPackings) {
+    const double r = 0.002;
+    for (bool hexagonal : {true, false}) {
+        std::vector<Vec2> pos;
+        std::vector<double> radius;
+        const double dy = hexagonal ? std::sqrt(3.0) * r : 2.0 * r;
+        for (int row = 0; row < 40; ++row)
+            for (int col = 0; col < 50; ++col) {
+                const double shift = hexagonal && row % 2 ? r : 0.0;
+                pos.emplace_back(r + shift + 2.0 * r * col, r + dy * row);
+                radius.push_back(r);
+            }
+        // a box a little wider than the lattice: gaps of up to one radius at its walls
+        const double width = 101.0 * r, height = 40.0 * dy + 3.0 * r;
+        const std::vector<std::array<Vec2, 2>> box = {std::array<Vec2, 2>{Vec2(0, 0), Vec2(width, 0)},
+                                                      {Vec2(width, 0), Vec2(width, height)},
+                                                      {Vec2(0, height), Vec2(0, 0)}};
+        const PackingMeasure m = interior_porosity(pos, radius, box);
+        const double exact = hexagonal ? 1.0 - kPi / (2.0 * std::sqrt(3.0)) : 1.0 - kPi / 4.0;
+        EXPECT_GT(m.samples, 20000);
+        EXPECT_NEAR(m.porosity, exact, 0.004) << (hexagonal ? "hexagonal" : "square");
+        // over the whole box the gaps at the walls and the open top count too: looser
+        double solid = 0;
+        for (double ri : radius) solid += kPi * ri * ri;
+        EXPECT_GT(1.0 - solid / (width * height), m.porosity + 0.01);
+    }
+    // a mass thinner than twice the clearance has no interior
+    const PackingMeasure thin = interior_porosity({Vec2(0, 0), Vec2(0.004, 0)}, {0.002, 0.002}, {});
+    EXPECT_EQ(thin.samples, 0);
+    EXPECT_EQ(thin.porosity, -1.0);
 }

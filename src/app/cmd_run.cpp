@@ -54,8 +54,8 @@ int report(const Scenario& s, const RunSummary& r, const std::string& dir, bool 
                 r.dt_min, r.dt_max);
     std::printf("  wall time %.1f s, %.3e particle-steps/s\n", r.wall_seconds, r.particle_steps_per_second);
     if (make_setup(s)->kind() == "flume") {
-        std::printf("  porosity %.3f; front at the barrier %.3f s; peak x-force on the barrier %.3f s; peak y-force on the arc %.3f s\n",
-                    r.porosity, r.t_front_at_barrier, r.t_peak_fx_barrier, r.t_peak_fy_arc);
+        std::printf("  porosity %.3f over the release box, %.3f inside the mass; front at the barrier %.3f s; peak x-force on the barrier %.3f s; peak y-force on the arc %.3f s\n",
+                    r.porosity_over_release_box, r.porosity_inside_mass, r.t_front_at_barrier, r.t_peak_fx_barrier, r.t_peak_fy_arc);
         std::printf("  run-out s = %.3f m; run-up %.3f m (max during run %.3f m)\n", r.runout_s, r.runup_height,
                     r.max_runup_height_during_run);
     }

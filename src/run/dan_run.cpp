@@ -156,7 +156,7 @@ RunSummary run_dan(const Scenario& s, const RunOptions& o) {
     RunSummary sum;
     sum.n_discs = 0;
     sum.total_mass = total_mass;
-    sum.porosity = -1.0;
+    sum.porosity_over_release_box = -1.0;
     sum.dt = sum.dt_min = sum.dt_max = dan.dt();
     double peak_fx = -1.0, peak_fy = -1.0, peak_ke = 0.0, rest_since = -1.0, max_front = s_front0;
     bool left_flume = false;

@@ -233,7 +233,8 @@ void write_summary(const std::string& path, const Scenario& s, const RunSummary&
     j.integer("n_discs", sum.n_discs);
     j.integer("lost_discs", sum.lost_discs);
     j.number("total_mass", sum.total_mass, "kg/m");
-    j.number("porosity", sum.porosity, "-");
+    j.number("porosity_over_release_box", sum.porosity_over_release_box, "-");
+    j.number("porosity_inside_mass", sum.porosity_inside_mass, "-");
     j.number("release_porosity_generated", r ? release.porosity_generated : NAN, "-");
     j.number("release_settle_time", r ? release.settle_time : NAN, "s");
     j.number("release_settle_ratio", r ? release.settle_ratio : NAN, "-");

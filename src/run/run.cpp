@@ -3,6 +3,8 @@
 // and on a signal, and the run folder's files at the end (run.h lists them).
 #include "run/run.h"
 
+#include "geometry/packing.h"
+
 #include <fcntl.h>
 #include <sys/file.h>
 #include <unistd.h>
@@ -318,7 +320,12 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
     RunSummary sum;
     sum.n_discs = long(n);
     sum.total_mass = total_mass;
-    sum.porosity = setup->has_release() ? mass.porosity_settled : -1.0;
+    sum.porosity_over_release_box = setup->has_release() ? mass.porosity_settled : -1.0;
+    if (setup->has_release()) {
+        std::vector<std::array<Vec2, 2>> box;
+        for (const WallDef& wd : setup->release_box().walls) box.push_back({wd.p0, wd.p1});
+        sum.porosity_inside_mass = interior_porosity(mass.pos, mass.radius, box).porosity;
+    }
     sum.dt_min = INFINITY;
     RunState st;
     st.e0 = solver.energy().balance();

@@ -50,7 +50,11 @@ struct RunSummary {
     long n_discs = 0;                   // at the start
     long lost_discs = 0;                // taken out when they left the domain (lost.csv)
     double total_mass = 0;              // kg per metre of thickness
-    double porosity = 0;                // of the release mass (settled), -1 for explicit discs
+    // the settled release mass: the discs' area over the release box (its looser layers at the
+    // walls and under the lid included), and the porosity inside the mass, 4 r_max from its
+    // walls and free surface (geometry/packing.h); -1 without a release mass
+    double porosity_over_release_box = 0;
+    double porosity_inside_mass = -1;
     double dt = 0;                      // s, the last step (automatic steps vary)
     double dt_min = 0, dt_max = 0;
     long steps = 0;
