@@ -56,7 +56,7 @@ std::string summary_without_timing(const fs::path& p) {
 }
 
 void expect_same_outputs(const fs::path& a, const fs::path& b) {
-    for (const char* f : {"forces.csv", "front.csv", "energy.csv", "track.csv", "deposit.csv", "release.csv",
+    for (const char* f : {"forces.csv", "front.csv", "energy.csv", "track.csv", "deposit.csv", "release.csv", "barrier_pressure.csv", "peaks.csv",
                           "snapshots/discs.pvd", "snapshots/walls.pvd"}) {
         ASSERT_TRUE(fs::exists(a / f)) << f;
         EXPECT_EQ(read_file(a / f), read_file(b / f)) << f << " differs";
@@ -252,7 +252,7 @@ TEST(Checkpoint, KilledAndSignalledProcessesResumeToTheSameBytes) {
         kill(pid, SIGKILL);
         EXPECT_EQ(wait_for(pid), 128 + SIGKILL);
         // atomic outputs: series only as .part, whole-file outputs complete or absent
-        for (const char* f : {"forces.csv", "energy.csv", "front.csv", "track.csv", "deposit.csv", "summary.json"})
+        for (const char* f : {"forces.csv", "energy.csv", "front.csv", "track.csv", "deposit.csv", "barrier_pressure.csv", "peaks.csv", "summary.json"})
             EXPECT_FALSE(fs::exists(killed / f)) << f << " exists under its final name in an unfinished run";
         EXPECT_TRUE(fs::exists(killed / "forces.csv.part"));
         for (const auto& e : fs::directory_iterator(killed / "snapshots")) {

@@ -27,7 +27,7 @@ namespace {
 bool names_its_unit(const std::string& c) {
     static const std::set<std::string> unitless = {"id", "i", "k", "bonds_intact_fraction"};
     if (unitless.count(c)) return true;
-    for (const char* u : {"_s", "_m", "_N_per_m", "_Ns_per_m", "_J_per_m", "_m_per_s", "_rad", "_rad_per_s", "_kg_per_m"})
+    for (const char* u : {"_s", "_m", "_N_per_m", "_Ns_per_m", "_J_per_m", "_m_per_s", "_rad", "_rad_per_s", "_kg_per_m", "_Pa"})
         if (c.size() > std::string(u).size() && c.compare(c.size() - std::string(u).size(), std::string::npos, u) == 0)
             return true;
     return false;

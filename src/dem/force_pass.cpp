@@ -434,11 +434,11 @@ size_t World::wall_contacts(size_t& kw, size_t end, int t, const PassContext<Law
             continue;
         }
         if (!o.touching) {
-            if (o.dissipated != 0.0) sums[n++] = WallSum{0.0, 0.0, 0.0, o.dissipated, -1};
+            if (o.dissipated != 0.0) sums[n++] = WallSum{0.0, 0.0, 0.0, o.dissipated, -1, int32_t(i)};
             if constexpr (Law::kStepAhead) load[i].k_tran += o.k_tran;  // closing in (DebrisLaw)
             continue;
         }
-        sums[n++] = WallSum{o.force.x(), o.force.y(), cross(o.point, o.force), o.dissipated, int32_t(w)};
+        sums[n++] = WallSum{o.force.x(), o.force.y(), cross(o.point, o.force), o.dissipated, int32_t(w), int32_t(i)};
         DiscLoad& l = load[i];
         l.force += o.force;
         l.torque += o.torque;
@@ -473,6 +473,15 @@ void World::block_ledger(size_t b0, size_t b1, size_t t) {
 // thread count; a serial pass over all discs here made the caller read every line the other
 // threads had written, and cost 2 threads a fifth of their speed); then the wall loads, in
 // contact-list order.
+void World::wall_loads(std::vector<WallLoad>& out) const {
+    out.clear();
+    for (size_t t = 0; t < wall_sums_.size() && t < range_clock_.size(); ++t)
+        for (size_t e = 0, n = range_clock_[t].wall_sums; e < n; ++e) {
+            const WallSum& o = wall_sums_[t][e];
+            if (o.wall >= 0 && o.disc >= 0) out.push_back({o.disc, o.wall, -Vec2(o.fx, o.fy)});
+        }
+}
+
 void World::add_up_pass() {
     double dissipated = 0.0;
     for (const LedgerBlock& b : ledger_blocks_) dissipated += b.contacts;

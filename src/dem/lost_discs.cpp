@@ -107,6 +107,12 @@ void World::compact_discs(const std::vector<size_t>& gone) {
         index_bonds();
         if (def_.bond.predict) bond_dashpot_last_.swap(dashpot_last);
     }
+    // the last step's wall records (wall_loads), renumbered; a lost disc's own are dropped
+    for (size_t t = 0; t < wall_sums_.size() && t < range_clock_.size(); ++t)
+        for (size_t e = 0, m = range_clock_[t].wall_sums; e < m; ++e) {
+            WallSum& o = wall_sums_[t][e];
+            if (o.disc >= 0) o.disc = to[size_t(o.disc)];
+        }
     rebuild_lists(dd, dw);
 }
 

@@ -182,6 +182,14 @@ public:
     // Force (N per metre of thickness) and moment about the origin (N m / m) that the discs
     // exert on wall w, summed over its contacts in the last step.
     Vec2 wall_force(int w) const { return wall_force_[size_t(w)]; }
+    // The touching disc-wall contacts of the last step, in the order wall_force sums them:
+    // the disc (its index now), the wall, and the disc's force on the wall, N/m. Their sum
+    // over a wall's contacts is wall_force. (The barrier's pressure and the bed's: measures.)
+    struct WallLoad {
+        int32_t disc, wall;
+        Vec2 force;
+    };
+    void wall_loads(std::vector<WallLoad>& out) const;
     double wall_moment(int w) const { return wall_moment_[size_t(w)]; }
     // Time integral of wall_force since the start, N s / m.
     Vec2 wall_impulse(int w) const { return wall_impulse_[size_t(w)]; }
@@ -419,6 +427,7 @@ private:
         double moment;      // N, cross(contact point, force on the disc), about the origin
         double dissipated;  // J/m, this step
         int32_t wall;       // the wall; -1: not touching (a last dashpot half only)
+        int32_t disc;       // the disc's index (in the record's padding: it stays 40 bytes)
     };
     std::vector<std::vector<WallSum>> wall_sums_;  // per range, sized to its wall contacts
     std::vector<size_t> disc_split_, contact_split_, wall_split_;  // per range: first disc, contact, wall contact

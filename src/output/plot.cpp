@@ -1,5 +1,6 @@
 #include "output/plot.h"
 
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -128,6 +129,59 @@ std::vector<std::string> make_plots(const std::string& run_dir, int width, int h
                << ct << ":" << tr << " with lines title 'translation', '' using " << ct << ":" << ro << " with lines title 'rotation'\n";
         }
         made.push_back(dir + "/kinetic_energy.png");
+    }
+    const std::string pressure = run_dir + "/barrier_pressure.csv";
+    if (fs::exists(pressure)) {
+        // the pressure along the barrier at the instant of its largest bin, and all instants
+        // as a map (gnuplot's nonuniform matrix: s along the first row, t down the first column)
+        const CsvTable p = read_csv_table(pressure);
+        std::vector<double> s;
+        for (size_t c = 1; c < p.names.size(); ++c) {
+            const std::string& n = p.names[c];  // p_at_S_m_Pa
+            s.push_back(std::atof(n.substr(5, n.size() - 10).c_str()));
+        }
+        size_t peak_row = 0;
+        double peak = -INFINITY;
+        for (size_t r = 0; r < p.rows.size(); ++r)
+            for (size_t c = 1; c < p.rows[r].size(); ++c)
+                if (p.rows[r][c] > peak) {
+                    peak = p.rows[r][c];
+                    peak_row = r;
+                }
+        if (!p.rows.empty() && !s.empty()) {
+            std::ostringstream at, map;
+            at.precision(10);
+            map.precision(10);
+            for (size_t c = 0; c < s.size(); ++c) at << s[c] << ',' << p.rows[peak_row][c + 1] << '\n';
+            map << s.size();
+            for (double x : s) map << ' ' << x;
+            map << '\n';
+            for (const std::vector<double>& row : p.rows) {
+                map << row[0];
+                for (size_t c = 1; c < row.size(); ++c) map << ' ' << row[c] / 1000.0;
+                map << '\n';
+            }
+            write_file_atomic(dir + "/barrier_pressure_peak.csv", "s_m,p_Pa\n" + at.str());
+            write_file_atomic(dir + "/barrier_pressure_map.dat", map.str());
+            gp << "set output '" << dir << "/barrier_pressure_peak.png'\nset title 'Normal pressure on the barrier at t = "
+               << p.rows[peak_row][0] << " s (its largest bin)'\nset xlabel 's along the barrier from its foot (m)'\n"
+               << "set ylabel 'p (Pa)'\nplot '" << dir << "/barrier_pressure_peak.csv' using 1:2 with steps lw 2 title 'pressure'\n"
+               << "set output '" << dir << "/barrier_pressure_map.png'\nset title 'Normal pressure on the barrier (kPa)'\n"
+               << "set xlabel 's along the barrier from its foot (m)'\nset ylabel 't (s)'\nset datafile separator whitespace\n"
+               << "set palette rgbformulae 33,13,10\nset cblabel 'p (kPa)'\nset autoscale fix\n"
+               << "plot '" << dir << "/barrier_pressure_map.dat' nonuniform matrix using 1:2:3 with image notitle\n"
+               << "set datafile separator ','\nunset cblabel\nset autoscale\nset xlabel 't (s)'\n";
+            made.push_back(dir + "/barrier_pressure_peak.png");
+            made.push_back(dir + "/barrier_pressure_map.png");
+        }
+    }
+    const std::string peaks = run_dir + "/peaks.csv";
+    if (fs::exists(peaks)) {
+        gp << "set output '" << dir << "/peaks.png'\nset title 'Largest flow height and mean speed along the path over the run'\n"
+           << "set xlabel 's along the path (m)'\nset ylabel 'flow height normal to the bed (m)'\nset y2label 'mean speed (m/s)'\n"
+           << "set y2tics\nplot '" << peaks << "' using 1:2 with lines lw 2 title 'height' axes x1y1, '' using 1:3 with lines lw 2 "
+           << "title 'speed' axes x1y2\nunset y2tics\nunset y2label\nset xlabel 't (s)'\n";
+        made.push_back(dir + "/peaks.png");
     }
     if (made.empty()) throw InputError(run_dir + ": no forces.csv, front.csv or energy.csv to plot");
     const std::string script = dir + "/plots.gp";

@@ -14,7 +14,8 @@ namespace demlab {
 namespace {
 constexpr char kMagic[8] = {'D', 'E', 'M', 'L', 'A', 'B', 'C', 'K'};
 // 2: the file ends with the CRC-32C of all that comes before it; 1 (earlier builds): no checksum
-constexpr uint32_t kCheckpointVersion = 2;
+// 3: the barrier outputs' peaks after the solver's state (BarrierOutputs::save)
+constexpr uint32_t kCheckpointVersion = 3;
 constexpr uint32_t kByteOrder = 0x01020304;
 
 // The scenario's settings: its text without the comment lines (the header names the file the
@@ -48,7 +49,7 @@ CheckpointHeader get_checkpoint_header(BinaryReader& in, const std::string& path
     in.get(magic);
     if (std::memcmp(magic, kMagic, 8) != 0) throw InputError(path + ": not a demlab checkpoint");
     const uint32_t version = in.get<uint32_t>();
-    if (version != kCheckpointVersion && version != 1) throw InputError(path + ": written by another version of demlab");
+    if (version != kCheckpointVersion && version != 1 && version != 2) throw InputError(path + ": written by another version of demlab");
     if (in.get<uint32_t>() != kByteOrder || in.get<uint32_t>() != sizeof(double))
         throw InputError(path + ": written on a machine of another architecture (byte order or number size)");
     CheckpointHeader h;
@@ -73,7 +74,8 @@ std::string read_checkpoint_file(const std::string& path) {
     std::string bytes = read_whole(path);
     uint32_t version = 0;
     if (bytes.size() >= 12 && std::memcmp(bytes.data(), kMagic, 8) == 0) std::memcpy(&version, bytes.data() + 8, 4);
-    if (version != kCheckpointVersion) return bytes;  // an earlier build's (no checksum), or not a checkpoint: the header says
+    // version 1 had no checksum; another value is not a checkpoint of this build: the header says
+    if (version < 2 || version > kCheckpointVersion) return bytes;
     if (bytes.size() < 16) throw InputError(path + ": corrupt checkpoint (truncated)");
     uint32_t stored = 0;
     for (int k = 0; k < 4; ++k) stored |= uint32_t(uint8_t(bytes[bytes.size() - 4 + size_t(k)])) << (8 * k);

@@ -253,6 +253,11 @@ void write_summary(const std::string& path, const Scenario& s, const RunSummary&
     j.number("deposit_max_height", sum.deposit_max_height, "m");
     j.number("deposit_length", sum.deposit_length, "m");
     put_landmarks(j, sum);
+    if (sum.s_peak_barrier_pressure >= 0) {  // a barrier (barrier_pressure.csv)
+        j.number("peak_barrier_pressure", sum.peak_barrier_pressure, "Pa");
+        j.number("s_peak_barrier_pressure", sum.s_peak_barrier_pressure, "m");
+        j.number("t_peak_barrier_pressure", sum.t_peak_barrier_pressure, "s");
+    }
     j.number("energy_balance_error", sum.energy_balance_error, "-");
     j.number("broadphase_margin", sum.broadphase_margin, "m");
     j.integer("broadphase_updates", sum.broadphase_updates);

@@ -4,6 +4,7 @@
 #include "run/run.h"
 
 #include "geometry/packing.h"
+#include "run/barrier_outputs.h"
 
 #include <fcntl.h>
 #include <sys/file.h>
@@ -211,7 +212,8 @@ void finish_summary(const World& w, RunSummary& sum, double candidate_sum, doubl
 // far, the timings, the snapshots' times, the series files cut back to what they held, and
 // the solver's state.
 void restore_run(BinaryReader& in, const std::string& checkpoint_path, RunState& st, RunSummary& sum,
-                 double& wall_seconds_before, SnapshotWriter* snaps, RunSeries& series, Solver& solver) {
+                 double& wall_seconds_before, SnapshotWriter* snaps, RunSeries& series, Solver& solver,
+                 BarrierOutputs& barrier) {
     st.fields(in, [](BinaryReader& r, double& v) { r.get(v); }, sum);
     in.get(wall_seconds_before);
     std::vector<double> snap_times;
@@ -221,6 +223,8 @@ void restore_run(BinaryReader& in, const std::string& checkpoint_path, RunState&
     for (uint64_t& z : size) in.get(z);
     series.reopen(size);
     solver.load_state(in);
+    if (in.at_end()) barrier.disable();  // an earlier build's checkpoint
+    else barrier.load(in);
     if (!in.at_end()) throw InputError(checkpoint_path + ": corrupt checkpoint (trailing bytes)");
 }
 
@@ -315,6 +319,7 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
                                  s.output.front_neighbour_gap > 0 ? s.output.front_neighbour_gap : r_max, start_pos};
 
     RunSeries series(dir, path != nullptr, !s.output.track.empty(), !w.bonds().empty());
+    BarrierOutputs barrier(dir, w, measure);
     std::unique_ptr<SnapshotWriter> snaps;
     if (s.output.snapshot_interval > 0) snaps = std::make_unique<SnapshotWriter>(dir + "/snapshots", layer, grid, s.output.snapshot_format == "binary");
     RunSummary sum;
@@ -331,10 +336,11 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
     st.e0 = solver.energy().balance();
     double wall_seconds_before = 0.0;
     if (restore) {
-        restore_run(*restore, checkpoint_path, st, sum, wall_seconds_before, snaps.get(), series, solver);
+        restore_run(*restore, checkpoint_path, st, sum, wall_seconds_before, snaps.get(), series, solver, barrier);
         restore.reset();
     } else {
         series.open();
+        barrier.open();
     }
     const long steps_start = solver.step_count();
     Progress progress(s.stop.t_max, "s", solver.time(), steps_start);
@@ -366,6 +372,7 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
         out.put(snaps ? snaps->times() : std::vector<double>{});
         for (uint64_t z : series.flush()) out.put(z);
         solver.save_state(out);
+        barrier.save(out);
         write_file_atomic(checkpoint_path, seal_checkpoint(out.bytes()));
     };
     auto snapshot = [&]() {
@@ -383,6 +390,7 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
     while (true) {
         if (solver.time() >= st.next_series - 1e-12) {
             series.sample(w, measure, st, sum);
+            barrier.sample(w, solver.time());
             st.next_series += s.output.series_interval;
             sampled_now = true;
         }
@@ -458,7 +466,10 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
     }
     progress.finish();
     if (o.on_progress) o.on_progress(solver.time(), s.stop.t_max, steps_per_second());
-    if (!sampled_now) series.sample(w, measure, st, sum);
+    if (!sampled_now) {
+        series.sample(w, measure, st, sum);
+        barrier.sample(w, solver.time());
+    }
     if (snaps) {
         // the last instant, unless the loop's last snapshot was taken at it already
         if (snaps->times().empty() || snaps->times().back() != solver.time()) snapshot();
@@ -476,6 +487,7 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
     sum.peak_fx_barrier = std::max(0.0, st.peak_fx_barrier);
     sum.peak_fy_arc = std::max(0.0, st.peak_fy_arc);
 
+    barrier.finish(sum);
     write_results(s, *setup, w, measure, mass, dir, sum);
     std::filesystem::remove(checkpoint_path);  // the run is complete: nothing to resume
     lock->release_and_remove();

@@ -72,6 +72,9 @@ struct RunSummary {
     double t_peak_fy_arc = -1;
     double peak_fx_barrier = 0;         // N/m, the largest |x-force| on the barrier (forces.csv's samples)
     double peak_fy_arc = 0;             // N/m, the largest |y-force| on the arc
+    // Pa, the largest normal pressure in a bin of the barrier (barrier_pressure.csv), where
+    // along it from its lower end (m) and when (s); -1: no barrier
+    double peak_barrier_pressure = 0, s_peak_barrier_pressure = -1, t_peak_barrier_pressure = -1;
     double energy_balance_error = 0;    // |balance drift| / the largest energy put in (measures.h, energy_put_in)
     // The broad phase, of this process like wall_seconds (a resumed run counts from the resume,
     // and rebuilds its candidate lists there), sampled every 10 steps: the force pass tests

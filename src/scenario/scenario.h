@@ -105,7 +105,8 @@ struct OutputDef {
     double snapshot_interval = 0.05;       // s between snapshots (VTK)
     std::string snapshot_format = "binary";  // "binary" (appended, zlib) or "ascii"
     std::vector<long> track;               // disc ids whose path is written to track.csv
-    double deposit_bin = 0.01;             // m, spacing of deposit.csv along the flume path
+    double deposit_bin = 0.01;             // m, spacing of deposit.csv (and peaks.csv) along the flume path
+    double pressure_bin = 0.01;            // m, bins of barrier_pressure.csv along the barrier
     double front_neighbour_gap = 0.0;      // m, a front disc must have a neighbour within this gap; 0 = r_max
 };
 

@@ -1,0 +1,141 @@
+// The barrier design outputs (barrier_pressure.csv, peaks.csv): the pressures integrate to
+// the barrier's normal force, a disc at rest on a flat barrier presses with its weight, and
+// one disc's peaks are its own track.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "core/csv.h"
+#include "files.h"
+#include "run/run.h"
+#include "scenario/scenario.h"
+
+using namespace demlab;
+using demlab::test::temp_dir;
+namespace fs = std::filesystem;
+
+namespace {
+CsvTable table(const fs::path& p) { return read_csv_table(p.string()); }
+size_t column(const CsvTable& t, const std::string& name) {
+    for (size_t c = 0; c < t.names.size(); ++c)
+        if (t.names[c] == name) return c;
+    ADD_FAILURE() << "no column " << name;
+    return 0;
+}
+}  // namespace
+
+TEST(BarrierOutputs, PressuresIntegrateToTheBarriersNormalForceAtEveryRow) {
+    Scenario s = load_scenario(std::string(DEMLAB_SOURCE_DIR) + "/scenarios/geometry-A.toml");
+    apply_override(s, "release.scale=20");
+    apply_override(s, "stop.t_max=1.3");
+    apply_override(s, "output.snapshot_interval=0");
+    finish_scenario(s);
+    const fs::path dir = temp_dir("barrier-a20");
+    fs::remove_all(dir);
+    const RunSummary r = run_scenario(s, {dir.string(), false, {}});
+    // W3 as the world has it (its lower end moved onto the arc)
+    const World w = world_of_scenario(s);
+    const WallGeom& g = w.wall_geom(2);
+    const Vec2 t = (g.p1 - g.p0).normalized(), n = perp(t);
+    const double length = (g.p1 - g.p0).norm();
+    const CsvTable f = table(dir / "forces.csv"), p = table(dir / "barrier_pressure.csv");
+    ASSERT_EQ(f.rows.size(), p.rows.size());
+    const size_t bins = p.names.size() - 1;
+    EXPECT_EQ(bins, size_t(std::lround(length / 0.01)));
+    const size_t fx = column(f, "fx_barrier_N_per_m"), fy = column(f, "fy_barrier_N_per_m");
+    double largest = 0;
+    for (size_t k = 0; k < f.rows.size(); ++k) {
+        EXPECT_EQ(f.rows[k][0], p.rows[k][0]);
+        double integral = 0;
+        for (size_t b = 1; b <= bins; ++b) integral += p.rows[k][b] * length / double(bins);
+        const double normal = -(f.rows[k][fx] * n.x() + f.rows[k][fy] * n.y());
+        // both files keep 10 significant digits
+        EXPECT_NEAR(integral, normal, 1e-8 * std::max(1.0, std::abs(normal))) << "t = " << f.rows[k][0];
+        largest = std::max(largest, normal);
+    }
+    EXPECT_GT(largest, 100.0);  // the mass reached the barrier and loaded it
+    EXPECT_GT(r.peak_barrier_pressure, 0.0);
+    EXPECT_GE(r.s_peak_barrier_pressure, 0.0);
+    EXPECT_LE(r.s_peak_barrier_pressure, length);
+    // peaks.csv: per deposit bin of the path, finite, non-negative, with flow somewhere
+    const CsvTable k = table(dir / "peaks.csv");
+    ASSERT_EQ(k.names, (std::vector<std::string>{"s_m", "max_height_m", "max_mean_speed_m_per_s", "max_bed_pressure_Pa"}));
+    double h_max = 0, v_max = 0;
+    for (const auto& row : k.rows) {
+        for (double v : row) EXPECT_TRUE(std::isfinite(v) && v >= 0);
+        h_max = std::max(h_max, row[1]);
+        v_max = std::max(v_max, row[2]);
+    }
+    EXPECT_GT(h_max, 0.02);
+    EXPECT_GT(v_max, 1.0);
+    fs::remove_all(dir);
+}
+
+// One disc on a flat top of a terrain barrier (up 0.2 m from its foot, then 0.5 m level):
+// at rest it presses with its weight m g on the bin under it, per the bin's length; its
+// peaks along the path are its own track's height and speed.
+TEST(BarrierOutputs, ADiscAtRestOnAFlatBarrierPressesWithItsWeight) {
+    const fs::path dir = temp_dir("barrier-flat");
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    std::ofstream(dir / "ground.csv") << "x,y\n0,0\n2,0\n";
+    const double r = 0.01, density = 2672.0, g = 9.81;
+    std::ofstream(dir / "flat.toml") << R"([scenario]
+name = "flat-barrier"
+[terrain]
+profile = "ground.csv"
+barrier = [[1.0, 0.0], [1.0, 0.2], [1.5, 0.2]]
+[material]
+density = 2672.0
+[[discs]]
+position = [1.2525, 0.2102]
+radius = 0.01
+[output]
+track = [0]
+series_interval = 0.002
+snapshot_interval = 0
+[stop]
+t_max = 0.8
+rest_duration = 0.5
+)";
+    Scenario s = load_scenario((dir / "flat.toml").string());
+    finish_scenario(s);
+    const fs::path out = dir / "run";
+    run_scenario(s, {out.string(), false, {}});
+    const CsvTable p = table(out / "barrier_pressure.csv");
+    const size_t bins = p.names.size() - 1;
+    ASSERT_EQ(bins, 70u);  // 0.7 m in bins of 0.01 m
+    const double bin = 0.7 / 70.0;
+    // the disc's foot on the top: 0.2 m up the face, then 0.2525 m along the top
+    const size_t expected = size_t((0.2 + 0.2525) / bin);
+    const std::vector<double>& last = p.rows.back();
+    const double weight = density * kPi * r * r * g;
+    for (size_t b = 1; b <= bins; ++b) {
+        if (b - 1 == expected) EXPECT_NEAR(last[b] * bin, weight, 1e-6 * weight);
+        else EXPECT_EQ(last[b], 0.0) << "bin " << b - 1;
+    }
+    // its peaks: the track's largest height above the bed and speed (one disc: the mean is its own)
+    const CsvTable track = table(out / "track.csv"), peaks = table(out / "peaks.csv");
+    double v_track = 0, h_track = 0;
+    for (const auto& row : track.rows) {
+        v_track = std::max(v_track, std::hypot(row[column(track, "vx_m_per_s")], row[column(track, "vy_m_per_s")]));
+        // the bed path runs over the barrier: the height is above its top, y = 0.2 m
+        h_track = std::max(h_track, row[column(track, "y_m")] + r - 0.2);
+    }
+    double v_peak = 0, h_peak = 0;
+    long bins_with_disc = 0;
+    for (const auto& row : peaks.rows) {
+        v_peak = std::max(v_peak, row[2]);
+        h_peak = std::max(h_peak, row[1]);
+        bins_with_disc += row[1] > 0 ? 1 : 0;
+    }
+    EXPECT_GT(v_track, 0.01);  // it fell onto the barrier first
+    EXPECT_NEAR(v_peak, v_track, 1e-9 * v_track);
+    EXPECT_NEAR(h_peak, h_track, 1e-9);
+    EXPECT_EQ(bins_with_disc, 1);
+    fs::remove_all(dir);
+}
