@@ -12,9 +12,10 @@ PKGS=(
   libgtest-dev libtomlplusplus-dev libcli11-dev
   gnuplot-nox
   pybind11-dev python3-dev python3-numpy python3-pytest python3-matplotlib zlib1g-dev
+  openmpi-bin libopenmpi-dev
   clang libclang-rt-14-dev
 )
-if [ "${1:-}" = "--peer" ]; then PKGS+=(lammps openmpi-bin python3); fi
+if [ "${1:-}" = "--peer" ]; then PKGS+=(lammps python3); fi
 missing=()
 for p in "${PKGS[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

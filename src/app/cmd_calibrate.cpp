@@ -5,6 +5,7 @@
 
 #include "calibration/calibration.h"
 #include "app/commands.h"
+#include "calibration/ranks.h"
 #include "core/error.h"
 
 namespace demlab {
@@ -40,6 +41,7 @@ int calibrate_command(const CalibrateCli& o) {
     opt.jobs = o.jobs;
     opt.force = o.force;
     const CalibrationResult r = calibrate(c, opt);
+    if (!Ranks::world().root()) return kExitOk;  // rank 0 reports (and applies)
     std::printf("best friction angle %.2f deg (objective %.3f deg); %d new run(s), %d reused, %.0f s\n", r.best_angle,
                 r.best_objective, r.runs_done, r.runs_reused, r.wall_seconds);
     std::printf("  table: %s/table.md, %s/table.csv; envelopes: %s/envelopes.png\n", opt.out.c_str(), opt.out.c_str(),
@@ -54,7 +56,8 @@ Command add_calibrate_command(CLI::App& app) {
     CLI::App* sub = app.add_subcommand("calibrate", "Dam-break friction calibration: sweep, deposit angles, best fit (Table 7)");
     sub->add_option("config", o->config, "Calibration file, e.g. calibration/dam-break.toml")->required();
     sub->add_option("--out", o->out, "Output folder (default runs/calibration); rerun with the same folder to resume");
-    sub->add_option("--jobs", o->jobs, "Runs at once (default: the number of cores)")->check(CLI::Range(1, 256));
+    sub->add_option("--jobs", o->jobs, std::string("Runs at once on this machine (default: the number of cores); across machines: mpirun -n N demlab calibrate ...") +
+                                           (have_mpi() ? "" : " (this build has no MPI)"))->check(CLI::Range(1, 256));
     sub->add_option("--angles", o->angles, "Friction angles to try, deg, comma-separated (default: the config's)");
     sub->add_option("--seeds", o->seeds, "Runs per angle with different seeds (the objective is their mean)")->check(CLI::Range(1, 100));
     sub->add_option("--scale", o->scale, "Upscaling of the sand (Table 14)")->check(CLI::Range(1, 100));

@@ -12,6 +12,7 @@
 #include <sstream>
 #include <thread>
 
+#include "calibration/ranks.h"
 #include "geometry/deposit.h"
 #include "core/error.h"
 #include "core/fileio.h"
@@ -179,7 +180,7 @@ double AngleResult::mean(const std::string& key) const {
 namespace {
 
 // The folder: new, or one made for this same configuration (resume).
-void open_calibration_folder(const CalibrationConfig& c, const CalibrationOptions& o) {
+void open_calibration_folder_here(const CalibrationConfig& c, const CalibrationOptions& o) {
     std::ostringstream cfg;
     cfg << "scenario = " << c.scenario << "\nseeds = " << c.seeds << "\nscale = " << c.scale << "\n";
     const std::string marker = o.out + "/calibration.id";
@@ -193,7 +194,21 @@ void open_calibration_folder(const CalibrationConfig& c, const CalibrationOption
     }
     fs::create_directories(o.out + "/runs");
     write_file_atomic(marker, cfg.str());
+}
 
+// Rank 0 opens the folder; the others wait for it (and stop with it if it refused).
+void open_calibration_folder(const CalibrationConfig& c, const CalibrationOptions& o) {
+    const Ranks& ranks = Ranks::world();
+    std::string error;
+    if (ranks.root()) {
+        try {
+            open_calibration_folder_here(c, o);
+        } catch (const InputError& e) {
+            error = e.what();
+        }
+    }
+    if (ranks.any_failed(!error.empty()))
+        throw InputError(error.empty() ? "output folder '" + o.out + "' was refused by rank 0 (its output says why)" : error);
 }
 
 // Runs the dam break for each (angle, seed) not yet finished, `jobs` at a time, and gathers
@@ -209,17 +224,33 @@ std::vector<AngleResult> evaluate_angles(const CalibrationConfig& c, const Calib
     for (double a : angles)
         for (int k = 0; k < c.seeds; ++k) todo.push_back({a, k});
     std::map<std::pair<double, int>, std::map<std::string, double>> done;
-    size_t next = 0;
+    // this rank's share: every size-th job from its rank (all of them without MPI)
+    const Ranks& ranks = Ranks::world();
+    std::vector<size_t> mine;
+    for (size_t k = 0; k < todo.size(); ++k)
+        if (int(k % size_t(ranks.size())) == ranks.rank()) mine.push_back(k);
+    auto dir_of = [&](const Job& job) { return o.out + "/runs/" + angle_tag(job.angle) + "-seed" + std::to_string(job.seed + 1); };
+    // a run's figures: its summary and the angles of its saved envelope with this
+    // configuration's sections (changing them needs no rerun)
+    auto figures_of = [&](const std::string& dir) {
+        auto summary = read_summary(dir + "/summary.json");
+        const SlopeAngles a = slope_angles(read_envelope_csv(dir + "/envelope.csv"), 0.1, c.wall_gap);
+        summary["gamma_ges"] = a.gamma_ges;
+        for (int i = 0; i < 5; ++i) summary["gamma_" + std::to_string(i + 1)] = a.gamma[i];
+        return summary;
+    };
+    const auto t0 = std::chrono::steady_clock::now();
+    size_t next = 0, ran = 0;
     std::string error;
     const auto worker = [&] {
         while (true) {
             Job job;
             {
                 std::lock_guard<std::mutex> lock(mu);
-                if (next >= todo.size() || !error.empty()) return;
-                job = todo[next++];
+                if (next >= mine.size() || !error.empty()) return;
+                job = todo[mine[next++]];
             }
-            const std::string dir = o.out + "/runs/" + angle_tag(job.angle) + "-seed" + std::to_string(job.seed + 1);
+            const std::string dir = dir_of(job);
             try {
                 bool reused = fs::exists(dir + "/summary.json");
                 if (!reused) {
@@ -234,18 +265,19 @@ std::vector<AngleResult> evaluate_angles(const CalibrationConfig& c, const Calib
                     ro.out_dir = dir;
                     run_scenario(s, ro);
                 }
-                auto summary = read_summary(dir + "/summary.json");
-                // the angles from the saved envelope with this configuration's sections:
-                // changing them needs no rerun
-                const SlopeAngles a = slope_angles(read_envelope_csv(dir + "/envelope.csv"), 0.1, c.wall_gap);
-                summary["gamma_ges"] = a.gamma_ges;
-                for (int i = 0; i < 5; ++i) summary["gamma_" + std::to_string(i + 1)] = a.gamma[i];
+                const auto summary = figures_of(dir);
                 if (!fs::exists(dir + "/deposit.png")) render_deposit(dir, summary, c.wall_gap);
                 std::lock_guard<std::mutex> lock(mu);
-                done[{job.angle, job.seed}] = summary;
                 (reused ? res.runs_reused : res.runs_done) += 1;
-                std::printf("  %s seed %d: objective %.2f deg%s\n", angle_tag(job.angle).c_str(), job.seed + 1,
-                            objective_of(summary, c), reused ? " (reused)" : "");
+                if (!reused) ++ran;
+                // progress: the runs finished in the folder (all ranks'), and an ETA from this rank's pace
+                long finished = 0;
+                for (const Job& j : todo) finished += fs::exists(dir_of(j) + "/summary.json") ? 1 : 0;
+                const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+                const double eta = ran > 0 ? secs / double(ran) * double(todo.size() - size_t(finished)) / double(ranks.size()) : 0.0;
+                std::printf("  %s seed %d: objective %.2f deg%s; %ld / %zu runs done%s\n", angle_tag(job.angle).c_str(),
+                            job.seed + 1, objective_of(summary, c), reused ? " (reused)" : "", finished, todo.size(),
+                            ran > 0 && size_t(finished) < todo.size() ? (", ETA " + format_number(std::round(eta)) + " s").c_str() : "");
                 std::fflush(stdout);
             } catch (const std::exception& e) {
                 std::lock_guard<std::mutex> lock(mu);
@@ -254,9 +286,12 @@ std::vector<AngleResult> evaluate_angles(const CalibrationConfig& c, const Calib
         }
     };
     std::vector<std::thread> pool;
-    for (int k = 0; k < std::min<int>(jobs, int(todo.size())); ++k) pool.emplace_back(worker);
+    for (int k = 0; k < std::min<int>(jobs, int(mine.size())); ++k) pool.emplace_back(worker);
     for (auto& th : pool) th.join();
-    if (!error.empty()) throw RunError("calibration run failed: " + error);
+    // every rank's runs are done (or one failed): then each rank reads them all
+    if (ranks.any_failed(!error.empty()))
+        throw RunError("calibration run failed: " + (error.empty() ? std::string("on another rank (its output says which)") : error));
+    for (const Job& job : todo) done[{job.angle, job.seed}] = figures_of(dir_of(job));
     std::vector<AngleResult> out;
     for (double a : angles) {
         AngleResult r;
@@ -325,8 +360,7 @@ void write_calibration_table(const CalibrationConfig& c, const CalibrationOption
     md << "# Dam-break calibration (Table 7 layout)\n\nScenario `" << c.scenario << "`, " << c.seeds
        << " seed(s) per angle (mean shown; the objective's spread in brackets), objective = sum over sections";
     for (int i : c.sections) md << ' ' << i;
-    md << " of |gamma_i - gamma_i,lab|. Best angle in bold. Wall time " << format_number(std::round(res.wall_seconds))
-       << " s for " << res.runs_done << " new run(s), " << res.runs_reused << " reused.\n\n| angle (deg) | lab |";
+    md << " of |gamma_i - gamma_i,lab|. Best angle in bold (wall times: timings.csv).\n\n| angle (deg) | lab |";
     for (const auto& a : all) {
         csv << "," << angle_tag(a.angle);
         md << (a.angle == res.best_angle ? " **" : " ") << format_number(a.angle) << (a.angle == res.best_angle ? "** |" : " |");
@@ -403,6 +437,8 @@ CalibrationResult calibrate(const CalibrationConfig& c, const CalibrationOptions
     const int jobs = o.jobs > 0 ? o.jobs : std::max(1, int(std::thread::hardware_concurrency()));
     CalibrationResult res;
     g_progress_muted = true;
+    const Ranks& ranks = Ranks::world();
+    if (ranks.size() > 1) std::printf("rank %d of %d: ", ranks.rank(), ranks.size());
     std::printf("grid: %zu angles x %d seed(s), %d job(s) at a time\n", c.angles.size(), c.seeds, jobs);
     res.grid = evaluate_angles(c, o, jobs, c.angles, res);
     size_t best = 0;
@@ -416,8 +452,21 @@ CalibrationResult calibrate(const CalibrationConfig& c, const CalibrationOptions
     std::vector<AngleResult> all = res.grid;
     all.insert(all.end(), res.refined.begin(), res.refined.end());
     std::sort(all.begin(), all.end(), [](const AngleResult& a, const AngleResult& b) { return a.angle > b.angle; });
-    write_calibration_table(c, o, res, all);
-    plot_envelopes(c, o, all);
+    // the results on rank 0, the same bytes for any number of ranks and jobs; the wall times
+    // (which vary) apart, in timings.csv
+    if (Ranks::world().root()) {
+        write_calibration_table(c, o, res, all);
+        plot_envelopes(c, o, all);
+        std::ostringstream t;
+        t << "run,wall_seconds\n";
+        for (const AngleResult& a : all)
+            for (size_t k = 0; k < a.runs.size(); ++k) {
+                const auto w = a.runs[k].find("wall_seconds");
+                t << angle_tag(a.angle) << "-seed" << k + 1 << ',' << (w == a.runs[k].end() ? NAN : w->second) << '\n';
+            }
+        t << "sweep," << res.wall_seconds << '\n';
+        write_file_atomic(o.out + "/timings.csv", t.str());
+    }
     return res;
 }
 

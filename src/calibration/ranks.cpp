@@ -1,0 +1,61 @@
+#include "calibration/ranks.h"
+
+#include <cstdlib>
+
+#include "core/error.h"
+
+#ifdef DEMLAB_MPI
+#include <mpi.h>
+#endif
+
+namespace demlab {
+
+Ranks& Ranks::world() {
+    static Ranks r;
+    return r;
+}
+
+Ranks::Ranks() {
+#ifdef DEMLAB_MPI
+    if (std::getenv("OMPI_COMM_WORLD_SIZE") || std::getenv("PMI_SIZE")) {
+        MPI_Init(nullptr, nullptr);
+        MPI_Comm_rank(MPI_COMM_WORLD, &rank_);
+        MPI_Comm_size(MPI_COMM_WORLD, &size_);
+        started_ = true;
+    }
+#else
+    // several copies of a build without MPI would each run every job into the same folder
+    const char* n = std::getenv("OMPI_COMM_WORLD_SIZE");
+    if (!n) n = std::getenv("PMI_SIZE");
+    if (n && std::atoi(n) > 1)
+        throw InputError("demlab was built without MPI (libopenmpi-dev was missing when it was configured): run the "
+                         "sweep with --jobs on one machine, or rebuild after scripts/install-deps.sh");
+#endif
+}
+
+Ranks::~Ranks() {
+#ifdef DEMLAB_MPI
+    if (started_) MPI_Finalize();
+#endif
+}
+
+bool Ranks::any_failed(bool failed) const {
+#ifdef DEMLAB_MPI
+    if (started_) {
+        int mine = failed ? 1 : 0, any = 0;
+        MPI_Allreduce(&mine, &any, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
+        return any != 0;
+    }
+#endif
+    return failed;
+}
+
+bool have_mpi() {
+#ifdef DEMLAB_MPI
+    return true;
+#else
+    return false;
+#endif
+}
+
+}  // namespace demlab

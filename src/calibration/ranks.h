@@ -1,0 +1,31 @@
+// The processes of a sweep: one without MPI, or the ranks of `mpirun -n N demlab calibrate`
+// (Open MPI). The sweep spreads its runs over the ranks by index and shares nothing but the
+// run folders (a file system all hosts see) and two collective calls: a barrier once the
+// runs are done, and whether any rank failed. Every rank then reads every run's results from
+// its folder and reaches the same figures; rank 0 writes the table.
+#pragma once
+
+namespace demlab {
+
+class Ranks {
+public:
+    // MPI is started only under a launcher (mpirun sets OMPI_COMM_WORLD_SIZE or PMI_SIZE):
+    // a plain `demlab calibrate` runs as one rank without touching MPI.
+    static Ranks& world();
+    int rank() const { return rank_; }
+    int size() const { return size_; }
+    bool root() const { return rank_ == 0; }
+    // waits for every rank; true if any rank passed failed = true
+    bool any_failed(bool failed) const;
+    ~Ranks();
+
+private:
+    Ranks();
+    int rank_ = 0, size_ = 1;
+    bool started_ = false;
+};
+
+// Whether this build has MPI (CMake found it).
+bool have_mpi();
+
+}  // namespace demlab
