@@ -1,5 +1,6 @@
 #include "calibration/ranks.h"
 
+#include <cstdio>
 #include <cstdlib>
 
 #include "core/error.h"
@@ -10,8 +11,13 @@
 
 namespace demlab {
 
+namespace {
+const Ranks* g_started = nullptr;  // the world, once made
+}
+
 Ranks& Ranks::world() {
     static Ranks r;
+    g_started = &r;
     return r;
 }
 
@@ -48,6 +54,19 @@ bool Ranks::any_failed(bool failed) const {
     }
 #endif
     return failed;
+}
+
+void Ranks::abort_others(const char* message, int code) {
+#ifdef DEMLAB_MPI
+    if (g_started && g_started->started_ && g_started->size_ > 1) {
+        std::fprintf(stderr, "demlab (rank %d of %d): %s\n", g_started->rank_, g_started->size_, message);
+        std::fflush(stderr);
+        MPI_Abort(MPI_COMM_WORLD, code);
+    }
+#else
+    (void)message;
+    (void)code;
+#endif
 }
 
 bool have_mpi() {

@@ -17,6 +17,10 @@ public:
     bool root() const { return rank_ == 0; }
     // waits for every rank; true if any rank passed failed = true
     bool any_failed(bool failed) const;
+    // an error on this rank alone (after the last collective call): the others would wait
+    // for it forever, so the message goes to stderr and mpirun stops them all (exit code)
+    // (nothing when MPI was not started: an error every rank meets alike ends each alone)
+    static void abort_others(const char* message, int code);
     ~Ranks();
 
 private:
