@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
-# The calibration sweep under MPI (CTest: calibration.mpi): `mpirun -n 2` gives the same
-# table.csv and table.md bytes as `--jobs 1`, and a sweep resumed with another number of
-# ranks computes nothing already finished.
+# Sweeps under MPI (CTest: calibration.mpi): `mpirun -n 2` gives the same calibration
+# table.csv and table.md bytes as `--jobs 1`, a calibration resumed with another number of
+# ranks computes nothing already finished, and `demlab sweep` gives the same sweep.csv.
 # usage: tests/mpi_sweep.sh DEMLAB_EXE WORK_DIR
 set -euo pipefail
 exe="$1"
@@ -27,4 +27,17 @@ grep -q ' 0 new run(s)' "$work/again.log"
 "$exe" "${sweep[@]}" --angles 15,16,17 --jobs 1 --out "$work/three" > "$work/three.log"
 cmp "$work/three/table.csv" "$work/two/table.csv"
 cmp "$work/three/table.md" "$work/two/table.md"
-echo "mpi sweep: the same tables on 1 and 2 ranks, resumed across rank counts without recomputing"
+# demlab sweep: the same sweep.csv on 1 and 2 ranks
+cat > "$work/s.toml" <<TOML
+[sweep]
+scenario = "$PWD/scenarios/geometry-A.toml"
+set = ["release.scale=20", "stop.t_max=0.4", "output.snapshot_interval=0"]
+[grid]
+"material.friction_disc_deg" = [14, 17]
+"rotation.model" = [1, 3]
+TOML
+"$exe" sweep "$work/s.toml" --jobs 1 --out "$work/sweep-one" > "$work/sweep-one.log"
+"${mpi[@]}" "$exe" sweep "$work/s.toml" --jobs 1 --out "$work/sweep-two" > "$work/sweep-two.log"
+cmp "$work/sweep-one/sweep.csv" "$work/sweep-two/sweep.csv"
+test "$(wc -l < "$work/sweep-two/sweep.csv")" -eq 5
+echo "mpi: the same calibration tables and sweep.csv on 1 and 2 ranks, resumed across rank counts without recomputing"

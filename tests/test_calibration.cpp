@@ -8,6 +8,8 @@
 #include <sstream>
 
 #include "calibration/calibration.h"
+#include "calibration/sweep.h"
+#include "run/summary_file.h"
 #include "geometry/deposit.h"
 #include "core/error.h"
 #include "scenario/scenario.h"
@@ -145,5 +147,72 @@ TEST(Calibration, ApplyWritesACopyAndNeverOverwrites) {
     EXPECT_DOUBLE_EQ(s.disc_friction_deg, 15.7);
     EXPECT_DOUBLE_EQ(load_scenario((dir / "geometry-A.toml").string()).disc_friction_deg, 15.5);  // original intact
     EXPECT_THROW(apply_calibration((dir / "geometry-A.toml").string(), 16.0, false), InputError);
+    fs::remove_all(dir);
+}
+
+// demlab sweep: a grid of two keys over two values each, one seed; sweep.csv holds a row per
+// run with the varied values and the run's own summary numbers; a rerun computes nothing.
+TEST(Sweep, GridRowsSummariesAndResume) {
+    const fs::path dir = fs::temp_directory_path() / ("demlab-sweep-" + std::to_string(::getpid()));
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    const fs::path file = dir / "s.toml";
+    std::ofstream(file) << "[sweep]\nscenario = \"" << DEMLAB_SOURCE_DIR << "/scenarios/geometry-A.toml\"\n"
+                        << "set = [\"release.scale=20\", \"stop.t_max=0.4\", \"output.snapshot_interval=0\"]\n"
+                        << "columns = [\"runout_s\", \"t_end\", \"n_discs\"]\n"
+                        << "[grid]\n\"material.friction_disc_deg\" = [14, 17.5]\n\"release.variant\" = [\"I\", \"II\"]\n";
+    const SweepConfig c = load_sweep(file.string());
+    ASSERT_EQ(c.rows.size(), 4u);
+    EXPECT_EQ(c.keys, (std::vector<std::string>{"material.friction_disc_deg", "release.variant"}));
+    EXPECT_EQ(c.rows[1], (std::vector<std::string>{"14", "\"II\""}));  // the first key slowest
+    SweepOptions o;
+    o.out = (dir / "out").string();
+    o.jobs = 2;
+    const SweepResult r = run_sweep(c, o);
+    EXPECT_EQ(r.runs_done, 4);
+    std::ifstream in(o.out + "/sweep.csv");
+    std::string line;
+    std::vector<std::string> lines;
+    while (std::getline(in, line)) lines.push_back(line);
+    ASSERT_EQ(lines.size(), 5u);
+    EXPECT_EQ(lines[0], "row,seed,material.friction_disc_deg,release.variant,runout_s_m,t_end_s,n_discs");
+    EXPECT_EQ(lines[4].rfind("4,1,17.5,\"II\",", 0), 0u) << lines[4];
+    // each row's numbers are its run's summary
+    const SummaryFile s3 = read_summary_file(o.out + "/runs/row003-seed1/summary.json");
+    std::ostringstream want;
+    want.precision(10);
+    want << "3,1,17.5,\"I\"," << s3.number("runout_s") << ',' << s3.number("t_end") << ',' << s3.number("n_discs");
+    EXPECT_EQ(lines[3], want.str());
+    EXPECT_TRUE(fs::exists(o.out + "/timings.csv"));
+    const SweepResult again = run_sweep(c, o);
+    EXPECT_EQ(again.runs_done, 0);
+    EXPECT_EQ(again.runs_reused, 4);
+    fs::remove_all(dir);
+}
+
+TEST(Sweep, BadFilesAreRefusedBeforeAnyRun) {
+    const fs::path dir = fs::temp_directory_path() / ("demlab-sweep-bad-" + std::to_string(::getpid()));
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    const fs::path file = dir / "s.toml";
+    const std::string scenario = std::string("[sweep]\nscenario = \"") + DEMLAB_SOURCE_DIR + "/scenarios/geometry-A.toml\"\n";
+    auto message = [&](const std::string& text) {
+        std::ofstream(file) << text;
+        try {
+            load_sweep(file.string());
+        } catch (const InputError& e) {
+            return std::string(e.what());
+        }
+        return std::string("accepted");
+    };
+    EXPECT_NE(message(scenario + "[grid]\n\"material.frction_disc_deg\" = [14]\n").find("did you mean 'material.friction_disc_deg'"), std::string::npos);
+    EXPECT_NE(message(scenario + "[grid]\n\"material.friction_disc_deg\" = [14, 95]\n").find("row 2"), std::string::npos);
+    EXPECT_NE(message(scenario + "[grid]\n\"release.scale\" = 20\n").find("non-empty array"), std::string::npos);
+    EXPECT_NE(message("[sweep]\nseeds = 2\n").find("scenario is required"), std::string::npos);
+    EXPECT_NE(message(scenario + "seeds = 0\n").find("seeds (1 to 100)"), std::string::npos);
+    EXPECT_NE(message(scenario + "[grid]\n\"scenario.seed\" = [1, 2]\n").find("[sweep] seeds"), std::string::npos);
+    EXPECT_NE(message(scenario + "[grid]\n\"rotation.model\" = [1]\n[[rows]]\n\"rotation.model\" = 1\n").find("not both"), std::string::npos);
+    EXPECT_NE(message(scenario + "[[rows]]\n\"rotation.model\" = 1\n[[rows]]\n\"release.scale\" = 20\n").find("same keys"), std::string::npos);
+    EXPECT_FALSE(fs::exists(dir / "runs"));
     fs::remove_all(dir);
 }

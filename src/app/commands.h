@@ -16,6 +16,7 @@ Command add_keys_command(CLI::App& app);
 Command add_render_command(CLI::App& app);
 Command add_plot_command(CLI::App& app);
 Command add_calibrate_command(CLI::App& app);
+Command add_sweep_command(CLI::App& app);
 Command add_compare_command(CLI::App& app);
 
 }  // namespace demlab

@@ -22,6 +22,7 @@ int main(int argc, char** argv) {
     add(add_render_command);
     add(add_plot_command);
     add(add_calibrate_command);
+    add(add_sweep_command);
     add(add_compare_command);
     add(add_demo_command);
     add(add_keys_command);

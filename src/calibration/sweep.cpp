@@ -1,0 +1,296 @@
+#include "calibration/sweep.h"
+
+#include <toml++/toml.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <mutex>
+#include <set>
+#include <sstream>
+#include <thread>
+
+#include "calibration/ranks.h"
+#include "core/error.h"
+#include "core/fileio.h"
+#include "core/progress.h"
+#include "core/validate.h"
+#include "run/run.h"
+#include "run/summary_file.h"
+#include "scenario/key_registry.h"
+#include "scenario/scenario.h"
+
+namespace demlab {
+
+namespace fs = std::filesystem;
+
+namespace {
+// the summary's numbers that depend on the machine and the moment, not the run: they go to
+// timings.csv, so that sweep.csv is the same bytes on any number of ranks
+const std::set<std::string> kClockKeys = {"wall_seconds", "particle_steps_per_second", "release_wall_seconds",
+                                          "broadphase_update_seconds", "force_pass_busy_share",
+                                          "force_pass_busy_fallbacks", "force_pass_one_range_cuts"};
+
+std::string read_text_or_empty(const std::string& path) {
+    std::ifstream in(path);
+    std::stringstream b;
+    b << in.rdbuf();
+    return b.str();
+}
+
+// a summary key as a column name that says its unit, as the series' columns do: runout_s_m,
+// peak_fx_barrier_N_per_m (a count or ratio keeps its name)
+std::string column_name(const std::string& key, const std::string& unit) {
+    if (unit.empty() || unit == "-") return key;
+    std::string u;
+    for (char ch : unit) u += ch == '/' ? std::string("_per_") : std::string(1, ch);
+    return key + "_" + u;
+}
+
+std::string row_tag(size_t row, int seed) {
+    char b[48];
+    std::snprintf(b, sizeof b, "row%03zu-seed%d", row + 1, seed + 1);
+    return b;
+}
+
+// the scenario of one run: the file, the common overrides, the row's, the seed
+Scenario scenario_of(const SweepConfig& c, size_t row, int seed) {
+    Scenario s = load_scenario(c.scenario);
+    for (const std::string& a : c.common) apply_override(s, a);
+    for (size_t k = 0; k < c.keys.size(); ++k) apply_override(s, c.keys[k] + "=" + c.rows[row][k]);
+    apply_override(s, "scenario.seed=" + std::to_string(s.seed + unsigned(seed)));
+    finish_scenario(s);
+    return s;
+}
+}  // namespace
+
+SweepConfig load_sweep(const std::string& path) {
+    SweepConfig c;
+    c.source = path;
+    toml::table t;
+    try {
+        t = toml::parse(read_input_file(path, kMaxScenarioBytes, "sweep file"), path);
+    } catch (const toml::parse_error& e) {
+        throw InputError(path + ":" + std::to_string(e.source().begin.line) + ": TOML syntax error: " + std::string(e.description()));
+    }
+    const auto where = [&](const toml::node& n, const std::string& key) {
+        return path + ":" + std::to_string(n.source().begin.line) + ": key '" + key + "'";
+    };
+    auto check_key = [&](const toml::node& n, const std::string& key) {
+        if (!keys::find_key(key)) keys::unknown_key(where(n, key), key, keys::key_names());
+        if (key == "scenario.seed") throw InputError(where(n, key) + ": the seeds are [sweep] seeds (scenario.seed + 0, 1, ...)");
+    };
+    for (const auto& [sec, node] : t) {
+        const std::string section(sec.str());
+        if (section == "sweep") {
+            const toml::table* tab = node.as_table();
+            if (!tab) throw InputError(where(node, section) + ": must be a table");
+            for (const auto& [k, v] : *tab) {
+                const std::string key = "sweep." + std::string(k.str());
+                if (key == "sweep.scenario" && v.is_string()) c.scenario = *v.value<std::string>();
+                else if (key == "sweep.seeds" && v.is_integer() && *v.value<int64_t>() >= 1 && *v.value<int64_t>() <= 100)
+                    c.seeds = int(*v.value<int64_t>());
+                else if ((key == "sweep.set" || key == "sweep.columns") && v.is_array()) {
+                    for (const toml::node& e : *v.as_array()) {
+                        if (!e.is_string()) throw InputError(where(e, key) + ": must be an array of strings");
+                        (key == "sweep.set" ? c.common : c.columns).push_back(*e.value<std::string>());
+                    }
+                } else {
+                    throw InputError(where(v, key) + " = " + keys::node_text(v) +
+                                     ": accepted: scenario (a file), seeds (1 to 100), set (array of \"key=value\"), columns (array of summary keys)");
+                }
+            }
+        } else if (section == "grid") {
+            const toml::table* tab = node.as_table();
+            if (!tab) throw InputError(where(node, section) + ": must be a table of key = [values]");
+            std::vector<std::vector<std::string>> values;
+            for (const auto& [k, v] : *tab) {
+                const std::string key(k.str());
+                check_key(v, key);
+                const toml::array* a = v.as_array();
+                if (!a || a->empty()) throw InputError(where(v, key) + ": a grid key takes a non-empty array of values");
+                c.keys.push_back(key);
+                values.emplace_back();
+                for (const toml::node& e : *a) values.back().push_back(keys::node_text(e));
+            }
+            // every combination, the first key slowest
+            std::vector<std::vector<std::string>> rows = {{}};
+            for (const auto& vs : values) {
+                std::vector<std::vector<std::string>> next;
+                for (const auto& r : rows)
+                    for (const std::string& v : vs) {
+                        next.push_back(r);
+                        next.back().push_back(v);
+                    }
+                rows = std::move(next);
+            }
+            c.rows = rows;
+        } else if (section == "rows") {
+            const toml::array* a = node.as_array();
+            if (!a || !a->is_array_of_tables()) throw InputError(where(node, section) + ": must be [[rows]] tables");
+            for (const toml::node& r : *a) {
+                std::vector<std::pair<std::string, std::string>> row;
+                for (const auto& [k, v] : *r.as_table()) {
+                    check_key(v, std::string(k.str()));
+                    row.emplace_back(std::string(k.str()), keys::node_text(v));
+                }
+                if (c.keys.empty() && c.rows.empty())
+                    for (const auto& kv : row) c.keys.push_back(kv.first);
+                std::vector<std::string> vals;
+                for (const std::string& key : c.keys) {
+                    auto it = std::find_if(row.begin(), row.end(), [&](const auto& kv) { return kv.first == key; });
+                    if (it == row.end() || row.size() != c.keys.size())
+                        throw InputError(where(r, "rows") + ": every row sets the same keys as the first (" + std::to_string(c.keys.size()) + ")");
+                    vals.push_back(it->second);
+                }
+                c.rows.push_back(vals);
+            }
+        } else {
+            throw InputError(where(node, section) + ": unknown table; accepted: [sweep], [grid], [[rows]]");
+        }
+    }
+    if (t.contains("grid") && t.contains("rows")) throw InputError(path + ": give either [grid] or [[rows]], not both");
+    if (c.scenario.empty()) throw InputError(path + ": [sweep] scenario is required (the scenario file to sweep)");
+    if (fs::path(c.scenario).is_relative()) c.scenario = (fs::path(path).parent_path() / c.scenario).lexically_normal().string();
+    if (c.rows.empty()) c.rows = {{}};  // the scenario alone, over its seeds
+    // every run's scenario is checked now, before any output
+    for (size_t r = 0; r < c.rows.size(); ++r) {
+        try {
+            (void)scenario_of(c, r, 0);
+        } catch (const InputError& e) {
+            throw InputError(path + ": row " + std::to_string(r + 1) + ": " + e.what());
+        }
+    }
+    return c;
+}
+
+SweepResult run_sweep(const SweepConfig& c, const SweepOptions& o) {
+    const auto t0 = std::chrono::steady_clock::now();
+    const Ranks& ranks = Ranks::world();
+    // the folder: new, or made by this same sweep (resume); rank 0 opens it
+    std::ostringstream id;
+    id << "scenario = " << c.scenario << "\nseeds = " << c.seeds << "\n";
+    for (const std::string& a : c.common) id << "set " << a << "\n";
+    for (size_t r = 0; r < c.rows.size(); ++r) {
+        id << "row " << r + 1 << ":";
+        for (size_t k = 0; k < c.keys.size(); ++k) id << " " << c.keys[k] << "=" << c.rows[r][k];
+        id << "\n";
+    }
+    std::string error;
+    if (ranks.root()) {
+        try {
+            const std::string marker = o.out + "/sweep.id";
+            if (fs::exists(o.out) && read_text_or_empty(marker) != id.str() && !o.force)
+                throw InputError("output folder '" + o.out + "' exists and was not made by this sweep; choose another --out or pass --force");
+            fs::create_directories(o.out + "/runs");
+            write_file_atomic(marker, id.str());
+        } catch (const std::exception& e) {
+            error = e.what();
+        }
+    }
+    if (ranks.any_failed(!error.empty()))
+        throw InputError(error.empty() ? "output folder '" + o.out + "' was refused by rank 0 (its output says why)" : error);
+
+    struct Job {
+        size_t row;
+        int seed;
+    };
+    std::vector<Job> todo;
+    for (size_t r = 0; r < c.rows.size(); ++r)
+        for (int k = 0; k < c.seeds; ++k) todo.push_back({r, k});
+    std::vector<size_t> mine;
+    for (size_t k = 0; k < todo.size(); ++k)
+        if (int(k % size_t(ranks.size())) == ranks.rank()) mine.push_back(k);
+    auto dir_of = [&](const Job& j) { return o.out + "/runs/" + row_tag(j.row, j.seed); };
+    const int jobs = o.jobs > 0 ? o.jobs : std::max(1, int(std::thread::hardware_concurrency()));
+    SweepResult res;
+    std::mutex mu;
+    size_t next = 0, ran = 0;
+    g_progress_muted = true;
+    auto worker = [&] {
+        while (true) {
+            Job job;
+            {
+                std::lock_guard<std::mutex> lock(mu);
+                if (next >= mine.size() || !error.empty()) return;
+                job = todo[mine[next++]];
+            }
+            const std::string dir = dir_of(job);
+            try {
+                const bool reused = fs::exists(dir + "/summary.json");
+                if (!reused) {
+                    fs::remove_all(dir);  // an unfinished run of our own
+                    RunOptions ro;
+                    ro.out_dir = dir;
+                    run_scenario(scenario_of(c, job.row, job.seed), ro);
+                }
+                std::lock_guard<std::mutex> lock(mu);
+                (reused ? res.runs_reused : res.runs_done) += 1;
+                if (!reused) ++ran;
+                long finished = 0;
+                for (const Job& j : todo) finished += fs::exists(dir_of(j) + "/summary.json") ? 1 : 0;
+                const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+                const double eta = ran > 0 ? secs / double(ran) * double(todo.size() - size_t(finished)) / double(ranks.size()) : 0.0;
+                std::printf("  %s%s; %ld / %zu runs done%s\n", row_tag(job.row, job.seed).c_str(), reused ? " (reused)" : "",
+                            finished, todo.size(),
+                            ran > 0 && size_t(finished) < todo.size() ? (", ETA " + format_number(std::round(eta)) + " s").c_str() : "");
+                std::fflush(stdout);
+            } catch (const std::exception& e) {
+                std::lock_guard<std::mutex> lock(mu);
+                error = dir + ": " + e.what();
+            }
+        }
+    };
+    std::vector<std::thread> pool;
+    for (int k = 0; k < std::min<int>(jobs, int(mine.size())); ++k) pool.emplace_back(worker);
+    for (auto& th : pool) th.join();
+    g_progress_muted = false;
+    if (ranks.any_failed(!error.empty()))
+        throw RunError("sweep run failed: " + (error.empty() ? std::string("on another rank (its output says which)") : error));
+    res.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    if (!ranks.root()) return res;
+
+    // sweep.csv: row, seed, the varied values, the summary's numbers; timings.csv apart
+    std::vector<SummaryFile> sums;
+    for (const Job& j : todo) sums.push_back(read_summary_file(dir_of(j) + "/summary.json"));
+    std::vector<std::string> columns = c.columns;
+    if (columns.empty())
+        for (const auto& [k, v] : sums.front().numbers)
+            // (the broad phase's and the force pass's figures describe the run's numerics and
+            // count from a resume: not a result)
+            if (!kClockKeys.count(k) && k.rfind("broadphase_", 0) != 0 && k.rfind("force_pass_", 0) != 0) columns.push_back(k);
+    std::ostringstream csv, timings;
+    csv.precision(10);
+    csv << "row,seed";
+    for (const std::string& k : c.keys) csv << ',' << k;
+    for (const std::string& k : columns) csv << ',' << column_name(k, sums.front().unit(k));
+    csv << '\n';
+    timings << "run,wall_seconds,release_wall_seconds,machine\n";
+    for (size_t n = 0; n < todo.size(); ++n) {
+        const Job& j = todo[n];
+        csv << j.row + 1 << ',' << j.seed + 1;
+        for (const std::string& v : c.rows[j.row]) csv << ',' << (v.find(',') != std::string::npos ? "\"" + v + "\"" : v);
+        for (const std::string& k : columns) {
+            const auto it = sums[n].numbers.find(k);
+            if (it == sums[n].numbers.end())
+                throw InputError(o.out + ": column '" + k + "' is not a number of " + dir_of(j) + "/summary.json");
+            csv << ',' << it->second;
+        }
+        csv << '\n';
+        auto num = [&](const char* k) {
+            const auto it = sums[n].numbers.find(k);
+            return it == sums[n].numbers.end() ? NAN : it->second;
+        };
+        timings << row_tag(j.row, j.seed) << ',' << num("wall_seconds") << ',' << num("release_wall_seconds") << ",\""
+                << sums[n].text("machine") << "\"\n";
+    }
+    timings << "sweep," << res.wall_seconds << ",,\n";
+    write_file_atomic(o.out + "/sweep.csv", csv.str());
+    write_file_atomic(o.out + "/timings.csv", timings.str());
+    return res;
+}
+
+}  // namespace demlab
