@@ -3,7 +3,7 @@
 same steps in one call (the C++ loop, World::run), on two worlds built from the same scenario,
 timed in turn (A B, B A, ...) with the ratio pair by pair.
 
-    PYTHONPATH=build/python python3 bench/python_step.py [--scale 20] [--steps 100000] [--pairs 5]
+    PYTHONPATH=build/python /usr/bin/python3 bench/python_step.py [--scale 20] [--steps 100000] [--pairs 5]
 """
 import argparse
 import os

@@ -3,7 +3,7 @@
 passed the barrier's foot (x beyond W3's lower end) in geometry A at scale 20, sampled every
 5 ms of simulated time, written to OUT/barrier_energy.csv and plotted to OUT/barrier_energy.png.
 
-    PYTHONPATH=build/python python3 examples/barrier_energy.py --out runs/barrier-energy
+    PYTHONPATH=build/python /usr/bin/python3 examples/barrier_energy.py --out runs/barrier-energy
 """
 import argparse
 import os

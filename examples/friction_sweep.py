@@ -3,7 +3,7 @@
 disc friction angles, all from the same settled release mass, and the run-out plotted against
 the angle (matplotlib, to OUT/runout.png).
 
-    PYTHONPATH=build/python python3 examples/friction_sweep.py --out runs/friction-sweep
+    PYTHONPATH=build/python /usr/bin/python3 examples/friction_sweep.py --out runs/friction-sweep
 """
 import argparse
 import os
