@@ -64,17 +64,7 @@ Command add_calibrate_command(CLI::App& app) {
     sub->add_flag("--no-refine", o->no_refine, "Only the grid, no golden-section refinement");
     sub->add_option("--apply", o->apply, "Write SCENARIO-calibrated.toml with the best angle (never over the original)");
     sub->add_flag("--force", o->force, "Use a folder made for another configuration; replace an existing -calibrated file");
-    return [o] {
-        try {
-            return calibrate_command(*o);
-        } catch (const InputError& e) {
-            Ranks::abort_others(e.what(), kExitInput);
-            throw;
-        } catch (const std::exception& e) {
-            Ranks::abort_others(e.what(), kExitRun);
-            throw;
-        }
-    };
+    return [o] { return Ranks::run_command([&] { return calibrate_command(*o); }); };
 }
 
 }  // namespace demlab

@@ -43,17 +43,7 @@ Command add_sweep_command(CLI::App& app) {
                                            (have_mpi() ? "" : " (this build has no MPI)"))
         ->check(CLI::Range(1, 256));
     sub->add_flag("--force", o->force, "Use a folder made for another sweep");
-    return [o] {
-        try {
-            return sweep_command(*o);
-        } catch (const InputError& e) {
-            Ranks::abort_others(e.what(), kExitInput);
-            throw;
-        } catch (const std::exception& e) {
-            Ranks::abort_others(e.what(), kExitRun);
-            throw;
-        }
-    };
+    return [o] { return Ranks::run_command([&] { return sweep_command(*o); }); };
 }
 
 }  // namespace demlab

@@ -12,6 +12,7 @@
 #include <sstream>
 #include <thread>
 
+#include "calibration/rank_jobs.h"
 #include "calibration/ranks.h"
 #include "geometry/deposit.h"
 #include "core/error.h"
@@ -215,7 +216,6 @@ void open_calibration_folder(const CalibrationConfig& c, const CalibrationOption
 // each angle's objective over its seeds.
 std::vector<AngleResult> evaluate_angles(const CalibrationConfig& c, const CalibrationOptions& o, int jobs,
                                          const std::vector<double>& angles, CalibrationResult& res) {
-    std::mutex mu;
     struct Job {
         double angle;
         int seed;
@@ -224,11 +224,6 @@ std::vector<AngleResult> evaluate_angles(const CalibrationConfig& c, const Calib
     for (double a : angles)
         for (int k = 0; k < c.seeds; ++k) todo.push_back({a, k});
     std::map<std::pair<double, int>, std::map<std::string, double>> done;
-    // this rank's share: every size-th job from its rank (all of them without MPI)
-    const Ranks& ranks = Ranks::world();
-    std::vector<size_t> mine;
-    for (size_t k = 0; k < todo.size(); ++k)
-        if (int(k % size_t(ranks.size())) == ranks.rank()) mine.push_back(k);
     auto dir_of = [&](const Job& job) { return o.out + "/runs/" + angle_tag(job.angle) + "-seed" + std::to_string(job.seed + 1); };
     // a run's figures: its summary and the angles of its saved envelope with this
     // configuration's sections (changing them needs no rerun)
@@ -239,58 +234,37 @@ std::vector<AngleResult> evaluate_angles(const CalibrationConfig& c, const Calib
         for (int i = 0; i < 5; ++i) summary["gamma_" + std::to_string(i + 1)] = a.gamma[i];
         return summary;
     };
-    const auto t0 = std::chrono::steady_clock::now();
-    size_t next = 0, ran = 0;
-    std::string error;
-    const auto worker = [&] {
-        while (true) {
-            Job job;
-            {
-                std::lock_guard<std::mutex> lock(mu);
-                if (next >= mine.size() || !error.empty()) return;
-                job = todo[mine[next++]];
-            }
-            const std::string dir = dir_of(job);
-            try {
-                bool reused = fs::exists(dir + "/summary.json");
-                if (!reused) {
-                    fs::remove_all(dir);  // an unfinished run of our own
-                    Scenario s = load_scenario(c.scenario);
-                    apply_override(s, "material.friction_disc_deg=" + format_number(job.angle));
-                    if (c.scale) apply_override(s, "release.scale=" + std::to_string(c.scale));
-                    apply_override(s, "scenario.seed=" + std::to_string(s.seed + unsigned(job.seed)));
-                    finish_scenario(s);
-                    if (make_setup(s)->kind() != "dam_break") throw InputError(c.scenario + ": not a [dam_break] scenario");
-                    RunOptions ro;
-                    ro.out_dir = dir;
-                    run_scenario(s, ro);
-                }
-                const auto summary = figures_of(dir);
-                if (!fs::exists(dir + "/deposit.png")) render_deposit(dir, summary, c.wall_gap);
-                std::lock_guard<std::mutex> lock(mu);
-                (reused ? res.runs_reused : res.runs_done) += 1;
-                if (!reused) ++ran;
-                // progress: the runs finished in the folder (all ranks'), and an ETA from this rank's pace
-                long finished = 0;
-                for (const Job& j : todo) finished += fs::exists(dir_of(j) + "/summary.json") ? 1 : 0;
-                const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-                const double eta = ran > 0 ? secs / double(ran) * double(todo.size() - size_t(finished)) / double(ranks.size()) : 0.0;
-                std::printf("  %s seed %d: objective %.2f deg%s; %ld / %zu runs done%s\n", angle_tag(job.angle).c_str(),
-                            job.seed + 1, objective_of(summary, c), reused ? " (reused)" : "", finished, todo.size(),
-                            ran > 0 && size_t(finished) < todo.size() ? (", ETA " + format_number(std::round(eta)) + " s").c_str() : "");
-                std::fflush(stdout);
-            } catch (const std::exception& e) {
-                std::lock_guard<std::mutex> lock(mu);
-                error = dir + ": " + e.what();
-            }
-        }
+    RankJobsDef def;
+    def.count = todo.size();
+    def.threads = jobs;
+    def.what = "calibration";
+    def.folder = [&](size_t k) { return dir_of(todo[k]); };
+    def.run = [&](size_t k) {
+        const Job& job = todo[k];
+        Scenario s = load_scenario(c.scenario);
+        apply_override(s, "material.friction_disc_deg=" + format_number(job.angle));
+        if (c.scale) apply_override(s, "release.scale=" + std::to_string(c.scale));
+        apply_override(s, "scenario.seed=" + std::to_string(s.seed + unsigned(job.seed)));
+        finish_scenario(s);
+        if (make_setup(s)->kind() != "dam_break") throw InputError(c.scenario + ": not a [dam_break] scenario");
+        RunOptions ro;
+        ro.out_dir = dir_of(job);
+        run_scenario(s, ro);
     };
-    std::vector<std::thread> pool;
-    for (int k = 0; k < std::min<int>(jobs, int(mine.size())); ++k) pool.emplace_back(worker);
-    for (auto& th : pool) th.join();
+    def.describe = [&](size_t k) {
+        const Job& job = todo[k];
+        const std::string dir = dir_of(job);
+        const auto summary = figures_of(dir);
+        if (!fs::exists(dir + "/deposit.png")) render_deposit(dir, summary, c.wall_gap);
+        char line[96];
+        std::snprintf(line, sizeof line, "%s seed %d: objective %.2f deg", angle_tag(job.angle).c_str(), job.seed + 1,
+                      objective_of(summary, c));
+        return std::string(line);
+    };
     // every rank's runs are done (or one failed): then each rank reads them all
-    if (ranks.any_failed(!error.empty()))
-        throw RunError("calibration run failed: " + (error.empty() ? std::string("on another rank (its output says which)") : error));
+    const RankJobsCount count = run_rank_jobs(def);
+    res.runs_done += count.ran;
+    res.runs_reused += count.reused;
     for (const Job& job : todo) done[{job.angle, job.seed}] = figures_of(dir_of(job));
     std::vector<AngleResult> out;
     for (double a : angles) {

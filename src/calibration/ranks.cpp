@@ -69,6 +69,18 @@ void Ranks::abort_others(const char* message, int code) {
 #endif
 }
 
+int Ranks::run_command(const std::function<int()>& command) {
+    try {
+        return command();
+    } catch (const InputError& e) {
+        abort_others(e.what(), kExitInput);
+        throw;
+    } catch (const std::exception& e) {
+        abort_others(e.what(), kExitRun);
+        throw;
+    }
+}
+
 bool have_mpi() {
 #ifdef DEMLAB_MPI
     return true;

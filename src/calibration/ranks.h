@@ -4,6 +4,7 @@
 // runs are done, and whether any rank failed. Every rank then reads every run's results from
 // its folder and reaches the same figures; rank 0 writes the table.
 #pragma once
+#include <functional>
 
 namespace demlab {
 
@@ -21,6 +22,9 @@ public:
     // for it forever, so the message goes to stderr and mpirun stops them all (exit code)
     // (nothing when MPI was not started: an error every rank meets alike ends each alone)
     static void abort_others(const char* message, int code);
+    // runs a sweep command; an exception from it first stops the other ranks (abort_others,
+    // exit code 2 for an input error, 3 otherwise), then goes on to the caller
+    static int run_command(const std::function<int()>& command);
     ~Ranks();
 
 private:

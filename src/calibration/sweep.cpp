@@ -8,16 +8,15 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
-#include <mutex>
 #include <set>
 #include <sstream>
 #include <thread>
 
+#include "calibration/rank_jobs.h"
 #include "calibration/ranks.h"
 #include "core/error.h"
 #include "core/fileio.h"
 #include "core/progress.h"
-#include "core/validate.h"
 #include "run/run.h"
 #include "run/summary_file.h"
 #include "scenario/key_registry.h"
@@ -201,55 +200,30 @@ SweepResult run_sweep(const SweepConfig& c, const SweepOptions& o) {
     std::vector<Job> todo;
     for (size_t r = 0; r < c.rows.size(); ++r)
         for (int k = 0; k < c.seeds; ++k) todo.push_back({r, k});
-    std::vector<size_t> mine;
-    for (size_t k = 0; k < todo.size(); ++k)
-        if (int(k % size_t(ranks.size())) == ranks.rank()) mine.push_back(k);
     auto dir_of = [&](const Job& j) { return o.out + "/runs/" + row_tag(j.row, j.seed); };
-    const int jobs = o.jobs > 0 ? o.jobs : std::max(1, int(std::thread::hardware_concurrency()));
-    SweepResult res;
-    std::mutex mu;
-    size_t next = 0, ran = 0;
-    g_progress_muted = true;
-    auto worker = [&] {
-        while (true) {
-            Job job;
-            {
-                std::lock_guard<std::mutex> lock(mu);
-                if (next >= mine.size() || !error.empty()) return;
-                job = todo[mine[next++]];
-            }
-            const std::string dir = dir_of(job);
-            try {
-                const bool reused = fs::exists(dir + "/summary.json");
-                if (!reused) {
-                    fs::remove_all(dir);  // an unfinished run of our own
-                    RunOptions ro;
-                    ro.out_dir = dir;
-                    run_scenario(scenario_of(c, job.row, job.seed), ro);
-                }
-                std::lock_guard<std::mutex> lock(mu);
-                (reused ? res.runs_reused : res.runs_done) += 1;
-                if (!reused) ++ran;
-                long finished = 0;
-                for (const Job& j : todo) finished += fs::exists(dir_of(j) + "/summary.json") ? 1 : 0;
-                const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-                const double eta = ran > 0 ? secs / double(ran) * double(todo.size() - size_t(finished)) / double(ranks.size()) : 0.0;
-                std::printf("  %s%s; %ld / %zu runs done%s\n", row_tag(job.row, job.seed).c_str(), reused ? " (reused)" : "",
-                            finished, todo.size(),
-                            ran > 0 && size_t(finished) < todo.size() ? (", ETA " + format_number(std::round(eta)) + " s").c_str() : "");
-                std::fflush(stdout);
-            } catch (const std::exception& e) {
-                std::lock_guard<std::mutex> lock(mu);
-                error = dir + ": " + e.what();
-            }
-        }
+    RankJobsDef def;
+    def.count = todo.size();
+    def.threads = o.jobs > 0 ? o.jobs : std::max(1, int(std::thread::hardware_concurrency()));
+    def.what = "sweep";
+    def.folder = [&](size_t k) { return dir_of(todo[k]); };
+    def.run = [&](size_t k) {
+        RunOptions ro;
+        ro.out_dir = dir_of(todo[k]);
+        run_scenario(scenario_of(c, todo[k].row, todo[k].seed), ro);
     };
-    std::vector<std::thread> pool;
-    for (int k = 0; k < std::min<int>(jobs, int(mine.size())); ++k) pool.emplace_back(worker);
-    for (auto& th : pool) th.join();
+    def.describe = [&](size_t k) { return row_tag(todo[k].row, todo[k].seed); };
+    SweepResult res;
+    g_progress_muted = true;
+    RankJobsCount count;
+    try {
+        count = run_rank_jobs(def);
+    } catch (...) {
+        g_progress_muted = false;
+        throw;
+    }
     g_progress_muted = false;
-    if (ranks.any_failed(!error.empty()))
-        throw RunError("sweep run failed: " + (error.empty() ? std::string("on another rank (its output says which)") : error));
+    res.runs_done = count.ran;
+    res.runs_reused = count.reused;
     res.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     if (!ranks.root()) return res;
 

@@ -1,0 +1,67 @@
+#include "calibration/rank_jobs.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <mutex>
+#include <thread>
+#include <vector>
+
+#include "calibration/ranks.h"
+#include "core/error.h"
+#include "core/validate.h"
+
+namespace demlab {
+
+RankJobsCount run_rank_jobs(const RankJobsDef& def) {
+    const Ranks& ranks = Ranks::world();
+    std::vector<size_t> mine;
+    for (size_t k = 0; k < def.count; ++k)
+        if (int(k % size_t(ranks.size())) == ranks.rank()) mine.push_back(k);
+    RankJobsCount count;
+    std::mutex mu;
+    size_t next = 0;
+    std::string error;
+    const auto t0 = std::chrono::steady_clock::now();
+    const auto worker = [&] {
+        while (true) {
+            size_t k;
+            {
+                std::lock_guard<std::mutex> lock(mu);
+                if (next >= mine.size() || !error.empty()) return;
+                k = mine[next++];
+            }
+            const std::string dir = def.folder(k);
+            try {
+                const bool reused = std::filesystem::exists(dir + "/summary.json");
+                if (!reused) {
+                    std::filesystem::remove_all(dir);  // an unfinished run of our own
+                    def.run(k);
+                }
+                const std::string line = def.describe(k);
+                std::lock_guard<std::mutex> lock(mu);
+                (reused ? count.reused : count.ran) += 1;
+                long finished = 0;
+                for (size_t j = 0; j < def.count; ++j) finished += std::filesystem::exists(def.folder(j) + "/summary.json") ? 1 : 0;
+                const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+                const double eta = count.ran > 0 ? secs / count.ran * double(def.count - size_t(finished)) / ranks.size() : 0.0;
+                std::printf("  %s%s; %ld / %zu runs done%s\n", line.c_str(), reused ? " (reused)" : "", finished, def.count,
+                            count.ran > 0 && size_t(finished) < def.count ? (", ETA " + format_number(std::round(eta)) + " s").c_str() : "");
+                std::fflush(stdout);
+            } catch (const std::exception& e) {
+                std::lock_guard<std::mutex> lock(mu);
+                error = dir + ": " + e.what();
+            }
+        }
+    };
+    std::vector<std::thread> pool;
+    for (int t = 0; t < std::min<int>(def.threads, int(mine.size())); ++t) pool.emplace_back(worker);
+    for (auto& th : pool) th.join();
+    if (ranks.any_failed(!error.empty()))
+        throw RunError(def.what + " run failed: " + (error.empty() ? std::string("on another rank (its output says which)") : error));
+    return count;
+}
+
+}  // namespace demlab
