@@ -42,12 +42,11 @@ double World::critical_step_squared_of(size_t i, const DtFactors& f) const {
 }
 
 double World::step_from_critical_squared(double best_sq) const {
-    // DEBRIS: the rule capped by debris.dt_max, which a disc without contacts takes (D12)
-    // and grown by at most half a step a step: the closing contacts are looked for one step
-    // of the present size ahead (DebrisLaw::k_ahead), so the next may not be much longer
+    // DEBRIS: the rule capped by debris.dt_max, which a disc without contacts takes (D12),
+    // shrinking at once and growing slowly (DebrisLaw::kStepGrowth)
     if (def_.law == ContactLawKind::Debris) {
         const double rule = std::isfinite(best_sq) ? def_.timestep.safety * std::sqrt(best_sq) : INFINITY;
-        return std::min({def_.debris.dt_max, rule, dt_ > 0.0 ? 1.5 * dt_ : INFINITY});
+        return std::min({def_.debris.dt_max, rule, dt_ > 0.0 ? DebrisLaw::kStepGrowth * dt_ : INFINITY});
     }
     if (!std::isfinite(best_sq)) return def_.timestep.fixed;  // no discs
     return def_.timestep.safety * std::sqrt(best_sq);

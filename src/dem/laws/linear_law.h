@@ -48,6 +48,8 @@ struct LinearLaw {
     static constexpr bool kWideKernels = true;
     static constexpr bool kDiscFriction = false;  // friction at the contacts (DebrisLaw: per disc)
     static constexpr bool kStepAhead = false;     // open contacts add nothing to the step (DebrisLaw: they may)
+    // The ledger's elastic energy at x(t), as its dashpots' work is booked (DebrisLaw: at t - dt/2).
+    static constexpr bool kElasticAtHalfStep = false;
     static double k_ahead(const Params&, double, double, double, double, double) { return 0.0; }
 
     // kn, ks: the series stiffnesses (N/m); mu: the combined friction coefficient
