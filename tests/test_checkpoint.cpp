@@ -19,6 +19,7 @@
 #include "core/crc32c.h"
 #include "core/error.h"
 #include "files.h"
+#include "resume.h"
 #include "core/interrupt.h"
 #include "run/run.h"
 #include "scenario/scenario.h"
@@ -142,12 +143,7 @@ TEST(Checkpoint, ResumedRunIsByteIdentical) {
         junk << "9.99,written after the checkpoint by a run that was then killed\n";
     }
 
-    Scenario s2 = load_scenario((cut / "scenario.toml").string());  // what `demlab resume` does
-    finish_scenario(s2);
-    s2.world.threads = 2;
-    RunOptions rr{cut.string(), false, {}};
-    rr.resume = true;
-    const RunSummary r = run_scenario(s2, rr);
+    const RunSummary r = demlab::test::resume_run(cut, 2);
     EXPECT_NEAR(r.t_end, 1.2, 1e-4);
     expect_same_outputs(ref, cut);
     fs::remove_all(ref);
@@ -174,12 +170,7 @@ TEST(Checkpoint, DebrisRunResumesToTheSameBytes) {
     EXPECT_THROW(run_scenario(make(), ro), Interrupted);
     ASSERT_TRUE(fs::exists(cut / kCheckpointFile));
     EXPECT_NEAR(read_checkpoint_info(cut.string()).time, 2.0, 0.01);
-    Scenario s2 = load_scenario((cut / "scenario.toml").string());
-    finish_scenario(s2);
-    s2.world.threads = 2;
-    RunOptions rr{cut.string(), false, {}};
-    rr.resume = true;
-    run_scenario(s2, rr);
+    demlab::test::resume_run(cut, 2);
     int files = 0;
     for (const auto& e : fs::recursive_directory_iterator(ref)) {
         if (!e.is_regular_file()) continue;

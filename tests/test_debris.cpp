@@ -254,6 +254,16 @@ TEST(Debris, ElasticForceFeedsFriction) {
 }
 
 namespace {
+// a box open at the top: floor [0, 12] and walls 40 m high
+void box_walls(World& w) {
+    for (auto [a, b] : {std::pair<Vec2, Vec2>{Vec2(0, 0), Vec2(12, 0)}, {Vec2(12, 0), Vec2(12, 40)}, {Vec2(0, 40), Vec2(0, 0)}}) {
+        WallDef wd;
+        wd.p0 = a;
+        wd.p1 = b;
+        w.add_wall(wd);
+    }
+}
+
 // discs of radius r on a grid in a box [0, 12] x [0, 20], with velocities
 World box(int n, double r, double mu, Vec2 g, int threads = 1, double safety = 0.8) {
     WorldDef def = debris_world(mu, 0.0, g);
@@ -266,12 +276,7 @@ World box(int n, double r, double mu, Vec2 g, int threads = 1, double safety = 0
         const double x = 1.0 + 2.5 * r * (k % cols), y = 1.0 + 2.5 * r * (k / cols);
         w.add_disc({Vec2(x, y), r, Vec2(std::sin(1.7 * k), std::cos(2.3 * k)), 0, 0, m});
     }
-    for (auto [a, b] : {std::pair<Vec2, Vec2>{Vec2(0, 0), Vec2(12, 0)}, {Vec2(12, 0), Vec2(12, 40)}, {Vec2(0, 40), Vec2(0, 0)}}) {
-        WallDef wd;
-        wd.p0 = a;
-        wd.p1 = b;
-        w.add_wall(wd);
-    }
+    box_walls(w);
     w.finalize();
     return w;
 }
@@ -320,12 +325,7 @@ TEST(Debris, RingingPileKeepsItsEnergy) {
         const double x = 0.5 + r + 2 * r * col + (row % 2) * r, y = r + row * std::sqrt(3.0) * r;
         w.add_disc({Vec2(x, y), r, Vec2(0.05 * std::sin(1.7 * k), 0.05 * std::cos(2.3 * k)), 0, 0, m});
     }
-    for (auto [a, b] : {std::pair<Vec2, Vec2>{Vec2(0, 0), Vec2(12, 0)}, {Vec2(12, 0), Vec2(12, 40)}, {Vec2(0, 40), Vec2(0, 0)}}) {
-        WallDef wd;
-        wd.p0 = a;
-        wd.p1 = b;
-        w.add_wall(wd);
-    }
+    box_walls(w);
     w.finalize();
     const EnergyReport e0 = w.energy();
     const double total0 = e0.kinetic_translation + e0.potential + e0.elastic;

@@ -12,6 +12,7 @@
 #include "core/interrupt.h"
 #include "dem/world.h"
 #include "files.h"
+#include "resume.h"
 #include "run/run.h"
 #include "scenario/scenario.h"
 
@@ -196,12 +197,7 @@ TEST(LostDiscs, RunRecordsThemAndResumesToTheSameBytes) {
                   }};
     ro.handle_signals = true;
     EXPECT_THROW(run_scenario(s, ro), Interrupted);
-    Scenario s2 = load_scenario((cut / "scenario.toml").string());
-    finish_scenario(s2);
-    s2.world.threads = 2;
-    RunOptions rr{cut.string(), false, {}};
-    rr.resume = true;
-    run_scenario(s2, rr);
+    demlab::test::resume_run(cut, 2);
     for (const char* f : {"forces.csv", "energy.csv", "track.csv", "lost.csv", "snapshots/discs_00008.vtp"})
         EXPECT_EQ(read_file(ref / f), read_file(cut / f)) << f;
     fs::remove_all(ref);
