@@ -10,7 +10,7 @@ namespace demlab::test {
 
 // The folder's own resolved scenario, on `threads` threads (the thread count is not part of
 // the result: a resume on another count must give the same bytes).
-inline RunSummary resume_run(const std::filesystem::path& dir, int threads = 2) {
+inline RunSummary resume_run(const std::filesystem::path& dir, int threads) {
     Scenario s = load_scenario((dir / "scenario.toml").string());
     finish_scenario(s);
     s.world.threads = threads;
