@@ -462,6 +462,8 @@ TEST(EsriGrid, PlaneSampledAlongASectionAndFaultsRefused) {
     }
     EXPECT_DOUBLE_EQ(s.back().x(), 50.0);
     expect_refused([&] { sample_section(g, plane, Vec2(100, 205), b, 5.0); }, {"outside the grid", "terrain.section"});
+    // a section far longer than any grid: refused by its sample count, not by an integer overflow
+    expect_refused([&] { sample_section(g, plane, a, Vec2(1e60, 1e60), 1.0); }, {"more than 1,000,000", "terrain.section"});
     std::string holed = t.str();
     const size_t south = holed.rfind("\n", holed.size() - 2) + 1;  // the south-west cell
     holed.replace(south, holed.find(' ', south) - south, "-9999");

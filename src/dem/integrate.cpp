@@ -204,7 +204,7 @@ void World::integrate_discs(size_t begin, size_t end, int chunk, const Integrate
         // Outside the (finite) domain, or not a number: one test, without branches. A
         // non-finite velocity shows in the position it has just moved (v dt is inf or NaN).
         // (It was a finiteness test of p + v and four branches: a sixth of this loop, perf.)
-        const bool inside = (p.x() >= lo.x()) & (p.x() <= hi.x()) & (p.y() >= lo.y()) & (p.y() <= hi.y());
+        const bool inside = (int(p.x() >= lo.x()) & int(p.x() <= hi.x()) & int(p.y() >= lo.y()) & int(p.y() <= hi.y())) != 0;
         const bool bad = !inside;
         if (bad && fault == SIZE_MAX) fault = i;
         // BroadPhase::inside_fat_box, through the local pointers

@@ -86,7 +86,7 @@ void World::integrate_discs_debris(size_t begin, size_t end, int chunk, const In
             block_friction = 0.0;
             kinetic_lanes[0] = kinetic_lanes[1] = kinetic_lanes[2] = kinetic_lanes[3] = 0.0;
         }
-        const bool inside = (p.x() >= lo.x()) & (p.x() <= hi.x()) & (p.y() >= lo.y()) & (p.y() <= hi.y());
+        const bool inside = (int(p.x() >= lo.x()) & int(p.x() <= hi.x()) & int(p.y() >= lo.y()) & int(p.y() <= hi.y())) != 0;
         if (!inside && fault == SIZE_MAX) fault = i;
         const double r = radius[i];
         any_escaped = any_escaped || !(fat_lo[i].x() <= p.x() - r && fat_lo[i].y() <= p.y() - r &&

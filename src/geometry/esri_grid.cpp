@@ -138,8 +138,11 @@ std::vector<Vec2> sample_section(const EsriGrid& g, const std::string& path, con
     const double length = (b - a).norm();
     if (!(length > 0.0)) throw InputError(path + ": terrain.section: its two points coincide");
     if (!(spacing > 0.0)) throw InputError(path + ": terrain.spacing = " + format_number(spacing) + " m must be > 0");
-    const long n = long(std::ceil(length / spacing - 1e-9));
-    if (n > 1000000) throw InputError(path + ": terrain.section: " + std::to_string(n) + " samples (more than 1,000,000): a larger spacing");
+    // counted in double first: a section far longer than the grid would overflow the integer
+    const double samples = std::ceil(length / spacing - 1e-9);
+    if (!(samples <= 1000000.0))
+        throw InputError(path + ": terrain.section: " + format_number(samples) + " samples (more than 1,000,000): a larger spacing");
+    const long n = long(samples);
     std::vector<Vec2> out;
     for (long k = 0; k <= n; ++k) {
         const double s = std::min(double(k) * spacing, length);

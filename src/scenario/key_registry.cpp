@@ -154,8 +154,6 @@ Key choice(std::string name, std::string doc, E& (*ref)(Scenario&), std::vector<
     return k;
 }
 
-constexpr double kInf = INFINITY;
-
 void add_scenario_and_material_keys(std::vector<Key>& k) {
     // scenario
     k.push_back(text("scenario.name", "name of the scenario, used in outputs", [](Scenario& s) -> std::string& { return s.name; }));
