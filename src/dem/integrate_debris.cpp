@@ -58,12 +58,15 @@ void World::integrate_discs_debris(size_t begin, size_t end, int chunk, const In
         if (l.n_wall + l.n_disc > 0) {
             // N and P: the bed's and the pairs' parts of the contact force (debris_law.h: the
             // pairs' moduli are summed in k_rot, the walls' in wall_normal)
-            const double normal = resultant ? wall_reaction[i].norm() + (l.force - wall_reaction[i]).norm()
+            // (a disc off the walls, most of them, skips the walls' square root: its sum is 0)
+            const double normal = resultant ? (l.n_wall > 0 ? wall_reaction[i].norm() : 0.0) + (l.force - wall_reaction[i]).norm()
                                             : l.wall_normal + l.k_rot;
             if (trial) {
                 const double j = h * dd.mu * normal * inv_mass[i];
                 const double speed = v_star.norm();
-                v_new = speed <= j ? Vec2::Zero() : Vec2(v_star * ((speed - j) / speed / (1.0 + h * dd.eta * inv_mass[i])));
+                // one division: (speed - j)/speed/(1 + h eta/m), the same bits when eta = 0
+                v_new = speed <= j ? Vec2::Zero()
+                                   : Vec2(v_star * ((speed - j) / (speed * (1.0 + h * dd.eta * inv_mass[i]))));
             } else {
                 const double speed = v_old.norm();
                 if (speed > 0.0) v_new = v_star - (h * inv_mass[i] * (dd.mu * normal + dd.eta * speed) / speed) * v_old;

@@ -54,11 +54,13 @@ namespace debris {
 // a^2 of the contact for overlap delta: bed a^2 = delta (2R - delta); pair, with
 // d = Ri + Rj - delta and x the distance of the chord from i's centre,
 // a^2 = Ri^2 - x^2 = delta (Rj + d - Ri)(Ri + x) / (2 d) (written so: no cancellation)
+// (one division: both quotients by 2d share its reciprocal)
 inline double half_width_sq(double delta, double ri, double rj) {
     if (rj <= 0.0) return std::max(delta * (2.0 * ri - delta), 0.0);
     const double d = ri + rj - delta;
-    const double x = (d * d + ri * ri - rj * rj) / (2.0 * d);
-    return std::max(delta * (rj + d - ri) * (ri + x) / (2.0 * d), 0.0);
+    const double inv_2d = 0.5 / d;
+    const double x = (d * d + ri * ri - rj * rj) * inv_2d;
+    return std::max(delta * (rj + d - ri) * (ri + x) * inv_2d, 0.0);
 }
 
 // F(delta), N/m (t = 1 m)
@@ -71,25 +73,29 @@ inline double force(double E, DebrisArea area, double delta, double ri, double r
 
 // dF/d delta, N/m per m. Bed: F = (2E/R) a delta, a^2 = delta q with q = 2R - delta, da/d delta
 // = d/a; pair: F = 2E a delta/(Ri + Rj), a^2 = delta q with q = (Rj + d - Ri)(Ri + x)/(2d),
-// da/d delta = x (1 - x/d)/a. The term delta da/d delta is written with delta/a = sqrt(delta/q),
-// finite as delta -> 0 (where the form tends to Hertz's D7, k = 3 E sqrt(2 R* delta)/(Ri + Rj)).
+// da/d delta = x (1 - x/d)/a. The term delta da/d delta = (delta/a) c, with c = d (bed) or
+// x (1 - x/d) (pair), is written with delta/a = a/q, finite as delta -> 0 (where the form
+// tends to Hertz's D7, k = 3 E sqrt(2 R* delta)/(Ri + Rj)):
+//   k = 2E (a + a c/q)/(Ri + Rj) = 2E a (q + c)/(q (Ri + Rj)),
+// one square root and one division (two for a pair, with 1/(2d)), as force() takes: the step
+// needs it for every contact in every step.
 inline double stiffness(double E, DebrisArea area, double delta, double ri, double rj) {
     const double rsum = rj > 0.0 ? ri + rj : ri;
     if (area == DebrisArea::Diameter) return E * 2.0 * (rj > 0.0 ? std::min(ri, rj) : ri) / rsum;
     if (!(delta > 0.0)) return 0.0;
-    double a, delta_da;
+    double q, c;
     if (rj <= 0.0) {
-        const double q = 2.0 * ri - delta;
-        a = std::sqrt(delta * q);
-        delta_da = (ri - delta) * std::sqrt(delta / q);
+        q = 2.0 * ri - delta;
+        c = ri - delta;
     } else {
         const double d = rsum - delta;
-        const double x = (d * d + ri * ri - rj * rj) / (2.0 * d);
-        const double q = (rj + d - ri) * (ri + x) / (2.0 * d);
-        a = std::sqrt(delta * q);
-        delta_da = x * (1.0 - x / d) * std::sqrt(delta / q);
+        const double inv_2d = 0.5 / d;
+        const double x = (d * d + ri * ri - rj * rj) * inv_2d;
+        q = (rj + d - ri) * (ri + x) * inv_2d;
+        c = x * (1.0 - 2.0 * x * inv_2d);
     }
-    return 2.0 * E * (a + delta_da) / rsum;
+    const double a = std::sqrt(delta * q);
+    return 2.0 * E * a * (q + c) / (q * rsum);
 }
 
 // U(delta) = int_0^delta F, J/m: 8-point Gauss-Legendre over w in [0, sqrt(delta)], F(w^2) 2w dw
@@ -141,6 +147,16 @@ struct DebrisLaw {
     static double k_ahead(const Params& p, double gap, double vn, double dt, double ri, double rj) {
         const double ahead = -gap + kAheadSteps * dt * std::max(0.0, -vn);
         return ahead > 0.0 ? stiffness_at(p, ahead, ri, rj) : 0.0;
+    }
+    // The same for an open pair from its squared distance: most open candidates are farther
+    // apart than they can close in kAheadSteps steps, which a bound without a square root or
+    // a division shows (|vn| <= |vrel| <= |vx| + |vy|); they have k = 0 without the normal.
+    static double pair_k_ahead(const Params& p, double dist2, double rsum, const Vec2& dx, const Vec2& vrel, double dt,
+                               double ri, double rj) {
+        const double reach = rsum + kAheadSteps * dt * (std::abs(vrel.x()) + std::abs(vrel.y()));
+        if (dist2 >= reach * reach) return 0.0;
+        const double dist = std::sqrt(dist2);
+        return k_ahead(p, dist - rsum, vrel.dot(dx) / dist, dt, ri, rj);
     }
     // the tangent stiffness at an overlap ahead, kept below the smaller radius (the chord's
     // half-width is not defined past it)

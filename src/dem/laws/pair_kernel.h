@@ -77,9 +77,8 @@ template <typename Law = LinearLaw>
         }
         Law::clear_history(c);
         if constexpr (Law::kStepAhead) {
-            const double dist = std::sqrt(dist2);
             const typename Law::Params& pm = p.materials[size_t(d.material[i]) * p.n_materials + size_t(d.material[j])];
-            out.k_tran = Law::k_ahead(pm, dist - rsum, (d.vel[j] - d.vel[i]).dot(dx / dist), p.dt, d.radius[i], d.radius[j]);
+            out.k_tran = Law::pair_k_ahead(pm, dist2, rsum, dx, d.vel[j] - d.vel[i], p.dt, d.radius[i], d.radius[j]);
         }
         return true;
     }
