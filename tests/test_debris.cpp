@@ -284,9 +284,9 @@ World box(int n, double r, double mu, Vec2 g, int threads = 1, double safety = 0
 
 // 30 undamped discs bouncing in a box for 2 s (impacts at up to 8 m/s, thousands of them),
 // KE + PE + U against its start. Automatic step (about 4,000 steps; chaotic, so the figures
-// move with any change): measured 0.49 % at safety 0.8, 2.2 % at 0.4, 0.70 % at 0.2, 0.17 % at
+// move with any change): measured 0.46 % at safety 0.8, 2.1 % at 0.4, 0.67 % at 0.2, 0.14 % at
 // 0.1; with the step let grow by 1.5 a step (DebrisLaw::kStepGrowth) it was 4.2 % at 0.8.
-// Fixed steps: 1.6 % at 4e-4 s, 0.23 % at 2e-4, 0.032 % at 1e-4, 0.008 % at 5e-5 (the
+// Fixed steps: 1.8 % at 4e-4 s, 0.22 % at 2e-4, 0.032 % at 1e-4, 0.008 % at 5e-5 (the
 // leapfrog's second order). DEBRIS.md asks 0.1 % at safety 0.8: not reached (docs/debris.md).
 double box_drift(double safety, double fixed_dt = 0.0) {
     World w = box(30, 0.5, 0.0, Vec2(0.0, -kG), 1, safety);
@@ -314,8 +314,8 @@ TEST(Debris, ConservesEnergy) {
 
 // 30 undamped discs in three rows on the floor, let go at zero overlap with small velocities:
 // the pile sags under its weight and rings for 100,000 automatic steps (about 43 s). Measured
-// 2.6 % at safety 0.8; with the step free to follow each oscillation (a growth of 1.5 a step)
-// it gained 42 %. Fixed steps of the same mean size: 5 % at 4.9e-4 s, 0.08 % at 2.6e-4 s.
+// 2.2 % at safety 0.8; with the step free to follow each oscillation (a growth of 1.5 a step)
+// it gained 42 %. A fixed step of the same mean size, 4.3e-4 s: 1.9 %.
 TEST(Debris, RingingPileKeepsItsEnergy) {
     World w(debris_world(0.0, 0.0, Vec2(0.0, -kG)));
     const int m = rock(w);

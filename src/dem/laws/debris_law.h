@@ -133,8 +133,8 @@ struct DebrisLaw {
     // follows the stiffness of the moment rises and falls with every oscillation of a contact,
     // and a step that varies with the state breaks the leapfrog's symplectic structure: an
     // undamped pile of 30 discs ringing on the floor gained 42 % of its energy in 100,000 steps
-    // at safety 0.8 with a growth of 1.5 (2.6 % at 1.05, as a fixed step of the same mean
-    // size: 5 % at 4.9e-4 s); the box gas of Debris.ConservesEnergy drifted 4.2 % (0.5 % at
+    // at safety 0.8 with a growth of 1.5 (2.2 % at 1.05; a fixed step of the same mean size,
+    // 4.3e-4 s: 1.9 %); the box gas of Debris.ConservesEnergy drifted 4.2 % (0.5 % at
     // 1.05). The Attabad section takes 2.4 % more steps at 1.05.
     static constexpr double kStepGrowth = 1.05;
     // The tangent stiffness of an open contact that may touch by the end of the next step (0
