@@ -20,6 +20,8 @@
 #include "helpers.h"
 #include "run/run.h"
 #include "scenario/scenario.h"
+#include "setups/lattice_release.h"
+#include "setups/setup.h"
 
 using namespace demlab;
 using demlab::test::expect_refused;
@@ -496,6 +498,53 @@ std::string write_grid(const std::string& name, const std::string& text) {
     return path;
 }
 }  // namespace
+
+// A release given by the mass's top surface (lattice_release.top), filled down to the terrain:
+// the same discs as the polygon it bounds with the bed given as lattice_release.region, and
+// the faults refused with the key. Bed: a floor from (0, 0) to (40, 0) and a rise to (60, 10);
+// top: from the floor at x = 10 up to (30, 6) and (50, 8), ending 3 m above the rise at x = 50.
+TEST(LatticeRelease, TopSurfaceIsFilledDownToTheTerrain) {
+    const std::string bed = write_grid("bed.csv", "x,y\n0,0\n40,0\n60,10\n");
+    const std::string top = write_grid("top.csv", "# the mass's top\nx,y\n10,0\n30,6\n50,8\n");
+    auto scenario = [&](const std::string& release) {
+        Scenario s = parse_scenario("[terrain]\nprofile = \"" + bed + "\"\n[lattice_release]\n" + release +
+                                        "origin = [10.0, 0.5]\nr_min = 0.5\n[contact]\nlaw = \"debris\"\n[rotation]\nmodel = 1\n",
+                                    "top.toml");
+        finish_scenario(s);
+        return s;
+    };
+    const Scenario by_top = scenario("top = \"" + top + "\"\n");
+    // the polygon: the top left to right, then the bed back (the rise's foot at x = 40, the
+    // rise's height at x = 50); the top's first point is on the floor
+    const std::vector<Vec2> polygon = {{10, 0}, {30, 6}, {50, 8}, {50, 5}, {40, 0}};
+    EXPECT_EQ(by_top.lattice_release.fill, polygon);
+    const Scenario by_region = scenario("region = [[10, 0], [30, 6], [50, 8], [50, 5], [40, 0]]\n");
+    auto mass = [](const Scenario& s) {
+        std::vector<WallDef> walls = make_setup(s)->walls();
+        return lattice_mass(s, walls);
+    };
+    const ReleaseMass a = mass(by_top), b = mass(by_region);
+    EXPECT_GT(a.pos.size(), 50u);
+    EXPECT_EQ(a.pos, b.pos);
+    // the resolved scenario reads back the same (a resume's check)
+    Scenario again = parse_scenario(resolved_toml(by_top), "top.toml");
+    finish_scenario(again);
+    EXPECT_EQ(again.lattice_release.fill, polygon);
+    const std::string below = write_grid("below.csv", "x,y\n10,0\n30,-1\n50,8\n");
+    const std::string wide = write_grid("wide.csv", "x,y\n-5,3\n30,6\n");
+    const std::string flat = write_grid("flat.csv", "x,y\n5,0\n35,0\n");
+    expect_refused([&] { scenario("top = \"" + top + "\"\nregion = [[10, 0], [30, 6], [40, 0]]\n"); },
+                   {"lattice_release.region and lattice_release.top", "one of the two"});
+    expect_refused([&] { scenario("top = \"" + below + "\"\n"); }, {"lattice_release.top", "x = 30", "1 m below the terrain"});
+    expect_refused([&] { scenario("top = \"" + wide + "\"\n"); }, {"lattice_release.top", "beyond the terrain's profile"});
+    expect_refused([&] { scenario("top = \"" + flat + "\"\n"); }, {"lattice_release.top", "no mass between them"});
+    expect_refused([&] { scenario("top = \"" + top + "x\"\n"); }, {"top.csvx"});
+    expect_refused([&] {
+        Scenario s = parse_scenario("[lattice_release]\ntop = \"" + top + "\"\norigin = [10.0, 0.5]\nr_min = 0.5\n[contact]\n"
+                                    "law = \"debris\"\n[rotation]\nmodel = 1\n", "top.toml");
+        finish_scenario(s);
+    }, {"lattice_release.top", "needs a [terrain]"});
+}
 
 // An ESRI ASCII grid of the plane z = 100 + 0.5 x - 0.25 y (cell centres, corner origin),
 // sampled along a diagonal: the plane exactly (bilinear is exact on a plane); the header's

@@ -272,6 +272,7 @@ void add_cohesion_keys(std::vector<Key>& k) {
     }
     // lattice release (COHESION.md section 3)
     k.push_back(polygon("lattice_release.region", "array of >= 3 points [x, y], a simple polygon", "the polygon the lattice's discs fill (a centre inside it and at least r from every wall makes a disc)", [](Scenario& s) -> std::vector<Vec2>& { return s.lattice_release.region; }));
+    k.push_back(text("lattice_release.top", "CSV file of the initial mass's top surface, rows x,y in m with x increasing (as terrain.profile; a relative path is taken from the scenario file's folder): the lattice fills the area between it and the terrain's profile, over its x range; instead of lattice_release.region", [](Scenario& s) -> std::string& { return s.lattice_release.top; }));
     k.push_back(vec2("lattice_release.origin", "m", "a node of the lattice (required)", [](Scenario& s) -> Vec2& { return s.lattice_release.origin; }));
     k.push_back(real("lattice_release.angle_deg", "deg", "direction of the rows, counter-clockwise from +x", [](Scenario& s) -> double& { return s.lattice_release.angle_deg; }, -180, 180));
     k.push_back(real("lattice_release.spacing", "m", "distance between neighbouring nodes; 0 = 2 r_max", [](Scenario& s) -> double& { return s.lattice_release.spacing; }, 0, 100));

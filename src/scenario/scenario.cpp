@@ -193,6 +193,14 @@ void apply_override(Scenario& s, const std::string& assignment) {
     if (key.rfind("dan.", 0) == 0) s.dan_given = true;
 }
 
+// A relative path is the scenario file's neighbour; resolved, it is written absolute, so the
+// run folder's copy of the scenario (and a resume) reads the same file.
+static void resolve_beside_scenario(const Scenario& s, std::string& file) {
+    const std::filesystem::path p(file);
+    if (p.is_relative() && std::filesystem::is_regular_file(s.source))
+        file = (std::filesystem::absolute(std::filesystem::path(s.source)).parent_path() / p).lexically_normal().string();
+}
+
 // The profile read and the release polygon checked: a convex polygon of >= 3 corners that
 // holds discs of the release's radii.
 void finish_terrain(Scenario& s) {
@@ -202,13 +210,7 @@ void finish_terrain(Scenario& s) {
         throw InputError(where + (t.profile.empty() ? "terrain.profile: a [terrain] needs its profile (a CSV file of x,y rows in m) "
                                                       "or an elevation grid (terrain.grid with terrain.section)"
                                                     : "terrain.profile and terrain.grid: give one of the two"));
-    // a relative path is the scenario file's neighbour; resolved, it is written absolute, so
-    // the run folder's copy of the scenario (and a resume) reads the same file
-    auto beside_scenario = [&](std::string& file) {
-        const std::filesystem::path p(file);
-        if (p.is_relative() && std::filesystem::is_regular_file(s.source))
-            file = (std::filesystem::absolute(std::filesystem::path(s.source)).parent_path() / p).lexically_normal().string();
-    };
+    auto beside_scenario = [&](std::string& file) { resolve_beside_scenario(s, file); };
     if (!t.profile.empty()) {
         beside_scenario(t.profile);
         t.points = read_profile_csv(t.profile);
@@ -341,6 +343,46 @@ void finish_cohesion(Scenario& s) {
                          format_number(c.build.max_bond_length) + ")");
 }
 
+// The polygon between a mass's top surface and the bed below it, over the top's x range:
+// the top from left to right, then the bed back from right to left (its heights interpolated
+// at the top's ends, which are left out where the top starts or ends on the bed). The top
+// must lie within the bed's x range and nowhere below it.
+static std::vector<Vec2> region_under_top(const std::vector<Vec2>& top, const std::vector<Vec2>& bed, const std::string& what) {
+    if (top.size() < 2) throw InputError(what + ": " + std::to_string(top.size()) + " point(s); the top needs at least 2");
+    const double xa = top.front().x(), xb = top.back().x();
+    if (xa < bed.front().x() || xb > bed.back().x())
+        throw InputError(what + ": x from " + format_number(xa) + " to " + format_number(xb) +
+                         " m, beyond the terrain's profile (x from " + format_number(bed.front().x()) + " to " +
+                         format_number(bed.back().x()) + " m)");
+    auto height = [](const std::vector<Vec2>& line, double x) {
+        size_t k = 0;
+        while (k + 2 < line.size() && line[k + 1].x() < x) ++k;
+        const Vec2 a = line[k], b = line[k + 1];
+        return a.y() + (b.y() - a.y()) * (x - a.x()) / (b.x() - a.x());
+    };
+    // a tolerance for "on the bed": a millionth of the mass's extent
+    const double extent = std::max({xb - xa, std::abs(top.front().y()), std::abs(top.back().y()), 1.0});
+    const double tol = 1e-6 * extent;
+    double thickest = 0.0;
+    auto check = [&](double x, double above) {
+        if (above < -tol)
+            throw InputError(what + ": at x = " + format_number(x) + " m the top is " + format_number(-above) +
+                             " m below the terrain; it must lie on or above it");
+        thickest = std::max(thickest, above);
+    };
+    for (const Vec2& p : top) check(p.x(), p.y() - height(bed, p.x()));
+    for (const Vec2& p : bed)
+        if (p.x() > xa && p.x() < xb) check(p.x(), height(top, p.x()) - p.y());
+    if (!(thickest > tol)) throw InputError(what + ": the top lies on the terrain everywhere: no mass between them");
+    std::vector<Vec2> poly(top.begin(), top.end());
+    const double yb = height(bed, xb), ya = height(bed, xa);
+    if (top.back().y() - yb > tol) poly.emplace_back(xb, yb);
+    for (size_t k = bed.size(); k-- > 0;)
+        if (bed[k].x() > xa + tol && bed[k].x() < xb - tol) poly.push_back(bed[k]);
+    if (top.front().y() - ya > tol) poly.emplace_back(xa, ya);
+    return poly;
+}
+
 // The lattice's keys together: a region and an origin, radii, a spacing that keeps discs apart.
 void finish_lattice(Scenario& s) {
     const std::string where = s.source + ": ";
@@ -349,17 +391,30 @@ void finish_lattice(Scenario& s) {
     if (s.flume.enabled || s.dam_break.enabled || (s.terrain.enabled && !s.terrain.release.empty()))
         throw InputError(where + "[lattice_release] fills its own region: it cannot go with a [flume], a [dam_break] "
                          "or a terrain.release (they generate a release mass)");
-    if (l.region.size() < 3)
-        throw InputError(where + "lattice_release.region: " + std::to_string(l.region.size()) +
-                         " points; a polygon needs at least 3 ([[x, y], ...] in m)");
-    const size_t n = l.region.size();
+    if (!l.top.empty()) {
+        if (!l.region.empty())
+            throw InputError(where + "lattice_release.region and lattice_release.top: give one of the two (a polygon, or the "
+                             "mass's top surface filled down to the terrain)");
+        if (!s.terrain.enabled)
+            throw InputError(where + "lattice_release.top: the mass's top is filled down to the terrain's profile: it needs a "
+                             "[terrain] (terrain.profile or terrain.grid)");
+        resolve_beside_scenario(s, l.top);
+        l.fill = region_under_top(read_profile_csv(l.top), s.terrain.points, where + "lattice_release.top");
+    } else {
+        if (l.region.size() < 3)
+            throw InputError(where + "lattice_release.region: " + std::to_string(l.region.size()) +
+                             " points; a polygon needs at least 3 ([[x, y], ...] in m), or give lattice_release.top");
+        l.fill = l.region;
+    }
+    const size_t n = l.fill.size();
+    const std::string name = l.top.empty() ? "lattice_release.region" : "lattice_release.top (the area down to the terrain)";
     for (size_t a = 0; a < n; ++a)
         for (size_t b = a + 1; b < n; ++b) {
             if (b == a + 1 || (a == 0 && b == n - 1)) continue;  // neighbours share a corner
-            const Vec2 p = l.region[a], q = l.region[(a + 1) % n], r = l.region[b], t = l.region[(b + 1) % n];
+            const Vec2 p = l.fill[a], q = l.fill[(a + 1) % n], r = l.fill[b], t = l.fill[(b + 1) % n];
             const double d1 = cross(q - p, r - p), d2 = cross(q - p, t - p), d3 = cross(t - r, p - r), d4 = cross(t - r, q - r);
             if (((d1 > 0) != (d2 > 0)) && ((d3 > 0) != (d4 > 0)) && d1 != 0 && d2 != 0 && d3 != 0 && d4 != 0)
-                throw InputError(where + "lattice_release.region: edges " + std::to_string(a) + " and " + std::to_string(b) +
+                throw InputError(where + name + ": edges " + std::to_string(a) + " and " + std::to_string(b) +
                                  " cross: the polygon must be simple");
         }
     if (!std::isfinite(l.origin.x()) || !std::isfinite(l.origin.y()))

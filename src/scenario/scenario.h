@@ -65,6 +65,8 @@ struct CohesionDef {
 struct LatticeReleaseDef {
     bool enabled = false;                  // a [lattice_release] table was given
     std::vector<Vec2> region;              // m, a simple polygon of >= 3 corners
+    std::string top;                       // or a CSV file of the mass's top (x,y rows, x increasing), filled down to the terrain
+    std::vector<Vec2> fill;                // m, the polygon filled: region, or between top and the terrain (finish_scenario)
     Vec2 origin{NAN, NAN};                 // m, a lattice node (required)
     double angle_deg = 0.0;                // deg, the rows' direction, ccw from +x
     double spacing = 0.0;                  // m, between neighbours; 0 = 2 r_max

@@ -36,7 +36,7 @@ ReleaseMass lattice_mass(const Scenario& s, const std::vector<WallDef>& walls) {
     const Vec2 u(std::cos(a), std::sin(a)), w(-u.y(), u.x());
     // the region's extent in lattice coordinates, one node more on every side
     double u0 = INFINITY, u1 = -INFINITY, w0 = INFINITY, w1 = -INFINITY;
-    for (const Vec2& p : l.region) {
+    for (const Vec2& p : l.fill) {
         const Vec2 d = p - l.origin;
         u0 = std::min(u0, d.dot(u));
         u1 = std::max(u1, d.dot(u));
@@ -56,7 +56,7 @@ ReleaseMass lattice_mass(const Scenario& s, const std::vector<WallDef>& walls) {
         for (long i = i0; i <= i1; ++i) {
             const double odd = (j % 2 + 2) % 2 == 1 ? 0.5 * sp : 0.0;
             const Vec2 p = l.origin + (double(i) * sp + odd) * u + double(j) * row * w;
-            if (!inside_or_on(l.region, p, tol)) continue;
+            if (!inside_or_on(l.fill, p, tol)) continue;
             const double r = l.r_min + (l.r_max - l.r_min) * (double(rng() >> 11) * 0x1.0p-53);
             bool clear = true;
             // (0.1 % of r of slack: coordinates given to 0.1 mm put a row meant to touch the
