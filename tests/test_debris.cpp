@@ -538,7 +538,7 @@ TEST(LatticeRelease, TopSurfaceIsFilledDownToTheTerrain) {
     expect_refused([&] { scenario("top = \"" + below + "\"\n"); }, {"lattice_release.top", "x = 30", "1 m below the terrain"});
     expect_refused([&] { scenario("top = \"" + wide + "\"\n"); }, {"lattice_release.top", "beyond the terrain's profile"});
     expect_refused([&] { scenario("top = \"" + flat + "\"\n"); }, {"lattice_release.top", "no mass between them"});
-    expect_refused([&] { scenario("top = \"" + top + "x\"\n"); }, {"top.csvx"});
+    expect_refused([&] { scenario("top = \"" + top + "x\"\n"); }, {"top.csvx", "lattice_release.top"});
     expect_refused([&] {
         Scenario s = parse_scenario("[lattice_release]\ntop = \"" + top + "\"\norigin = [10.0, 0.5]\nr_min = 0.5\n[contact]\n"
                                     "law = \"debris\"\n[rotation]\nmodel = 1\n", "top.toml");

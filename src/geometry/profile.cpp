@@ -11,8 +11,8 @@
 
 namespace demlab {
 
-std::vector<Vec2> read_profile_csv(const std::string& path) {
-    std::istringstream in(read_input_file(path, kMaxTableBytes, "terrain profile (terrain.profile)"));
+std::vector<Vec2> read_profile_csv(const std::string& path, const std::string& what) {
+    std::istringstream in(read_input_file(path, kMaxTableBytes, what));
     std::vector<Vec2> pts;
     std::string line;
     int no = 0;
@@ -41,7 +41,7 @@ std::vector<Vec2> read_profile_csv(const std::string& path) {
                              format_number(pts.back().x()) + " m (a profile runs left to right)");
         pts.emplace_back(x, y);
     }
-    if (pts.size() < 2) throw InputError(path + ": a terrain profile needs at least 2 points (x,y rows in m)");
+    if (pts.size() < 2) throw InputError(path + ": a " + what + " needs at least 2 points (x,y rows in m)");
     return pts;
 }
 

@@ -399,7 +399,7 @@ void finish_lattice(Scenario& s) {
             throw InputError(where + "lattice_release.top: the mass's top is filled down to the terrain's profile: it needs a "
                              "[terrain] (terrain.profile or terrain.grid)");
         resolve_beside_scenario(s, l.top);
-        l.fill = region_under_top(read_profile_csv(l.top), s.terrain.points, where + "lattice_release.top");
+        l.fill = region_under_top(read_profile_csv(l.top, "mass's top surface (lattice_release.top)"), s.terrain.points, where + "lattice_release.top");
     } else {
         if (l.region.size() < 3)
             throw InputError(where + "lattice_release.region: " + std::to_string(l.region.size()) +
