@@ -152,8 +152,9 @@ TEST(Checkpoint, ResumedRunIsByteIdentical) {
 
 // The same with the DEBRIS law (no contact history; its state is the positions, the velocities
 // of the half step and the two last steps, which set the forces' weights and the next step):
-// the Attabad-like section to 6 s, interrupted at 2 s, resumed on 2 threads (1,489 discs:
-// above the pool's threshold), every file of the run folder the same bytes.
+// the Attabad-like section to 6 s, interrupted at 2 s, resumed on 2 threads (the thread count
+// is not part of the state; 1,489 discs are below the pool's 4,096, so the pass itself stays
+// one range: Debris.Determinism covers the ranges), every file of the run folder the same bytes.
 TEST(Checkpoint, DebrisRunResumesToTheSameBytes) {
     auto make = [] {
         Scenario s = load_scenario(std::string(DEMLAB_SOURCE_DIR) + "/scenarios/attabad-2d.toml");

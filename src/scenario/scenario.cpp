@@ -210,12 +210,11 @@ void finish_terrain(Scenario& s) {
         throw InputError(where + (t.profile.empty() ? "terrain.profile: a [terrain] needs its profile (a CSV file of x,y rows in m) "
                                                       "or an elevation grid (terrain.grid with terrain.section)"
                                                     : "terrain.profile and terrain.grid: give one of the two"));
-    auto beside_scenario = [&](std::string& file) { resolve_beside_scenario(s, file); };
     if (!t.profile.empty()) {
-        beside_scenario(t.profile);
+        resolve_beside_scenario(s, t.profile);
         t.points = read_profile_csv(t.profile);
     } else {
-        beside_scenario(t.grid);
+        resolve_beside_scenario(s, t.grid);
         if (t.section.size() != 2)
             throw InputError(where + "terrain.section: " + std::to_string(t.section.size()) +
                              " points; a section through terrain.grid is a line of 2 points [[x0, y0], [x1, y1]]");
