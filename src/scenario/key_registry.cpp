@@ -1,5 +1,7 @@
 #include "scenario/key_registry.h"
 
+#include <cstdio>
+
 #include <algorithm>
 #include <cmath>
 #include <sstream>
@@ -22,10 +24,28 @@ std::string toml_number(double v) {
 }
 
 std::string toml_string(const std::string& s) {
+    // a basic TOML string on one line: every control character escaped, so a multi-line
+    // description or a name with a tab is written back as a scenario that reads again
     std::string out = "\"";
     for (char c : s) {
-        if (c == '"' || c == '\\') out += '\\';
-        out += c;
+        const unsigned char u = static_cast<unsigned char>(c);
+        switch (c) {
+            case '"': out += "\\\""; break;
+            case '\\': out += "\\\\"; break;
+            case '\n': out += "\\n"; break;
+            case '\t': out += "\\t"; break;
+            case '\r': out += "\\r"; break;
+            case '\b': out += "\\b"; break;
+            case '\f': out += "\\f"; break;
+            default:
+                if (u < 0x20 || u == 0x7f) {
+                    char b[8];
+                    std::snprintf(b, sizeof b, "\\u%04X", unsigned(u));
+                    out += b;
+                } else {
+                    out += c;
+                }
+        }
     }
     return out + "\"";
 }
