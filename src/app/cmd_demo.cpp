@@ -5,9 +5,11 @@
 #include <fstream>
 #include <memory>
 #include <random>
+#include <sstream>
 #include <string>
 
 #include "app/commands.h"
+#include "core/fileio.h"
 #include "core/error.h"
 #include "core/output_dir.h"
 #include "core/progress.h"
@@ -68,7 +70,10 @@ int demo(const DemoOptions& o) {
     world.set_local_damping(0.7);
     world.finalize();
 
-    std::ofstream series(o.out + "/series.csv");
+    SeriesFile series_file;  // checked writes, a final name only when complete
+    series_file.open(o.out + "/series.csv");
+    std::ostream& series = series_file.out();
+    series.precision(6);  // (the demo's figures as they always were)
     series << "t,kinetic_J,potential_J,elastic_J,dissipated_J,balance_J,floor_fx_N,floor_fy_N,back_fx_N,back_fy_N,"
               "gate_fx_N,gate_fy_N\n";
     const auto t0 = std::chrono::steady_clock::now();
@@ -94,7 +99,8 @@ int demo(const DemoOptions& o) {
     }
     progress.finish();
     const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    std::ofstream final_discs(o.out + "/final_discs.csv");
+    series_file.close();
+    std::ostringstream final_discs;
     final_discs << "id,x_m,y_m,r_m,vx_m_s,vy_m_s,omega_rad_s\n";
     double runout = 0.0;
     for (size_t i = 0; i < world.disc_count(); ++i) {
@@ -104,6 +110,7 @@ int demo(const DemoOptions& o) {
                     << ',' << world.omegas()[i] << '\n';
         runout = std::max(runout, p.x() + world.radii()[i]);
     }
+    write_file_atomic(o.out + "/final_discs.csv", final_discs.str());
     std::printf("demo: %zu discs, model %d, %ld steps to t = %.3f s (dt %.3g s) in %.2f s wall, %.3e particle-steps/s\n",
                 world.disc_count(), o.model, world.step_count(), world.time(), world.dt(), secs,
                 double(world.disc_count()) * double(world.step_count()) / secs);

@@ -42,6 +42,9 @@ int main(int argc, char** argv) {
     } catch (const InputError& e) {
         std::fprintf(stderr, "demlab: input error: %s\n", e.what());
         return kExitInput;
+    } catch (const WriteError& e) {
+        std::fprintf(stderr, "demlab: cannot write the output: %s\n", e.what());
+        return kExitWrite;
     } catch (const RunError& e) {
         std::fprintf(stderr, "demlab: run failed: %s\n", e.what());
         return kExitRun;

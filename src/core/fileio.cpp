@@ -3,25 +3,55 @@
 #include <cmath>
 #include <sstream>
 
+#include <fcntl.h>
+#include <unistd.h>
+
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 
 #include "core/error.h"
 
 namespace demlab {
 
+namespace {
+
+// Why the last write failed, for a message ("No space left on device", "File too large").
+std::string last_error() { return std::strerror(errno); }
+
+}  // namespace
+
 void write_file_atomic(const std::string& path, const std::string& content) {
+    // every byte checked: the write, the close (a network or full file system reports there),
+    // then the rename; a temporary file that failed is removed, never given the final name
     const std::string tmp = path + ".tmp";
-    {
-        std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-        if (!out) throw RunError("cannot write " + tmp);
-        out << content;
-        out.flush();
-        if (!out) throw RunError("cannot write " + tmp + " (disk full?)");
+    const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+    if (fd < 0) throw WriteError("cannot write " + path + " (" + last_error() + ")");
+    const char* p = content.data();
+    size_t left = content.size();
+    std::string failed;
+    while (left > 0) {
+        const ssize_t put = ::write(fd, p, left);
+        if (put < 0 && errno == EINTR) continue;
+        if (put <= 0) {
+            failed = put < 0 ? last_error() : "nothing written";
+            break;
+        }
+        p += put;
+        left -= size_t(put);
+    }
+    if (::close(fd) != 0 && failed.empty()) failed = last_error();
+    if (!failed.empty()) {
+        ::unlink(tmp.c_str());
+        throw WriteError("cannot write " + path + " (" + failed + ")");
     }
     std::error_code ec;
     std::filesystem::rename(tmp, path, ec);
-    if (ec) throw RunError("cannot rename " + tmp + " to " + path + ": " + ec.message());
+    if (ec) {
+        ::unlink(tmp.c_str());
+        throw WriteError("cannot rename " + tmp + " to " + path + ": " + ec.message());
+    }
 }
 
 std::string read_input_file(const std::string& path, uint64_t max_bytes, const std::string& what) {
@@ -46,7 +76,7 @@ std::string read_input_file(const std::string& path, uint64_t max_bytes, const s
 void SeriesFile::open(const std::string& path) {
     path_ = path;
     out_.open(path + ".part", std::ios::trunc);
-    if (!out_) throw RunError("cannot write " + path + ".part");
+    if (!out_) throw WriteError("cannot write " + path + ".part (" + last_error() + ")");
     out_.precision(10);
 }
 
@@ -64,23 +94,33 @@ void SeriesFile::reopen(const std::string& path, uint64_t size) {
     // not ios::app: its position reads 0 until the first write, and flush() reports it
     out_.open(part, std::ios::in | std::ios::out);
     out_.seekp(0, std::ios::end);
-    if (!out_) throw RunError("cannot write " + part);
+    if (!out_) throw WriteError("cannot write " + part + " (" + last_error() + ")");
     out_.precision(10);
 }
 
 uint64_t SeriesFile::flush() {
     if (!out_.is_open()) return 0;
     out_.flush();
-    if (!out_) throw RunError("cannot write " + path_ + ".part (disk full?)");
+    check();
     return uint64_t(out_.tellp());
+}
+
+void SeriesFile::check() {
+    // the stream fails when a buffer it hands on is refused (a full disk, a size limit)
+    if (out_.is_open() && !out_)
+        throw WriteError("cannot write " + path_ + " (" + (errno ? last_error() : std::string("the write failed")) +
+                         "): the run stops; the file stays " + path_ + ".part");
 }
 
 void SeriesFile::close() {
     if (!out_.is_open()) return;
+    out_.flush();
+    check();
     out_.close();
+    if (out_.fail()) throw WriteError("cannot write " + path_ + " (" + last_error() + "): the file stays " + path_ + ".part");
     std::error_code ec;
     std::filesystem::rename(path_ + ".part", path_, ec);
-    if (ec) throw RunError("cannot rename " + path_ + ".part: " + ec.message());
+    if (ec) throw WriteError("cannot rename " + path_ + ".part: " + ec.message());
 }
 
 std::string json_number(double v) {

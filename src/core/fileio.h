@@ -7,6 +7,8 @@
 
 namespace demlab {
 
+// Every byte is checked: a failed write (a full disk, a size limit) throws WriteError naming
+// the file, and the temporary file is removed.
 void write_file_atomic(const std::string& path, const std::string& content);
 
 // An input file read whole: refused (InputError, exit 2, naming the file and `what` it is)
@@ -25,7 +27,9 @@ std::string json_string(const std::string& text);
 std::string json_number(double v);
 
 // A file written over time (a CSV series): it is written as PATH.part and renamed to PATH
-// by close(), so an unfinished series is never mistaken for a complete one.
+// by close(), so an unfinished series is never mistaken for a complete one. A write that
+// failed throws WriteError at the next check(), flush() or close(), and the file keeps its
+// .part name.
 class SeriesFile {
 public:
     SeriesFile() = default;
@@ -36,6 +40,8 @@ public:
     // Flushes and returns the bytes written so far (for a checkpoint).
     uint64_t flush();
     std::ofstream& out() { return out_; }
+    // Throws WriteError if a write since the last check failed (cheap: the stream's state).
+    void check();
     void close();
     bool is_open() const { return out_.is_open(); }
 

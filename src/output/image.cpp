@@ -2,7 +2,9 @@
 
 #include <png.h>
 
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <memory>
 
@@ -13,12 +15,14 @@ namespace demlab {
 void write_png(const std::string& path, const Image& img) {
     const std::string tmp = path + ".tmp";
     std::unique_ptr<FILE, int (*)(FILE*)> fp(std::fopen(tmp.c_str(), "wb"), std::fclose);
-    if (!fp) throw RunError("cannot write " + tmp);
+    if (!fp) throw WriteError("cannot write " + path + " (" + std::strerror(errno) + ")");
     png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
     png_infop info = png_create_info_struct(png);
     if (setjmp(png_jmpbuf(png))) {
         png_destroy_write_struct(&png, &info);
-        throw RunError("libpng failed writing " + tmp);
+        fp.reset();
+        std::remove(tmp.c_str());
+        throw WriteError("cannot write " + path + " (libpng: " + std::strerror(errno) + ")");
     }
     png_init_io(png, fp.get());
     png_set_IHDR(png, info, png_uint_32(img.width), png_uint_32(img.height), 8, PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE,
@@ -32,10 +36,16 @@ void write_png(const std::string& path, const Image& img) {
     for (int y = 0; y < img.height; ++y) png_write_row(png, const_cast<png_bytep>(img.at(0, y)));
     png_write_end(png, nullptr);
     png_destroy_write_struct(&png, &info);
-    fp.reset();
+    // what the C library still buffers is written by fflush and fclose: checked too
+    const bool flushed = std::fflush(fp.get()) == 0 && !std::ferror(fp.get());
+    const bool closed = std::fclose(fp.release()) == 0;
+    if (!flushed || !closed) {
+        std::remove(tmp.c_str());
+        throw WriteError("cannot write " + path + " (" + std::strerror(errno) + ")");
+    }
     std::error_code ec;
     std::filesystem::rename(tmp, path, ec);
-    if (ec) throw RunError("cannot rename " + tmp + ": " + ec.message());
+    if (ec) throw WriteError("cannot rename " + tmp + ": " + ec.message());
 }
 
 Image read_png(const std::string& path) {

@@ -73,6 +73,7 @@ void BarrierOutputs::sample(const World& w, double t) {
         o << t;
         for (double p : pressure_) o << ',' << p;
         o << '\n';
+        file_.check();
         for (size_t b = 0; b < pressure_.size(); ++b)
             if (pressure_[b] > peak_barrier_pressure_) {
                 peak_barrier_pressure_ = pressure_[b];
