@@ -13,6 +13,7 @@
 
 #include "app/bench_bonds.h"
 #include "app/commands.h"
+#include "core/process.h"
 #include "setups/db9k.h"
 #include "core/error.h"
 #include "core/jitter.h"
@@ -126,17 +127,15 @@ void print_ceiling(const std::vector<XyrDisc>& discs, const BenchOptions& o, dou
 // passes its lines on.
 double run_peer(long steps, int ranks, bool echo = true) {
     const std::string script = std::string(DEMLAB_SOURCE_DIR) + "/bench/db9k/lammps/run.sh";
-    const std::string cmd = "bash '" + script + "' " + std::to_string(steps) + " " + std::to_string(ranks) + " 2>&1";
-    std::unique_ptr<FILE, int (*)(FILE*)> pipe(popen(cmd.c_str(), "r"), pclose);
-    if (!pipe) return 0.0;
-    std::array<char, 512> buf{};
     double rate = 0.0;
-    while (fgets(buf.data(), int(buf.size()), pipe.get())) {
-        std::string line(buf.data());
+    ProcessDef peer;  // no shell
+    peer.argv = {"bash", script, std::to_string(steps), std::to_string(ranks)};
+    peer.on_line = [&](const std::string& line) {
         if (echo) std::fputs(("  [lammps] " + line).c_str(), stdout);
         const auto pos = line.find("particle-steps/s  max ");
-        if (pos != std::string::npos) rate = std::stod(line.substr(pos + 22));
-    }
+        if (pos != std::string::npos) rate = std::atof(line.c_str() + pos + 22);
+    };
+    if (run_process(peer) < 0) return 0.0;
     return rate;
 }
 

@@ -16,6 +16,7 @@
 #include "calibration/ranks.h"
 #include "geometry/deposit.h"
 #include "core/error.h"
+#include "core/process.h"
 #include "core/fileio.h"
 #include "output/frame.h"
 #include "output/image.h"
@@ -389,16 +390,19 @@ void plot_envelopes(const CalibrationConfig& c, const CalibrationOptions& o, con
         }
         write_file_atomic(o.out + "/lab_profile.csv", lab.str());
         std::ostringstream gp;
-        gp << "set terminal pngcairo size 1100,600 font 'DejaVu Sans,11'\nset output '" << o.out << "/envelopes.png'\n"
+        gp << "set terminal pngcairo size 1100,600 font 'DejaVu Sans,11'\nset output 'envelopes.png'\n"
            << "set datafile separator ','\nset grid\nset key outside right top\nset xlabel 'x from the back wall (m)'\n"
            << "set ylabel 'surface height (m)'\nset title 'Dam-break deposits: envelopes against the lab profile'\n"
-           << "plot '" << o.out << "/lab_profile.csv' skip 1 using 1:2 with linespoints lw 3 lc rgb 'black' title 'lab (angles of Table 7, toe at 0.5 m)'";
+           << "plot 'lab_profile.csv' skip 1 using 1:2 with linespoints lw 3 lc rgb 'black' title 'lab (angles of Table 7, toe at 0.5 m)'";
         for (const auto& a : all)
-            gp << ", '" << o.out << "/runs/" << angle_tag(a.angle) << "-seed1/envelope.csv' skip 1 using 1:2 with lines title '"
+            gp << ", 'runs/" << angle_tag(a.angle) << "-seed1/envelope.csv' skip 1 using 1:2 with lines title '"
                << format_number(a.angle) << " deg'";
         gp << "\n";
         write_file_atomic(o.out + "/envelopes.gp", gp.str());
-        if (std::system(("gnuplot '" + o.out + "/envelopes.gp' 2>/dev/null").c_str()) != 0)
+        ProcessDef gnuplot;  // no shell, in the calibration's folder: the script names only its files
+        gnuplot.argv = {"gnuplot", "envelopes.gp"};
+        gnuplot.cwd = o.out;
+        if (run_process(gnuplot) != 0)
             std::fprintf(stderr, "demlab: warning: gnuplot failed on envelopes.gp\n");
     }
 }

@@ -8,6 +8,8 @@
 
 #include "core/csv.h"
 #include "core/error.h"
+#include "core/output_dir.h"
+#include "core/process.h"
 #include "core/fileio.h"
 
 namespace demlab {
@@ -55,7 +57,7 @@ static CsvHeader header_of(const std::string& path) {
     return CsvHeader(line, path);
 }
 
-bool gnuplot_available() { return std::system("gnuplot --version >/dev/null 2>&1") == 0; }
+bool gnuplot_available() { return program_available("gnuplot"); }
 
 std::vector<std::string> make_plots(const std::string& run_dir, int width, int height) {
     namespace fs = std::filesystem;
@@ -64,6 +66,7 @@ std::vector<std::string> make_plots(const std::string& run_dir, int width, int h
                        "scripts/install-deps.sh)");
     const std::string dir = run_dir + "/plots";
     fs::create_directories(dir);
+    mark_output_dir(dir);
     std::ostringstream gp;
     gp << "set terminal pngcairo size " << width << "," << height << " font 'DejaVu Sans,11'\n"
        << "set datafile separator ','\nset key autotitle columnhead\nset grid\nset key outside right top\n"
@@ -88,13 +91,13 @@ std::vector<std::string> make_plots(const std::string& run_dir, int width, int h
         write_file_atomic(smooth, moving_average_csv(forces, cols, names, ct, 0.05));
         for (const char axis : {'x', 'y'}) {
             const size_t o = axis == 'x' ? 0 : 4;
-            gp << "set output '" << dir << "/forces_" << axis << ".png'\n"
+            gp << "set output 'forces_" << axis << ".png'\n"
                << "set title 'Force of the mass on the flume, " << axis
                << " (per metre of width; lines: 50 ms moving average, faint: 5 ms samples)'\n"
                << "set ylabel 'F_" << axis << " (N/m)'\n"
-               << "plot '" << forces << "' using " << ct + 1 << ":" << cols[o] + 1 << " with lines lc rgb '#d0b0e0' notitle, '' using "
+               << "plot '../forces.csv' using " << ct + 1 << ":" << cols[o] + 1 << " with lines lc rgb '#d0b0e0' notitle, '' using "
                << ct + 1 << ":" << cols[o + 1] + 1 << " with lines lc rgb '#a0d8c8' notitle, '' using " << ct + 1 << ":"
-               << cols[o + 2] + 1 << " with lines lc rgb '#b0d8f0' notitle, '" << smooth << "' using 1:" << o + 2
+               << cols[o + 2] + 1 << " with lines lc rgb '#b0d8f0' notitle, 'forces_smoothed.csv' using 1:" << o + 2
                << " with lines lw 2 lc rgb '#8000c0' title 'path (total)', '' using 1:" << o + 3
                << " with lines lw 2 lc rgb '#009070' title 'arc W2', '' using 1:" << o + 4
                << " with lines lw 2 lc rgb '#3090d0' title 'barrier W3', '' using 1:" << o + 5
@@ -108,8 +111,8 @@ std::vector<std::string> make_plots(const std::string& run_dir, int width, int h
         const CsvHeader h = header_of(front);
         const size_t ct = h.column("t_s", "t") + 1, cs = h.column("s_front_m", "s_front") + 1,
                      cd = h.column("displacement_m", "displacement") + 1;
-        gp << "set output '" << dir << "/front.png'\nset title 'Front of the mass along the flume path'\n"
-           << "set ylabel 's (m)'\nplot '" << front << "' using " << ct << ":" << cs << " with lines lw 2 title 'front s', '' using "
+        gp << "set output 'front.png'\nset title 'Front of the mass along the flume path'\n"
+           << "set ylabel 's (m)'\nplot '../front.csv' using " << ct << ":" << cs << " with lines lw 2 title 'front s', '' using "
            << ct << ":" << cd << " with lines lw 2 title 'front displacement'\n";
         made.push_back(dir + "/front.png");
     }
@@ -117,15 +120,15 @@ std::vector<std::string> make_plots(const std::string& run_dir, int width, int h
     if (fs::exists(energy)) {
         const CsvHeader h = header_of(energy);
         const size_t ct = h.column("t_s", "t") + 1;
-        gp << "set output '" << dir << "/kinetic_energy.png'\nset title 'Kinetic energy (per metre of width)'\n"
+        gp << "set output 'kinetic_energy.png'\nset title 'Kinetic energy (per metre of width)'\n"
            << "set ylabel 'E (J/m)'\n";
         if (h.has("kinetic_J_per_m") || h.has("kinetic")) {  // a DAN run: one kinetic energy
-            gp << "plot '" << energy << "' using " << ct << ":" << h.column("kinetic_J_per_m", "kinetic") + 1
+            gp << "plot '../energy.csv' using " << ct << ":" << h.column("kinetic_J_per_m", "kinetic") + 1
                << " with lines lw 2 title 'kinetic'\n";
         } else {
             const size_t tr = h.column("kinetic_translation_J_per_m", "kinetic_translation") + 1,
                          ro = h.column("kinetic_rotation_J_per_m", "kinetic_rotation") + 1;
-            gp << "plot '" << energy << "' using " << ct << ":($" << tr << "+$" << ro << ") with lines lw 2 title 'total', '' using "
+            gp << "plot '../energy.csv' using " << ct << ":($" << tr << "+$" << ro << ") with lines lw 2 title 'total', '' using "
                << ct << ":" << tr << " with lines title 'translation', '' using " << ct << ":" << ro << " with lines title 'rotation'\n";
         }
         made.push_back(dir + "/kinetic_energy.png");
@@ -163,13 +166,13 @@ std::vector<std::string> make_plots(const std::string& run_dir, int width, int h
             }
             write_file_atomic(dir + "/barrier_pressure_peak.csv", "s_m,p_Pa\n" + at.str());
             write_file_atomic(dir + "/barrier_pressure_map.dat", map.str());
-            gp << "set output '" << dir << "/barrier_pressure_peak.png'\nset title 'Normal pressure on the barrier at t = "
+            gp << "set output 'barrier_pressure_peak.png'\nset title 'Normal pressure on the barrier at t = "
                << p.rows[peak_row][0] << " s (its largest bin)'\nset xlabel 's along the barrier from its foot (m)'\n"
-               << "set ylabel 'p (Pa)'\nplot '" << dir << "/barrier_pressure_peak.csv' using 1:2 with steps lw 2 title 'pressure'\n"
-               << "set output '" << dir << "/barrier_pressure_map.png'\nset title 'Normal pressure on the barrier (kPa)'\n"
+               << "set ylabel 'p (Pa)'\nplot 'barrier_pressure_peak.csv' using 1:2 with steps lw 2 title 'pressure'\n"
+               << "set output 'barrier_pressure_map.png'\nset title 'Normal pressure on the barrier (kPa)'\n"
                << "set xlabel 's along the barrier from its foot (m)'\nset ylabel 't (s)'\nset datafile separator whitespace\n"
                << "set palette rgbformulae 33,13,10\nset cblabel 'p (kPa)'\nset autoscale fix\n"
-               << "plot '" << dir << "/barrier_pressure_map.dat' nonuniform matrix using 1:2:3 with image notitle\n"
+               << "plot 'barrier_pressure_map.dat' nonuniform matrix using 1:2:3 with image notitle\n"
                << "set datafile separator ','\nunset cblabel\nset autoscale\nset xlabel 't (s)'\n";
             made.push_back(dir + "/barrier_pressure_peak.png");
             made.push_back(dir + "/barrier_pressure_map.png");
@@ -177,18 +180,22 @@ std::vector<std::string> make_plots(const std::string& run_dir, int width, int h
     }
     const std::string peaks = run_dir + "/peaks.csv";
     if (fs::exists(peaks)) {
-        gp << "set output '" << dir << "/peaks.png'\nset title 'Largest flow height and mean speed along the path over the run'\n"
+        gp << "set output 'peaks.png'\nset title 'Largest flow height and mean speed along the path over the run'\n"
            << "set xlabel 's along the path (m)'\nset ylabel 'flow height normal to the bed (m)'\nset y2label 'mean speed (m/s)'\n"
-           << "set y2tics\nplot '" << peaks << "' using 1:2 with lines lw 2 title 'height' axes x1y1, '' using 1:3 with lines lw 2 "
+           << "set y2tics\nplot '../peaks.csv' using 1:2 with lines lw 2 title 'height' axes x1y1, '' using 1:3 with lines lw 2 "
            << "title 'speed' axes x1y2\nunset y2tics\nunset y2label\nset xlabel 't (s)'\n";
         made.push_back(dir + "/peaks.png");
     }
     if (made.empty()) throw InputError(run_dir + ": no forces.csv, front.csv or energy.csv to plot");
     const std::string script = dir + "/plots.gp";
     write_file_atomic(script, gp.str());
-    const std::string cmd = "gnuplot '" + script + "' 2>'" + dir + "/gnuplot.log'";
-    if (std::system(cmd.c_str()) != 0)
-        throw RunError("gnuplot failed on " + script + " (see " + dir + "/gnuplot.log)");
+    // no shell, and the script names its files relative to the plots folder, where gnuplot
+    // runs: no path or name a user chose ever reaches a command line or the script
+    ProcessDef gnuplot;
+    gnuplot.argv = {"gnuplot", "plots.gp"};
+    gnuplot.cwd = dir;
+    gnuplot.stderr_file = dir + "/gnuplot.log";
+    if (run_process(gnuplot) != 0) throw RunError("gnuplot failed on " + script + " (see " + dir + "/gnuplot.log)");
     return made;
 }
 

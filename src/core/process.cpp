@@ -1,0 +1,105 @@
+#include "core/process.h"
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstdlib>
+#include <sstream>
+
+namespace demlab {
+
+bool program_available(const std::string& program) {
+    if (program.empty()) return false;
+    if (program.find('/') != std::string::npos) return ::access(program.c_str(), X_OK) == 0;
+    const char* path = std::getenv("PATH");
+    std::istringstream dirs(path ? path : "/usr/local/bin:/usr/bin:/bin");
+    std::string d;
+    while (std::getline(dirs, d, ':')) {
+        const std::string f = (d.empty() ? "." : d) + "/" + program;
+        struct stat st {};
+        if (::stat(f.c_str(), &st) == 0 && S_ISREG(st.st_mode) && ::access(f.c_str(), X_OK) == 0) return true;
+    }
+    return false;
+}
+
+int run_process(const ProcessDef& def) {
+    if (def.argv.empty() || !program_available(def.argv[0])) return -1;
+    std::vector<char*> args;
+    for (const std::string& a : def.argv) args.push_back(const_cast<char*>(a.c_str()));
+    args.push_back(nullptr);
+    // everything the child needs is prepared before fork (no allocation between fork and exec)
+    const char* in = def.stdin_file.empty() ? "/dev/null" : def.stdin_file.c_str();
+    const char* out = def.stdout_file.empty() ? "/dev/null" : def.stdout_file.c_str();
+    const char* err = def.stderr_file.empty() ? "/dev/null" : def.stderr_file.c_str();
+    const char* cwd = def.cwd.empty() ? nullptr : def.cwd.c_str();
+    int pipe_fd[2] = {-1, -1};
+    if (def.on_line && ::pipe2(pipe_fd, O_CLOEXEC) != 0) return -1;
+    const pid_t pid = ::fork();
+    if (pid < 0) {
+        if (pipe_fd[0] >= 0) ::close(pipe_fd[0]), ::close(pipe_fd[1]);
+        return -1;
+    }
+    if (pid == 0) {
+        const auto redirect = [](const char* file, int flags, int fd) {
+            const int f = ::open(file, flags | O_CLOEXEC, 0644);
+            if (f < 0 || ::dup2(f, fd) < 0) ::_exit(127);
+            ::close(f);
+        };
+        // (the files are named relative to the caller's folder: opened before the chdir)
+        redirect(in, O_RDONLY, 0);
+        if (pipe_fd[1] >= 0) {
+            if (::dup2(pipe_fd[1], 1) < 0) ::_exit(127);
+        } else {
+            redirect(out, O_WRONLY | O_CREAT | O_TRUNC, 1);
+        }
+        if (pipe_fd[1] >= 0 && def.stderr_file.empty()) {
+            if (::dup2(pipe_fd[1], 2) < 0) ::_exit(127);
+        } else {
+            redirect(err, O_WRONLY | O_CREAT | O_TRUNC, 2);
+        }
+        if (cwd && ::chdir(cwd) != 0) ::_exit(127);
+        ::execvp(args[0], args.data());
+        ::_exit(127);
+    }
+    if (pipe_fd[0] >= 0) {
+        ::close(pipe_fd[1]);
+        std::string line;
+        char buf[4096];
+        for (;;) {
+            const ssize_t got = ::read(pipe_fd[0], buf, sizeof buf);
+            if (got < 0 && errno == EINTR) continue;
+            if (got <= 0) break;
+            for (ssize_t i = 0; i < got; ++i) {
+                line += buf[i];
+                if (buf[i] == '\n') {
+                    def.on_line(line);
+                    line.clear();
+                }
+            }
+        }
+        if (!line.empty()) def.on_line(line);
+        ::close(pipe_fd[0]);
+    }
+    int status = 0;
+    while (::waitpid(pid, &status, 0) < 0)
+        if (errno != EINTR) return -1;
+    if (WIFEXITED(status)) return WEXITSTATUS(status);
+    if (WIFSIGNALED(status)) return 128 + WTERMSIG(status);
+    return -1;
+}
+
+std::string gnuplot_quote(const std::string& text) {
+    std::string o = "'";
+    for (const char c : text) {
+        const unsigned char u = static_cast<unsigned char>(c);
+        if (c == '\'') o += "''";
+        else if (u < 0x20 || u == 0x7f) o += '_';
+        else o += c;
+    }
+    return o + "'";
+}
+
+}  // namespace demlab
