@@ -185,6 +185,7 @@ int resume_command(const ResumeCliOptions& o) {
         // stopped before its first checkpoint (or in the release generation): the same
         // scenario and seed from the start give the same run
         ro.force = true;
+        ro.rerun = true;
         ro.checkpoint_every = std::max(0.0, o.checkpoint_every);
         ro.frames = fs::exists(dir + "/frames");
         std::fprintf(stderr, "%s has no checkpoint: running it again from the start (same scenario and seed)\n", dir.c_str());

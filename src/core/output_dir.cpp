@@ -3,8 +3,40 @@
 #include <filesystem>
 
 #include "core/error.h"
+#include "core/fileio.h"
 
 namespace demlab {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+// An absolute path with symbolic links and `.`/`..` resolved as far as it exists.
+fs::path resolved(const std::string& p) {
+    std::error_code ec;
+    fs::path r = fs::weakly_canonical(fs::absolute(p, ec), ec);
+    if (ec) r = fs::absolute(p, ec).lexically_normal();
+    return r;
+}
+
+std::string marker_path(const std::string& dir) { return dir + "/" + kOutputMarker; }
+
+}  // namespace
+
+bool path_within(const std::string& path, const std::string& base) {
+    const fs::path p = resolved(path), b = resolved(base);
+    auto pi = p.begin();
+    for (auto bi = b.begin(); bi != b.end(); ++bi, ++pi) {
+        if (bi->empty()) continue;  // a trailing separator
+        if (pi == p.end() || *pi != *bi) return false;
+    }
+    return true;
+}
+
+bool is_demlab_output(const std::string& dir) {
+    std::error_code ec;
+    return fs::is_regular_file(marker_path(dir), ec);
+}
 
 std::string replaced_output_dir(const std::string& dir) {
     std::string d = dir;
@@ -12,18 +44,46 @@ std::string replaced_output_dir(const std::string& dir) {
     return d + ".replaced";
 }
 
-void prepare_output_dir(const std::string& dir, bool force) {
-    namespace fs = std::filesystem;
+void check_output_dir(const std::string& dir, bool force, const std::vector<std::string>& inputs) {
     if (dir.empty()) throw InputError("--out '': an output folder needs a name");
     std::error_code ec;
+    if (!fs::exists(fs::symlink_status(dir, ec))) return;
+    if (!force)
+        throw InputError("output folder '" + dir +
+                         "' exists already; choose another --out or pass --force to replace its files");
+    if (fs::is_symlink(fs::symlink_status(dir, ec)))
+        throw InputError("output path '" + dir + "' is a symbolic link; --force replaces only a folder demlab made");
+    if (!fs::is_directory(dir, ec)) throw InputError("output path '" + dir + "' exists and is not a folder");
+    for (const std::string& in : inputs)
+        if (!in.empty() && path_within(in, dir))
+            throw InputError("--out '" + dir + "' " + (path_within(dir, in) ? "is" : "holds") + " the input '" + in +
+                             "'; --force would delete it: choose another --out");
+    if (path_within(fs::current_path(ec).string(), dir))
+        throw InputError("--out '" + dir +
+                         "' holds the working directory; --force would delete it: choose another --out");
+    if (!is_demlab_output(dir))
+        throw InputError("output folder '" + dir + "' was not made by demlab (it has no " + kOutputMarker +
+                         " marker); --force replaces only demlab's own output folders, never other files: "
+                         "choose another --out, or move or delete the folder yourself");
+}
+
+void mark_output_dir(const std::string& dir) {
+    if (!is_demlab_output(dir)) write_file_atomic(marker_path(dir), "made by demlab; `--force` may replace this folder\n");
+}
+
+void prepare_output_dir(const std::string& dir, bool force, const std::vector<std::string>& inputs) {
+    check_output_dir(dir, force, inputs);
+    std::error_code ec;
     if (fs::exists(dir, ec)) {
-        if (!force)
-            throw InputError("output folder '" + dir +
-                             "' exists already; choose another --out or pass --force to replace its files");
-        if (!fs::is_directory(dir, ec)) throw InputError("output path '" + dir + "' exists and is not a folder");
-        // the old content aside (a leftover of an earlier forced run that failed goes first)
+        // the old content aside (a leftover of an earlier forced run that failed goes first,
+        // if it too is demlab's)
         const std::string aside = replaced_output_dir(dir);
-        fs::remove_all(aside, ec);
+        if (fs::exists(fs::symlink_status(aside, ec))) {
+            if (!is_demlab_output(aside) || fs::is_symlink(fs::symlink_status(aside, ec)))
+                throw InputError("cannot move the old output folder '" + dir + "' aside: '" + aside +
+                                 "' exists and was not made by demlab; move or delete it yourself");
+            fs::remove_all(aside, ec);
+        }
         fs::rename(dir, aside, ec);
         if (ec)
             throw InputError("cannot move the old output folder '" + dir + "' aside to '" + aside + "' for --force: " +
@@ -31,11 +91,21 @@ void prepare_output_dir(const std::string& dir, bool force) {
     }
     fs::create_directories(dir, ec);
     if (ec) throw InputError("cannot create output folder '" + dir + "': " + ec.message());
+    mark_output_dir(dir);
 }
 
 void remove_replaced_output(const std::string& dir) {
     std::error_code ec;
-    std::filesystem::remove_all(replaced_output_dir(dir), ec);
+    const std::string aside = replaced_output_dir(dir);
+    if (is_demlab_output(aside)) fs::remove_all(aside, ec);
+}
+
+void abandon_output(const std::string& dir) {
+    std::error_code ec;
+    if (!is_demlab_output(dir)) return;
+    fs::remove_all(dir, ec);
+    const std::string aside = replaced_output_dir(dir);
+    if (is_demlab_output(aside)) fs::rename(aside, dir, ec);
 }
 
 }  // namespace demlab

@@ -11,6 +11,7 @@
 #include "core/error.h"
 #include "core/fileio.h"
 #include "core/output_dir.h"
+#include "core/process.h"
 #include "output/plot.h"
 #include "run/dan_run.h"
 #include "run/summary_file.h"
@@ -66,10 +67,14 @@ std::string columns(const std::string& path, const std::string& x, const std::st
     return std::to_string(h.column(x, legacy(x)) + 1) + ":" + std::to_string(h.column(y, legacy(y)) + 1);
 }
 
-std::string quoted(const std::string& s) {
-    std::string o;
-    for (char c : s) o += (c == '\'' ? std::string("''") : std::string(1, c));
-    return "'" + o + "'";
+std::string quoted(const std::string& s) { return gnuplot_quote(s); }
+
+// A run's series copied into the comparison's folder under a name of ours: the gnuplot script
+// names no path a user chose (it runs in that folder), and the comparison keeps its data.
+std::string copy_series(const std::string& src, const std::string& out, size_t k, const char* what) {
+    const std::string name = "run" + std::to_string(k) + "_" + what + ".csv";
+    write_file_atomic(out + "/" + name, read_input_file(src, kMaxTableBytes, "run's " + std::string(what) + " series"));
+    return name;
 }
 
 std::string cell(double v, int digits = 3) {
@@ -80,14 +85,8 @@ std::string cell(double v, int digits = 3) {
 }
 }  // namespace
 
-std::vector<std::string> compare_runs(const CompareOptions& o) {
-    if (o.runs.empty()) throw InputError("compare: give one or more run folders");
-    std::vector<RunInfo> runs;
-    for (const std::string& d : o.runs) runs.push_back(read_run(d));
-    if (!gnuplot_available())
-        throw RunError("gnuplot is not installed, so no comparison was drawn (apt-get install gnuplot-nox, or "
-                       "scripts/install-deps.sh)");
-    prepare_output_dir(o.out, o.force);
+namespace {
+std::vector<std::string> compare_into(const CompareOptions& o, const std::vector<RunInfo>& runs) {
     std::vector<std::string> made;
     bool all_flume = true;
     for (const RunInfo& r : runs) all_flume = all_flume && r.flume;
@@ -104,7 +103,7 @@ std::vector<std::string> compare_runs(const CompareOptions& o) {
             b << "x_m,y_m\n";
             for (double s = 0.0; s <= bed.length() + 1e-9; s += 0.005) b << bed.at(s).p.x() << ',' << bed.at(s).p.y() << '\n';
             write_file_atomic(o.out + "/bed.csv", b.str());
-            plot << "plot '" << o.out << "/bed.csv' using 1:2 with lines lw 3 lc rgb '#303030' title 'flume'";
+            plot << "plot 'bed.csv' using 1:2 with lines lw 3 lc rgb '#303030' title 'flume'";
         } else {
             plot << "plot ";
         }
@@ -146,25 +145,25 @@ std::vector<std::string> compare_runs(const CompareOptions& o) {
                     surf << s << ',' << height << '\n';
                 }
             }
-            const std::string file = o.out + "/deposit_" + std::to_string(k) + ".csv";
-            write_file_atomic(file, surf.str());
+            const std::string file = "deposit_" + std::to_string(k) + ".csv";
+            write_file_atomic(o.out + "/" + file, surf.str());
             plot << (k > 0 || all_flume ? ", " : "") << "'" << file << "' using 1:2 with lines lw 2 title " << quoted(r.label);
         }
-        gp << "set output '" << o.out << "/deposit.png'\nset title 'Final deposits'\n";
+        gp << "set output 'deposit.png'\nset title 'Final deposits'\n";
         if (all_flume) gp << "set size ratio -1\nset xlabel 'x (m)'\nset ylabel 'y (m)'\n";
         else gp << "set xlabel 's along the bed path (m)'\nset ylabel 'height normal to the bed (m)'\n";
         gp << plot.str() << "\nset size noratio\n";
         made.push_back(o.out + "/deposit.png");
     }
     // the fronts over time
-    gp << "set output '" << o.out << "/front.png'\nset title 'Front along the bed path'\nset xlabel 't (s)'\n"
+    gp << "set output 'front.png'\nset title 'Front along the bed path'\nset xlabel 't (s)'\n"
        << "set ylabel 's of the front (m)'\nplot ";
     for (size_t k = 0; k < runs.size(); ++k) {
         const RunInfo& r = runs[k];
-        gp << (k ? ", " : "") << "'" << r.dir << "/front.csv' every ::1 using " << columns(r.dir + "/front.csv", "t_s", "s_front_m")
+        gp << (k ? ", " : "") << "'" << copy_series(r.dir + "/front.csv", o.out, k, "front") << "' every ::1 using " << columns(r.dir + "/front.csv", "t_s", "s_front_m")
            << " with lines lw 2 title " << quoted(r.label);
         if (fs::exists(r.dir + "/front_synced.csv"))
-            gp << ", '" << r.dir << "/front_synced.csv' every ::1 using " << columns(r.dir + "/front_synced.csv", "t_s", "s_front_m")
+            gp << ", '" << copy_series(r.dir + "/front_synced.csv", o.out, k, "front_synced") << "' every ::1 using " << columns(r.dir + "/front_synced.csv", "t_s", "s_front_m")
                << " with lines lw 2 dt 2 title "
                << quoted(r.label + ", synchronised at " + cell(r.scenario.dan.sync_time, 2) + " s");
     }
@@ -173,18 +172,21 @@ std::vector<std::string> compare_runs(const CompareOptions& o) {
     // the barrier's force histories
     for (const char* axis : {"x", "y"}) {
         const std::string column = std::string("f") + axis + "_barrier_N_per_m";
-        gp << "set output '" << o.out << "/barrier_f" << axis << ".png'\nset title 'Force on the barrier, " << axis
+        gp << "set output 'barrier_f" << axis << ".png'\nset title 'Force on the barrier, " << axis
            << " (per metre of width)'\nset ylabel 'f" << axis << " (N/m)'\nplot ";
         for (size_t k = 0; k < runs.size(); ++k)
-            gp << (k ? ", " : "") << "'" << runs[k].dir << "/forces.csv' every ::1 using " << columns(runs[k].dir + "/forces.csv", "t_s", column) << " with lines lw 1.5 title "
+            gp << (k ? ", " : "") << "'" << (axis[0] == 'x' ? copy_series(runs[k].dir + "/forces.csv", o.out, k, "forces") : "run" + std::to_string(k) + "_forces.csv") << "' every ::1 using " << columns(runs[k].dir + "/forces.csv", "t_s", column) << " with lines lw 1.5 title "
                << quoted(runs[k].label);
         gp << "\n";
         made.push_back(o.out + "/barrier_f" + axis + ".png");
     }
     const std::string script = o.out + "/compare.gp";
     write_file_atomic(script, gp.str());
-    const std::string cmd = "gnuplot '" + script + "' 2>'" + o.out + "/gnuplot.log'";
-    if (std::system(cmd.c_str()) != 0) throw RunError("gnuplot failed on " + script + " (see " + o.out + "/gnuplot.log)");
+    ProcessDef gnuplot;  // no shell; the script names only the files of this folder
+    gnuplot.argv = {"gnuplot", "compare.gp"};
+    gnuplot.cwd = o.out;
+    gnuplot.stderr_file = o.out + "/gnuplot.log";
+    if (run_process(gnuplot) != 0) throw RunError("gnuplot failed on " + script + " (see " + o.out + "/gnuplot.log)");
 
     // the landmarks side by side
     std::ostringstream md, csv;
@@ -212,8 +214,27 @@ std::vector<std::string> compare_runs(const CompareOptions& o) {
     write_file_atomic(o.out + "/comparison.csv", csv.str());
     made.push_back(o.out + "/comparison.md");
     made.push_back(o.out + "/comparison.csv");
-    remove_replaced_output(o.out);
     return made;
+}
+
+}  // namespace
+
+std::vector<std::string> compare_runs(const CompareOptions& o) {
+    if (o.runs.empty()) throw InputError("compare: give one or more run folders");
+    std::vector<RunInfo> runs;
+    for (const std::string& d : o.runs) runs.push_back(read_run(d));
+    if (!gnuplot_available())
+        throw RunError("gnuplot is not installed, so no comparison was drawn (apt-get install gnuplot-nox, or "
+                       "scripts/install-deps.sh)");
+    prepare_output_dir(o.out, o.force, o.runs);
+    try {
+        std::vector<std::string> made = compare_into(o, runs);
+        remove_replaced_output(o.out);
+        return made;
+    } catch (...) {
+        abandon_output(o.out);  // a failed comparison leaves nothing to block its retry
+        throw;
+    }
 }
 
 }  // namespace demlab

@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
+#include <functional>
 #include <filesystem>
 #include <memory>
 #include <sstream>
@@ -17,6 +18,7 @@
 #include "output/frame.h"
 #include "output/image.h"
 #include "core/output_dir.h"
+#include "core/process.h"
 #include "output/renderer.h"
 #include "core/validate.h"
 
@@ -59,6 +61,25 @@ void parse_view(const std::string& v, const Frame& first, RenderStyle& st) {
     st.view_hi = Vec2(x1, y1);
 }
 
+// The strip's file: a new PNG, or (--force) one that is not a file the run or the frames'
+// folder holds.
+void check_strip_path(const RenderRunOptions& o, const std::string& out) {
+    if (o.strip.empty()) return;
+    std::error_code ec;
+    if (std::filesystem::is_directory(o.strip, ec)) throw InputError("--strip " + o.strip + ": is a folder; give a PNG file");
+    if (path_within(o.strip, out))
+        throw InputError("--strip " + o.strip + ": lies inside the frames' folder " + out + "; give a file outside it");
+    if (!std::filesystem::exists(o.strip, ec)) return;
+    if (!o.force) throw InputError("--strip " + o.strip + ": the file exists; choose another name or pass --force to replace it");
+    if (path_within(o.strip, o.run_dir))
+        throw InputError("--strip " + o.strip + ": is a file of the run " + o.run_dir +
+                         " (only a new file inside it may be written); choose another name");
+}
+
+int render_chosen(const RenderRunOptions& o, const std::string& out, const RenderStyle& style, const std::string& color,
+                  const std::vector<SnapshotEntry>& snaps, const std::vector<size_t>& chosen, double every,
+                  const std::function<Frame(size_t)>& frame_at);
+
 }  // namespace
 
 int render_run(const RenderRunOptions& o) {
@@ -98,7 +119,10 @@ int render_run(const RenderRunOptions& o) {
     if (style.width < 16 || style.height < 16 || style.width > 8192 || style.height > 8192)
         throw InputError("--size " + o.size + ": width and height must be in [16, 8192] px");
     const std::string out = o.out.empty() ? o.run_dir + "/frames" : o.out;
-    prepare_output_dir(out, o.force);
+    // the frames' folder may lie inside the run folder, never be it or hold it
+    const std::vector<std::string> inputs{o.run_dir};
+    check_output_dir(out, o.force, inputs);
+    check_strip_path(o, out);
 
     // which snapshots: all, or one per frame time (never interpolated)
     const double every = o.fps > 0 ? 1.0 / o.fps : o.every;
@@ -123,6 +147,23 @@ int render_run(const RenderRunOptions& o) {
         }
     }
     if (o.last_only && !chosen.empty()) chosen = {chosen.back()};
+    // every check done: the folder is made now, and removed again (the old one put back) if
+    // the rendering fails, so a failure never blocks the corrected retry
+    prepare_output_dir(out, o.force, inputs);
+    try {
+        const int frames = render_chosen(o, out, style, color, snaps, chosen, every, frame_at);
+        remove_replaced_output(out);
+        return frames;
+    } catch (...) {
+        abandon_output(out);
+        throw;
+    }
+}
+
+namespace {
+int render_chosen(const RenderRunOptions& o, const std::string& out, const RenderStyle& style, const std::string& color,
+                  const std::vector<SnapshotEntry>& snaps, const std::vector<size_t>& chosen, double every,
+                  const std::function<Frame(size_t)>& frame_at) {
     // Frames are independent: each thread has its own renderer (an OSMesa context is current
     // in one thread only) and takes every threads-th frame. A frame's bytes do not depend on
     // which renderer drew it, so the files are the same for any thread count (test
@@ -162,7 +203,6 @@ int render_run(const RenderRunOptions& o) {
     for (std::thread& th : pool) th.join();
     const size_t first_failed = size_t(std::min_element(failed_frame.begin(), failed_frame.end()) - failed_frame.begin());
     if (threads > 0 && failed[first_failed]) std::rethrow_exception(failed[first_failed]);
-    remove_replaced_output(out);
     std::printf("rendered %zu frames (%dx%d, %s) into %s/\n", chosen.size(), style.width, style.height, color.c_str(),
                 out.c_str());
     const int frames = int(chosen.size());
@@ -182,20 +222,26 @@ int render_run(const RenderRunOptions& o) {
         std::printf("strip of %zu frames: %s\n", tiles.size(), o.strip.c_str());
     }
     if (o.video) {
-        if (std::system("ffmpeg -version >/dev/null 2>&1") != 0) {
+        if (!program_available("ffmpeg")) {
             std::printf("ffmpeg is not installed: the frames are written, but no video was made "
                         "(apt-get install ffmpeg, then rerun with --video)\n");
             return frames;
         }
         const double rate = every > 0 ? 1.0 / every : (snaps.size() > 1 ? 1.0 / (snaps[1].time - snaps[0].time) : 10.0);
-        const std::string cmd = "ffmpeg -loglevel error -y -framerate " + format_number(rate) + " -i '" + out +
-                                "/frame_%05d.png' -c:v libx264 -pix_fmt yuv420p -vf 'pad=ceil(iw/2)*2:ceil(ih/2)*2' '" +
-                                out + "/video.mp4'";
-        if (std::system(cmd.c_str()) != 0) throw RunError("ffmpeg failed making " + out + "/video.mp4");
+        // no shell, in the frames' folder: the file names are ours (a `%` in a user's path would
+        // be read as ffmpeg's frame-number pattern)
+        ProcessDef ffmpeg;
+        ffmpeg.argv = {"ffmpeg", "-loglevel", "error", "-y", "-framerate", format_number(rate), "-i", "frame_%05d.png",
+                       "-c:v", "libx264", "-pix_fmt", "yuv420p", "-vf", "pad=ceil(iw/2)*2:ceil(ih/2)*2", "video.mp4"};
+        ffmpeg.cwd = out;
+        ffmpeg.stderr_file = out + "/ffmpeg.log";
+        if (run_process(ffmpeg) != 0) throw RunError("ffmpeg failed making " + out + "/video.mp4 (see " + out + "/ffmpeg.log)");
         std::printf("video: %s/video.mp4\n", out.c_str());
     }
     return frames;
 }
+
+}  // namespace
 
 void attach_frame_hook(RunOptions& ro, bool flume) {
     // the same look as `demlab render RUN_DIR`, drawn from the snapshot files just written,
@@ -214,7 +260,10 @@ void attach_frame_hook(RunOptions& ro, bool flume) {
             style.view_set = true;
             *renderer = std::make_unique<Renderer>(style);
         }
-        std::filesystem::create_directories(dir + "/frames");
+        if (!std::filesystem::is_directory(dir + "/frames")) {
+            std::filesystem::create_directories(dir + "/frames");
+            mark_output_dir(dir + "/frames");
+        }
         char name[64];
         std::snprintf(name, sizeof name, "/frames/frame_%05d.png", index);
         write_png(dir + name, (*renderer)->render(f));

@@ -113,7 +113,7 @@ RunSummary run_dan(const Scenario& s, const RunOptions& o) {
 
     const std::string dir = o.out_dir;
     std::unique_ptr<RunFolderLock> lock;
-    open_run_folder(o, resolved_toml(s), lock);
+    open_run_folder(o, resolved_toml(s), lock, run_inputs(s, o));
     const auto t0 = std::chrono::steady_clock::now();
 
     const DanPath& path = dan.path();

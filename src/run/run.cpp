@@ -282,14 +282,13 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
     const std::string checkpoint_path = dir + "/" + kCheckpointFile;
     const std::string scenario_text = resolved_toml(s);
     std::unique_ptr<RunFolderLock> lock;
+    const std::vector<std::string> inputs = run_inputs(s, o);
     // A new run's folder is made only once everything that can be checked is: the release
     // mass (generated or read), the walls, the tracers; a refusal leaves no partial folder to
     // block the corrected retry. That the folder is free is checked first.
     std::unique_ptr<BinaryReader> restore;
-    if (o.resume) restore = open_run_folder(o, scenario_text, lock);
-    else if (dir.empty()) throw InputError("--out '': an output folder needs a name");
-    else if (!o.force && std::filesystem::exists(dir))
-        throw InputError("output folder '" + dir + "' exists already; choose another --out or pass --force to replace its files");
+    if (o.resume) restore = open_run_folder(o, scenario_text, lock, inputs);
+    else check_output_dir(dir, o.force, inputs);
     const bool terminal = isatty(STDERR_FILENO) != 0;
     std::unique_ptr<InterruptScope> interrupts;
     if (o.handle_signals) interrupts = std::make_unique<InterruptScope>();
@@ -299,7 +298,7 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
     std::vector<int> layer, grid;
     World w = build_world(s, *setup, mass, restore != nullptr, layer, grid);
     if (!o.resume) {
-        open_run_folder(o, scenario_text, lock);
+        open_run_folder(o, scenario_text, lock, inputs);
         if (setup->has_release() && !s.lattice_release.enabled) save_release(mass, dir + "/release.csv");
     }
     DemSolver dem(w);

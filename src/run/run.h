@@ -20,6 +20,9 @@ struct RunOptions {
     double checkpoint_every = 0.0;  // s of wall-clock time between checkpoints; 0: none on a timer
     bool handle_signals = false;    // SIGINT/SIGTERM: a final checkpoint, then Interrupted (interrupt.h)
     bool resume = false;            // continue out_dir from its checkpoint (the scenario must be its scenario.toml)
+    // run out_dir again from the start with its own scenario.toml (resume of a run stopped
+    // before its first checkpoint): that file is an input the forced folder may hold
+    bool rerun = false;
     // called from the run loop about four times a second of wall-clock time and once at the
     // end, with the simulated time, stop.t_max and the steps per second so far (scripting: the
     // Python module's progress callable); may throw to abandon the run

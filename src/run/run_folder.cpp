@@ -13,16 +13,25 @@
 
 namespace demlab {
 
+std::vector<std::string> run_inputs(const Scenario& s, const RunOptions& o) {
+    std::vector<std::string> files = scenario_input_files(s);
+    if (o.rerun && !files.empty()) files.erase(files.begin());  // (the scenario file comes first)
+    return files;
+}
+
 // The run folder: a new one (refused if it exists, unless forced) with the resolved scenario,
 // or the checkpoint of the one to resume, checked against it; locked either way.
 std::unique_ptr<BinaryReader> open_run_folder(const RunOptions& o, const std::string& scenario_text,
-                                              std::unique_ptr<RunFolderLock>& lock) {
+                                              std::unique_ptr<RunFolderLock>& lock,
+                                              const std::vector<std::string>& inputs) {
     const std::string& dir = o.out_dir;
     const std::string checkpoint_path = dir + "/" + kCheckpointFile;
     if (!o.resume) {
+        // refused (a user's folder, an input inside it) before anything is written into it
+        check_output_dir(dir, o.force, inputs);
         // a folder that exists is locked before it is touched (a forced run over a running one)
         if (o.force && std::filesystem::is_directory(dir)) lock = std::make_unique<RunFolderLock>(dir);
-        prepare_output_dir(o.out_dir, o.force);  // (forced: the old folder, with its lock, moved aside)
+        prepare_output_dir(o.out_dir, o.force, inputs);  // (forced: the old folder, with its lock, moved aside)
         lock = std::make_unique<RunFolderLock>(dir);
         std::filesystem::remove(checkpoint_path);  // a stale one of a replaced run
         write_file_atomic(dir + "/scenario.toml", scenario_text);

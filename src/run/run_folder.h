@@ -10,6 +10,7 @@
 #include <filesystem>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "core/binary_io.h"
 #include "core/error.h"
@@ -47,9 +48,15 @@ private:
     int fd_ = -1;
 };
 
+// The files a run reads that its folder must not hold: the scenario's (scenario_input_files),
+// less the folder's own scenario.toml when the run is done again in place (RunOptions::rerun).
+std::vector<std::string> run_inputs(const Scenario& s, const RunOptions& o);
+
 // The run folder: a new one (refused if it exists, unless forced) with the resolved scenario,
-// or the checkpoint of the one to resume, checked against it; locked either way.
+// or the checkpoint of the one to resume, checked against it; locked either way. `inputs`: the
+// files the run reads, which a forced folder must not hold (output_dir.h).
 std::unique_ptr<BinaryReader> open_run_folder(const RunOptions& o, const std::string& scenario_text,
-                                              std::unique_ptr<RunFolderLock>& lock);
+                                              std::unique_ptr<RunFolderLock>& lock,
+                                              const std::vector<std::string>& inputs);
 
 }  // namespace demlab

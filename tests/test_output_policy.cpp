@@ -1,0 +1,259 @@
+// The output-folder policy, the writer that checks every byte and the runner without a shell
+// (docs/reliability.md, "Outputs"): --force never deletes what demlab did not make or what a
+// command reads, no name or path a user typed reaches a shell, a failed write ends the run with
+// exit code 5 and leaves no partial file under a final name, and strings written back into
+// scenario.toml read again.
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/resource.h>
+#include <fcntl.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "core/error.h"
+#include "core/fileio.h"
+#include "core/output_dir.h"
+#include "core/process.h"
+#include "files.h"
+#include "scenario/key_registry.h"
+#include "scenario/scenario.h"
+
+namespace demlab {
+namespace {
+
+namespace fs = std::filesystem;
+using test::read_file;
+using test::temp_dir;
+
+// Two discs dropped on a floor: a run of a fraction of a second, series every `series` s.
+std::string drop_scenario(const std::string& name, double series = 0.005, double snapshots = 0.02,
+                          const std::string& extra = "") {
+    return "[scenario]\nname = " + keys::toml_string(name) + "\n[stop]\nt_max = 0.1\nrest_duration = 0.01\nrest_ke_fraction = 1e-12\n" +
+           "[output]\nseries_interval = " + std::to_string(series) + "\nsnapshot_interval = " + std::to_string(snapshots) +
+           "\n" + extra + "[[discs]]\nposition = [0.0, 0.05]\nradius = 0.01\n[[discs]]\nposition = [0.05, 0.05]\nradius = 0.01\n" +
+           "[[walls]]\nstart = [-1, 0]\nend = [1, 0]\n";
+}
+
+void write_text(const fs::path& p, const std::string& text) {
+    fs::create_directories(p.parent_path());
+    std::ofstream(p) << text;
+}
+
+// The demlab executable with these arguments in folder `cwd`; its exit status.
+int demlab(const std::vector<std::string>& args, const fs::path& cwd) {
+    ProcessDef p;
+    p.argv = {DEMLAB_EXE};
+    p.argv.insert(p.argv.end(), args.begin(), args.end());
+    p.cwd = cwd.string();
+    p.stderr_file = (cwd / "stderr.txt").string();
+    return run_process(p);
+}
+
+// A finished run (snapshots and plots) at `work`/`name`.
+fs::path finished_run(const fs::path& work, const std::string& name) {
+    write_text(work / (name + ".toml"), drop_scenario(name));
+    EXPECT_EQ(demlab({"run", name + ".toml", "--out", name}, work), 0) << read_file(work / "stderr.txt");
+    return work / name;
+}
+
+std::vector<std::string> listing(const fs::path& dir) {
+    std::vector<std::string> names;
+    for (const auto& e : fs::recursive_directory_iterator(dir)) names.push_back(fs::relative(e.path(), dir).string());
+    std::sort(names.begin(), names.end());
+    return names;
+}
+
+}  // namespace
+
+// Row 1: --force on a folder of the user's own files, or on one that holds the scenario or the
+// working directory, is refused and nothing in it changes.
+TEST(OutputPolicy, ForceNeverDeletesWhatDemlabDidNotMakeOrAnInput) {
+    const fs::path work = temp_dir("force-user");
+    write_text(work / "project/base.toml", drop_scenario("base"));
+    write_text(work / "project/userdata/notes.txt", "my notes\n");
+    write_text(work / "project/userdata/sub/data.csv", "1,2\n");
+    const auto before = listing(work);
+    EXPECT_EQ(demlab({"run", "base.toml", "--out", "userdata", "--force"}, work / "project"), kExitInput);
+    EXPECT_NE(read_file(work / "project/stderr.txt").find("not made by demlab"), std::string::npos);
+    fs::remove(work / "project/stderr.txt");
+    EXPECT_EQ(listing(work), before);
+    // the folder holding the scenario and the working directory, from inside it
+    EXPECT_EQ(demlab({"run", "base.toml", "--out", "..", "--force"}, work / "project"), kExitInput);
+    fs::remove(work / "project/stderr.txt");
+    EXPECT_EQ(listing(work), before);
+    // a run folder of demlab's that holds the scenario read: refused, and no lock left in it
+    const fs::path run = finished_run(work, "r");
+    const auto run_files = listing(run);
+    EXPECT_EQ(demlab({"run", "r/scenario.toml", "--out", "r", "--force"}, work), kExitInput);
+    EXPECT_NE(read_file(work / "stderr.txt").find("input"), std::string::npos) << read_file(work / "stderr.txt");
+    EXPECT_EQ(demlab({"run", "../r.toml", "--out", ".", "--force"}, run), kExitInput);
+    fs::remove(run / "stderr.txt");
+    EXPECT_EQ(listing(run), run_files);  // (no .demlab.lock either)
+    // and a demlab folder that is none of these is replaced as before
+    EXPECT_EQ(demlab({"run", "r.toml", "--out", "r", "--force"}, work), 0);
+    EXPECT_FALSE(fs::exists(replaced_output_dir(run.string())));
+    fs::remove_all(work);
+}
+
+// Row 2: render's --strip does not overwrite an existing file without --force, and never a
+// file of the run itself.
+TEST(OutputPolicy, RenderStripNeverOverwritesUnasked) {
+    const fs::path work = temp_dir("strip");
+    const fs::path run = finished_run(work, "r");
+    const std::string summary = read_file(run / "summary.json");
+    EXPECT_EQ(demlab({"render", "r", "--size", "64x48", "--strip", "r/summary.json"}, work), kExitInput);
+    EXPECT_EQ(demlab({"render", "r", "--size", "64x48", "--strip", "r/summary.json", "--force"}, work), kExitInput);
+    EXPECT_EQ(read_file(run / "summary.json"), summary);
+    EXPECT_FALSE(fs::exists(run / "frames"));  // a refused render leaves no folder behind
+    write_text(work / "strip.png", "mine");
+    EXPECT_EQ(demlab({"render", "r", "--size", "64x48", "--strip", "strip.png"}, work), kExitInput);
+    EXPECT_EQ(read_file(work / "strip.png"), "mine");
+    EXPECT_EQ(demlab({"render", "r", "--size", "64x48", "--strip", "strip.png", "--force"}, work), 0);
+    EXPECT_NE(read_file(work / "strip.png"), "mine");
+    fs::remove_all(work);
+}
+
+// Row 3: an output that is one of the command's inputs is refused before anything moves.
+TEST(OutputPolicy, AnOutputThatIsAnInputIsRefusedBeforeAnythingMoves) {
+    const fs::path work = temp_dir("out-input");
+    const fs::path a = finished_run(work, "a"), b = finished_run(work, "b");
+    const auto files_a = listing(a), files_b = listing(b);
+    EXPECT_EQ(demlab({"render", "a", "--size", "64x48", "--out", "a", "--force"}, work), kExitInput);
+    EXPECT_EQ(demlab({"compare", "a", "b", "--out", "b", "--force"}, work), kExitInput);
+    EXPECT_EQ(demlab({"compare", "a", "b", "--out", ".", "--force"}, a), kExitInput);
+    fs::remove(a / "stderr.txt");
+    EXPECT_EQ(listing(a), files_a);
+    EXPECT_EQ(listing(b), files_b);
+    EXPECT_FALSE(fs::exists(replaced_output_dir(a.string())));
+    EXPECT_FALSE(fs::exists(replaced_output_dir(b.string())));
+    fs::remove_all(work);
+}
+
+// Row 4: quotes, $() and backquotes in a scenario's name or an output path reach no shell:
+// the run and its plots are made, and no command in them runs.
+TEST(OutputPolicy, NoNameOrPathReachesAShell) {
+    if (!program_available("gnuplot")) GTEST_SKIP() << "gnuplot is not installed";
+    const fs::path work = temp_dir("shell");
+    write_text(work / "s.toml", drop_scenario("a';touch PWNED;'`touch TICK`$(touch DOLLAR)"));
+    EXPECT_EQ(demlab({"run", "s.toml"}, work), 0) << read_file(work / "stderr.txt");
+    const std::string out = "x';touch X;'\"$(touch Y)\"`touch Z`";
+    EXPECT_EQ(demlab({"run", "s.toml", "--out", out}, work), 0) << read_file(work / "stderr.txt");
+    EXPECT_TRUE(fs::exists(work / out / "plots/forces_x.png"));
+    // compare's script and labels: two continuum runs (seconds) under such names
+    const std::string geometry = std::string(DEMLAB_SOURCE_DIR) + "/scenarios/geometry-A.toml";
+    for (const std::string& d : {out + "-dan", std::string("b'$(touch DOLLAR)`touch TICK`")})
+        EXPECT_EQ(demlab({"run", geometry, "--solver", "dan", "--out", d, "--no-plots"}, work), 0) << read_file(work / "stderr.txt");
+    EXPECT_EQ(demlab({"compare", out + "-dan", "b'$(touch DOLLAR)`touch TICK`", "--out", out + "-cmp"}, work), 0)
+        << read_file(work / "stderr.txt");
+    EXPECT_TRUE(fs::exists(work / (out + "-cmp") / "front.png"));
+    for (const char* f : {"PWNED", "TICK", "DOLLAR", "X", "Y", "Z"}) {
+        EXPECT_FALSE(fs::exists(work / f)) << f;
+        EXPECT_FALSE(fs::exists(work / out / "plots" / f)) << f;
+    }
+    fs::remove_all(work);
+}
+
+// Row 5: a write refused by the file system (here a file size limit, as a full disk refuses)
+// ends the run with exit code 5 naming the file, and no cut file gets its final name.
+TEST(OutputPolicy, AFailedWriteEndsTheRunWithItsOwnExitCode) {
+    const fs::path work = temp_dir("full");
+    // series every step or so: forces.csv passes 64 KiB within the run
+    write_text(work / "s.toml", drop_scenario("full", 1e-5, 0.0));
+    const pid_t pid = ::fork();
+    ASSERT_GE(pid, 0);
+    if (pid == 0) {
+        ::signal(SIGXFSZ, SIG_IGN);  // the write then fails with EFBIG, as on a full disk
+        const rlimit lim{64 * 1024, 64 * 1024};
+        ::setrlimit(RLIMIT_FSIZE, &lim);
+        if (::chdir(work.c_str()) != 0) ::_exit(99);
+        const int fd = ::open("stderr.txt", O_WRONLY | O_CREAT | O_TRUNC, 0644);
+        ::dup2(fd, 2);
+        ::execl(DEMLAB_EXE, DEMLAB_EXE, "run", "s.toml", "--out", "out", "--no-plots", static_cast<char*>(nullptr));
+        ::_exit(98);
+    }
+    int status = 0;
+    ::waitpid(pid, &status, 0);
+    ASSERT_TRUE(WIFEXITED(status));
+    EXPECT_EQ(WEXITSTATUS(status), kExitWrite) << read_file(work / "stderr.txt");
+    EXPECT_NE(read_file(work / "stderr.txt").find(".csv (File too large)"), std::string::npos) << read_file(work / "stderr.txt");
+    int parts = 0;
+    for (const auto& e : fs::directory_iterator(work / "out"))
+        if (e.path().extension() == ".part") {
+            ++parts;
+            EXPECT_FALSE(fs::exists(fs::path(e.path()).replace_extension(""))) << e.path() << " has its final name too";
+        }
+    EXPECT_GT(parts, 0);
+    EXPECT_FALSE(fs::exists(work / "out/summary.json"));
+    fs::remove_all(work);
+}
+
+// The writers themselves: a refused write throws WriteError, removes its temporary file and
+// gives no final name.
+TEST(OutputPolicy, WritersCheckEveryByte) {
+    const fs::path dir = temp_dir("writers");
+    fs::create_directories(dir);
+    rlimit old{};
+    ::getrlimit(RLIMIT_FSIZE, &old);
+    const auto old_handler = ::signal(SIGXFSZ, SIG_IGN);
+    rlimit lim = old;
+    lim.rlim_cur = 4096;
+    ASSERT_EQ(::setrlimit(RLIMIT_FSIZE, &lim), 0);
+    EXPECT_THROW(write_file_atomic((dir / "big.txt").string(), std::string(10000, 'x')), WriteError);
+    SeriesFile series;
+    series.open((dir / "series.csv").string());
+    bool thrown = false;
+    try {
+        for (int i = 0; i < 10000; ++i) {
+            series.out() << "0.123456789,0.123456789\n";
+            series.check();
+        }
+        series.close();
+    } catch (const WriteError&) {
+        thrown = true;
+    }
+    ::setrlimit(RLIMIT_FSIZE, &old);
+    ::signal(SIGXFSZ, old_handler);
+    EXPECT_TRUE(thrown);
+    EXPECT_FALSE(fs::exists(dir / "big.txt"));
+    EXPECT_FALSE(fs::exists(dir / "big.txt.tmp"));
+    EXPECT_FALSE(fs::exists(dir / "series.csv"));
+    EXPECT_NO_THROW(write_file_atomic((dir / "big.txt").string(), std::string(10000, 'x')));
+    fs::remove_all(dir);
+}
+
+// Row 13: every string written back into scenario.toml is escaped, so the resolved scenario
+// of a multi-line description reads again with the same text.
+TEST(OutputPolicy, StringsWrittenBackReadAgain) {
+    Scenario s = parse_scenario(drop_scenario("esc") + "", "esc.toml");
+    s.description = "two\nlines with a \"quote\", a tab\t, a \\ and a bell \x07";
+    finish_scenario(s);
+    const Scenario back = parse_scenario(resolved_toml(s), "resolved.toml");
+    EXPECT_EQ(back.description, s.description);
+}
+
+// The runner starts no shell: its arguments arrive as given.
+TEST(OutputPolicy, ProcessArgumentsArriveAsGiven) {
+    const fs::path dir = temp_dir("argv");
+    fs::create_directories(dir);
+    ProcessDef p;
+    p.argv = {"printf", "%s|", "a b", "'$(touch X)'", "`touch Y`"};
+    p.cwd = dir.string();
+    std::string got;
+    p.on_line = [&](const std::string& l) { got += l; };
+    EXPECT_EQ(run_process(p), 0);
+    EXPECT_EQ(got, "a b|'$(touch X)'|`touch Y`|");
+    EXPECT_FALSE(fs::exists(dir / "X"));
+    EXPECT_FALSE(fs::exists(dir / "Y"));
+    ProcessDef missing;
+    missing.argv = {"no-such-program-demlab"};
+    EXPECT_EQ(run_process(missing), -1);
+    fs::remove_all(dir);
+}
+
+}  // namespace demlab
