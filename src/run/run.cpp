@@ -281,12 +281,14 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
     const std::string dir = o.out_dir;
     const std::string checkpoint_path = dir + "/" + kCheckpointFile;
     const std::string scenario_text = resolved_toml(s);
+    // the files the scenario reads, hashed now: a resume compares them with the checkpoint's
+    const std::vector<ScenarioInput> inputs = scenario_inputs(s);
     std::unique_ptr<RunFolderLock> lock;
     // A new run's folder is made only once everything that can be checked is: the release
     // mass (generated or read), the walls, the tracers; a refusal leaves no partial folder to
     // block the corrected retry. That the folder is free is checked first.
     std::unique_ptr<BinaryReader> restore;
-    if (o.resume) restore = open_run_folder(o, scenario_text, lock);
+    if (o.resume) restore = open_run_folder(o, scenario_text, inputs, lock);
     else if (dir.empty()) throw InputError("--out '': an output folder needs a name");
     else if (!o.force && std::filesystem::exists(dir))
         throw InputError("output folder '" + dir + "' exists already; choose another --out or pass --force to replace its files");
@@ -299,7 +301,7 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
     std::vector<int> layer, grid;
     World w = build_world(s, *setup, mass, restore != nullptr, layer, grid);
     if (!o.resume) {
-        open_run_folder(o, scenario_text, lock);
+        open_run_folder(o, scenario_text, inputs, lock);
         if (setup->has_release() && !s.lattice_release.enabled) save_release(mass, dir + "/release.csv");
     }
     DemSolver dem(w);
@@ -323,6 +325,7 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
     std::unique_ptr<SnapshotWriter> snaps;
     if (s.output.snapshot_interval > 0) snaps = std::make_unique<SnapshotWriter>(dir + "/snapshots", layer, grid, s.output.snapshot_format == "binary");
     RunSummary sum;
+    sum.scenario_fingerprint = scenario_fingerprint(s, inputs);
     sum.n_discs = long(n);
     sum.total_mass = total_mass;
     sum.porosity_over_release_box = setup->has_release() ? mass.porosity_settled : -1.0;
@@ -356,7 +359,7 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
     // are flushed first and their lengths recorded, so a resume cuts off what came after.
     auto write_checkpoint = [&]() {
         BinaryWriter out;
-        put_checkpoint_header(out, scenario_text, solver.time(), s.stop.t_max, solver.step_count(), o);
+        put_checkpoint_header(out, scenario_text, inputs, solver.time(), s.stop.t_max, solver.step_count(), o);
         out.tag("RUN ");
         // what rebuilds this world: the discs at the start
         out.put(start_pos);

@@ -16,7 +16,7 @@ namespace demlab {
 // The run folder: a new one (refused if it exists, unless forced) with the resolved scenario,
 // or the checkpoint of the one to resume, checked against it; locked either way.
 std::unique_ptr<BinaryReader> open_run_folder(const RunOptions& o, const std::string& scenario_text,
-                                              std::unique_ptr<RunFolderLock>& lock) {
+                                              const std::vector<ScenarioInput>& inputs, std::unique_ptr<RunFolderLock>& lock) {
     const std::string& dir = o.out_dir;
     const std::string checkpoint_path = dir + "/" + kCheckpointFile;
     if (!o.resume) {
@@ -31,9 +31,12 @@ std::unique_ptr<BinaryReader> open_run_folder(const RunOptions& o, const std::st
     if (!std::filesystem::is_directory(dir)) throw InputError(dir + ": no such run folder to resume");
     lock = std::make_unique<RunFolderLock>(dir);
     auto restore = std::make_unique<BinaryReader>(read_checkpoint_file(checkpoint_path), checkpoint_path);
-    if (!same_scenario(get_checkpoint_header(*restore, checkpoint_path).scenario_text, scenario_text))
+    const CheckpointHeader header = get_checkpoint_header(*restore, checkpoint_path);
+    if (!same_scenario(header.scenario_text, scenario_text))
         throw InputError(dir + "/scenario.toml differs from the scenario the checkpoint was written with "
                          "(was it edited?); a resumed run must continue the same scenario");
+    // a terrain profile (or any file the scenario reads) edited since: refused, naming it
+    if (header.has_inputs) check_same_inputs(header.inputs, inputs, dir);
     restore->expect_tag("RUN ");
     // a write the kill interrupted left its temporary file (the target is intact)
     for (const auto& e : std::filesystem::recursive_directory_iterator(dir))

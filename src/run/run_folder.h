@@ -14,6 +14,7 @@
 #include "core/binary_io.h"
 #include "core/error.h"
 #include "run/run.h"
+#include "scenario/fingerprint.h"
 
 namespace demlab {
 
@@ -48,8 +49,9 @@ private:
 };
 
 // The run folder: a new one (refused if it exists, unless forced) with the resolved scenario,
-// or the checkpoint of the one to resume, checked against it; locked either way.
+// or the checkpoint of the one to resume, checked against it (the scenario, and the content
+// of every file it reads: `inputs`); locked either way.
 std::unique_ptr<BinaryReader> open_run_folder(const RunOptions& o, const std::string& scenario_text,
-                                              std::unique_ptr<RunFolderLock>& lock);
+                                              const std::vector<ScenarioInput>& inputs, std::unique_ptr<RunFolderLock>& lock);
 
 }  // namespace demlab
