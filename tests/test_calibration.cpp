@@ -5,6 +5,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <set>
 #include <sstream>
 
 #include "calibration/calibration.h"
@@ -18,6 +19,21 @@ using namespace demlab;
 namespace fs = std::filesystem;
 
 namespace {
+std::string test_read(const std::string& path) {
+    std::ifstream in(path);
+    std::stringstream b;
+    b << in.rdbuf();
+    return b.str();
+}
+
+std::vector<std::string> split(const std::string& line) {
+    std::vector<std::string> out;
+    std::istringstream in(line);
+    std::string cell;
+    while (std::getline(in, cell, ',')) out.push_back(cell);
+    return out;
+}
+
 // discs of radius r in columns 2r apart under a surface y(x), the top disc touching it
 void stack_under(double (*surface)(double), double r, double x_end, std::vector<Vec2>& pos, std::vector<double>& rad) {
     for (double x = r; x < x_end; x += 2 * r) {
@@ -175,18 +191,24 @@ TEST(Sweep, GridRowsSummariesAndResume) {
     std::vector<std::string> lines;
     while (std::getline(in, line)) lines.push_back(line);
     ASSERT_EQ(lines.size(), 5u);
-    EXPECT_EQ(lines[0], "row,seed,material.friction_disc_deg,release.variant,runout_s_m,t_end_s,n_discs");
-    EXPECT_EQ(lines[4].rfind("4,1,17.5,\"II\",", 0), 0u) << lines[4];
-    // each row's numbers are its run's summary
-    const SummaryFile s3 = read_summary_file(o.out + "/runs/row003-seed1/summary.json");
+    EXPECT_EQ(lines[0], "row,seed,run,reused,material.friction_disc_deg,release.variant,runout_s_m,t_end_s,n_discs");
+    // each row's numbers are its run's summary; its run folder is named in the row
+    const std::vector<std::string> row3 = split(lines[3]);
+    ASSERT_EQ(row3.size(), 9u) << lines[3];
+    const SummaryFile s3 = read_summary_file(o.out + "/runs/" + row3[2] + "/summary.json");
     std::ostringstream want;
     want.precision(10);
-    want << "3,1,17.5,\"I\"," << s3.number("runout_s") << ',' << s3.number("t_end") << ',' << s3.number("n_discs");
+    want << "3,1," << row3[2] << ",0,17.5,\"I\"," << s3.number("runout_s") << ',' << s3.number("t_end") << ',' << s3.number("n_discs");
     EXPECT_EQ(lines[3], want.str());
+    EXPECT_EQ(lines[4].rfind("4,1,", 0), 0u) << lines[4];
+    EXPECT_NE(lines[4].find(",0,17.5,\"II\","), std::string::npos) << lines[4];
     EXPECT_TRUE(fs::exists(o.out + "/timings.csv"));
     const SweepResult again = run_sweep(c, o);
     EXPECT_EQ(again.runs_done, 0);
     EXPECT_EQ(again.runs_reused, 4);
+    std::ifstream in2(o.out + "/sweep.csv");
+    std::getline(in2, line);
+    while (std::getline(in2, line)) EXPECT_EQ(split(line)[3], "1") << "a reused run says so: " << line;
     fs::remove_all(dir);
 }
 
@@ -214,5 +236,149 @@ TEST(Sweep, BadFilesAreRefusedBeforeAnyRun) {
     EXPECT_NE(message(scenario + "[grid]\n\"rotation.model\" = [1]\n[[rows]]\n\"rotation.model\" = 1\n").find("not both"), std::string::npos);
     EXPECT_NE(message(scenario + "[[rows]]\n\"rotation.model\" = 1\n[[rows]]\n\"release.scale\" = 20\n").find("same keys"), std::string::npos);
     EXPECT_FALSE(fs::exists(dir / "runs"));
+    fs::remove_all(dir);
+}
+
+namespace {
+// A sweep over the density of two discs on a terrain profile read from a file (a fraction of
+// a second each).
+struct DensitySweep {
+    fs::path dir;
+    std::string ground = "x,y\n0,0.5\n1,0\n3,0\n";
+    explicit DensitySweep(const std::string& name) : dir(fs::temp_directory_path() / (name + "-" + std::to_string(::getpid()))) {
+        fs::remove_all(dir);
+        fs::create_directories(dir);
+        std::ofstream(dir / "ground.csv") << ground;
+        std::ofstream(dir / "two.toml") << "[terrain]\nprofile = \"ground.csv\"\n[stop]\nt_max = 0.05\nrest_duration = 0.01\n"
+                                           "[output]\nsnapshot_interval = 0\n[[discs]]\nposition = [1.5, 0.05]\nradius = 0.05\n"
+                                           "[[discs]]\nposition = [2.0, 0.05]\nradius = 0.05\n";
+    }
+    ~DensitySweep() { fs::remove_all(dir); }
+    SweepConfig config(const std::string& densities, const std::string& columns = "[\"total_mass\"]") const {
+        std::ofstream(dir / "s.toml") << "[sweep]\nscenario = \"two.toml\"\ncolumns = " << columns
+                                      << "\n[grid]\n\"material.density\" = " << densities << "\n";
+        return load_sweep((dir / "s.toml").string());
+    }
+    // sweep.csv's rows: run folder, reused, density, total mass
+    std::vector<std::vector<std::string>> table() const {
+        std::ifstream in(dir / "out" / "sweep.csv");
+        std::string line;
+        std::getline(in, line);
+        std::vector<std::vector<std::string>> rows;
+        while (std::getline(in, line)) {
+            const std::vector<std::string> c = split(line);
+            rows.push_back({c.at(2), c.at(3), c.at(4), c.at(5)});
+        }
+        return rows;
+    }
+};
+}  // namespace
+
+// A sweep rerun (--force) with its grid changed from [2000, 3000] to [3000, 2000, 2500] takes
+// the runs of the same scenario, wherever their rows were, and runs the new one: the row of
+// 3000 reports the 3000 run's mass (by row position it reported the 2000 run's). Then the
+// terrain profile the scenario reads is edited: nothing is reused.
+TEST(Sweep, RerunReusesOnlyRunsOfTheSameScenarioAndFiles) {
+    DensitySweep w("demlab-sweep-reuse");
+    SweepOptions o;
+    o.out = (w.dir / "out").string();
+    o.jobs = 1;
+    const SweepResult first = run_sweep(w.config("[2000, 3000]"), o);
+    EXPECT_EQ(first.runs_done, 2);
+    const auto t1 = w.table();
+    ASSERT_EQ(t1.size(), 2u);
+    const double mass2000 = std::stod(t1[0][3]);
+    EXPECT_NEAR(std::stod(t1[1][3]), 1.5 * mass2000, 1e-9 * mass2000);
+    o.force = true;  // another grid: another sweep.id
+    const SweepResult second = run_sweep(w.config("[3000, 2000, 2500]"), o);
+    EXPECT_EQ(second.runs_done, 1);
+    EXPECT_EQ(second.runs_reused, 2);
+    const auto t2 = w.table();
+    ASSERT_EQ(t2.size(), 3u);
+    EXPECT_EQ(t2[0][2], "3000");
+    EXPECT_NEAR(std::stod(t2[0][3]), 1.5 * mass2000, 1e-9 * mass2000) << "the row of 3000 reports another run's mass";
+    EXPECT_NEAR(std::stod(t2[1][3]), mass2000, 1e-9 * mass2000);
+    EXPECT_NEAR(std::stod(t2[2][3]), 1.25 * mass2000, 1e-9 * mass2000);
+    EXPECT_EQ(t2[0][0], t1[1][0]);  // the 3000 run's folder, reused
+    EXPECT_EQ(t2[0][1], "1");
+    EXPECT_EQ(t2[1][1], "1");
+    EXPECT_EQ(t2[2][1], "0");
+    // the profile edited: the same keys, another input
+    std::ofstream(w.dir / "ground.csv") << "x,y\n0,0.6\n1,0\n3,0\n";
+    const SweepResult third = run_sweep(w.config("[3000, 2000, 2500]"), o);
+    EXPECT_EQ(third.runs_done, 3);
+    EXPECT_EQ(third.runs_reused, 0);
+    for (const auto& r : w.table()) EXPECT_EQ(r[1], "0");
+}
+
+// A grid value listed twice (or two that resolve alike), and a column no summary holds, are
+// refused when the sweep file is read, before any run.
+TEST(Sweep, DuplicateRowsAndUnknownColumnsAreRefusedBeforeAnyRun) {
+    DensitySweep w("demlab-sweep-dup");
+    auto message = [&](const std::string& densities, const std::string& columns) {
+        try {
+            w.config(densities, columns);
+        } catch (const InputError& e) {
+            return std::string(e.what());
+        }
+        return std::string("accepted");
+    };
+    const std::string ok = "[\"total_mass\"]";
+    const std::string twice = message("[2000, 3000, 2000]", ok);
+    EXPECT_NE(twice.find("row 3 (material.density=2000) is the same scenario as row 1"), std::string::npos) << twice;
+    const std::string alike = message("[2000, 2000.0]", ok);
+    EXPECT_NE(alike.find("row 2 (material.density=2000.0) is the same scenario as row 1"), std::string::npos) << alike;
+    const std::string column = message("[2000, 3000]", "[\"total_mass\", \"runout\"]");
+    EXPECT_NE(column.find("'runout' is not a number of a run's summary.json; did you mean 'runout_s'?"), std::string::npos) << column;
+    EXPECT_EQ(message("[2000, 3000]", ok), "accepted");
+    EXPECT_FALSE(fs::exists(w.dir / "out"));
+}
+
+// Two angles equal to two decimals get their own run folders (they shared phi15.00-seed1); an
+// angle of two decimals keeps its name.
+TEST(Calibration, CloseAnglesHaveTheirOwnRunFolders) {
+    EXPECT_EQ(calibration_run_name(15.5, 0), "phi15.50-seed1");
+    EXPECT_EQ(calibration_run_name(15.0, 1), "phi15.00-seed2");
+    EXPECT_EQ(calibration_run_name(15.001, 0), "phi15.001-seed1");
+    EXPECT_EQ(calibration_run_name(15.004, 0), "phi15.004-seed1");
+    EXPECT_NE(calibration_run_name(15.1 + 1e-12, 0), calibration_run_name(15.1, 0));
+}
+
+// A calibration run again after its scenario file was edited makes its runs again (they were
+// reused with the old scenario's objective); unchanged, it reuses them.
+TEST(Calibration, RerunAfterTheScenarioIsEditedRunsAgain) {
+    const fs::path dir = fs::temp_directory_path() / ("demlab-calibrate-edit-" + std::to_string(::getpid()));
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    std::string text = test_read(std::string(DEMLAB_SOURCE_DIR) + "/scenarios/dam-break.toml");
+    const std::string t_max = "t_max = 4.0";
+    ASSERT_NE(text.find(t_max), std::string::npos);
+    auto write_scenario = [&](const std::string& value) {
+        std::string t = text;
+        t.replace(t.find(t_max), t_max.size(), "t_max = " + value);
+        std::ofstream(dir / "dam-break.toml") << t;
+    };
+    write_scenario("0.3");
+    CalibrationConfig c;
+    c.scenario = (dir / "dam-break.toml").string();
+    c.scale = 20;
+    c.angles = {15.0};
+    c.refine = false;
+    CalibrationOptions o;
+    o.out = (dir / "out").string();
+    o.jobs = 1;
+    EXPECT_EQ(calibrate(c, o).runs_done, 1);
+    write_scenario("0.35");
+    const CalibrationResult edited = calibrate(c, o);
+    EXPECT_EQ(edited.runs_done, 1);
+    EXPECT_EQ(edited.runs_reused, 0);
+    EXPECT_NEAR(read_summary_file(o.out + "/runs/phi15.00-seed1/summary.json").number("t_end"), 0.35, 0.01);
+    const CalibrationResult again = calibrate(c, o);
+    EXPECT_EQ(again.runs_done, 0);
+    EXPECT_EQ(again.runs_reused, 1);
+    EXPECT_EQ(again.reused_runs, (std::set<std::string>{"phi15.00-seed1"}));
+    const std::string timings = test_read(o.out + "/timings.csv");
+    EXPECT_EQ(timings.rfind("run,wall_seconds,reused\nphi15.00-seed1,", 0), 0u) << timings;
+    EXPECT_NE(timings.find(",1\nsweep,"), std::string::npos) << timings;
     fs::remove_all(dir);
 }

@@ -356,3 +356,41 @@ TEST(Checkpoint, ALockedRunFolderIsRefused) {
     EXPECT_FALSE(fs::exists(dir / ".demlab.lock"));
     fs::remove_all(dir);
 }
+
+// A terrain profile edited between the signal and the resume: the checkpoint holds the content
+// hash of every file the scenario reads, and the resume is refused naming the file (it ran on
+// to a deposit of neither profile). The file restored, the run resumes.
+TEST(Checkpoint, EditedInputFileIsRefusedNamingIt) {
+    const fs::path dir = temp_dir("ck-input");
+    fs::create_directories(dir);
+    const fs::path profile = dir / "ground.csv";
+    const std::string ground = "x,y\n0,0.5\n1,0\n3,0\n";
+    std::ofstream(profile) << ground;
+    std::ofstream(dir / "drop.toml") << "[terrain]\nprofile = \"ground.csv\"\n[stop]\nt_max = 0.3\nrest_duration = 0.1\n"
+                                        "[output]\nsnapshot_interval = 0.05\n[[discs]]\nposition = [0.5, 0.6]\nradius = 0.05\n"
+                                        "[[discs]]\nposition = [2.0, 0.2]\nradius = 0.05\n";
+    Scenario s = load_scenario((dir / "drop.toml").string());
+    finish_scenario(s);
+    const fs::path run = dir / "run";
+    RunOptions ro{run.string(), false, [](const std::string&, const std::string&, int index) {
+                      if (index == 1) request_interrupt(SIGINT);
+                  }};
+    ro.handle_signals = true;
+    EXPECT_THROW(run_scenario(s, ro), Interrupted);
+    ASSERT_TRUE(fs::exists(run / kCheckpointFile));
+    std::ofstream(profile) << "x,y\n0,0.55\n1,0\n3,0\n";
+    try {
+        test::resume_run(run, 1);
+        FAIL() << "resumed with an edited terrain profile";
+    } catch (const InputError& e) {
+        const std::string m = e.what();
+        EXPECT_NE(m.find(profile.string()), std::string::npos) << m;
+        EXPECT_NE(m.find("terrain.profile"), std::string::npos) << m;
+        EXPECT_NE(m.find("has changed since the checkpoint"), std::string::npos) << m;
+    }
+    EXPECT_TRUE(fs::exists(run / kCheckpointFile));
+    std::ofstream(profile) << ground;
+    EXPECT_NO_THROW(test::resume_run(run, 1));
+    EXPECT_TRUE(fs::exists(run / "summary.json"));
+    fs::remove_all(dir);
+}

@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <mutex>
@@ -18,6 +19,7 @@
 #include "core/error.h"
 #include "core/process.h"
 #include "core/fileio.h"
+#include "core/output_dir.h"
 #include "output/frame.h"
 #include "output/image.h"
 #include "output/plot.h"
@@ -25,6 +27,7 @@
 #include "output/renderer.h"
 #include "run/run.h"
 #include "run/summary_file.h"
+#include "scenario/fingerprint.h"
 #include "scenario/scenario.h"
 #include "setups/setup.h"
 #include "core/validate.h"
@@ -114,11 +117,22 @@ namespace {
 
 std::map<std::string, double> read_summary(const std::string& path) { return read_summary_file(path).numbers; }
 
+// An angle's name in run folders and tables: two decimals (phi15.50), or as many more as the
+// angle needs to be told apart from every other (phi15.001, phi15.004): each angle its own folder.
 std::string angle_tag(double angle) {
-    char buf[32];
-    std::snprintf(buf, sizeof buf, "phi%.2f", angle);
+    char buf[64];
+    for (int digits = 2; digits <= 17; ++digits) {
+        std::snprintf(buf, sizeof buf, "phi%.*f", digits, angle);
+        if (std::strtod(buf + 3, nullptr) == angle) break;
+    }
     return buf;
 }
+
+}  // namespace
+
+std::string calibration_run_name(double angle, int seed) { return angle_tag(angle) + "-seed" + std::to_string(seed + 1); }
+
+namespace {
 
 double objective_of(const std::map<std::string, double>& r, const CalibrationConfig& c) {
     double sum = 0;
@@ -190,11 +204,16 @@ void open_calibration_folder_here(const CalibrationConfig& c, const CalibrationO
         std::ifstream in(marker);
         std::stringstream have;
         have << in.rdbuf();
-        if (have.str() != cfg.str() && !o.force)
-            throw InputError("output folder '" + o.out + "' exists and was not made by this calibration "
-                             "(scenario, seeds, scale); choose another --out or pass --force");
+        if (have.str() != cfg.str()) {
+            if (!o.force)
+                throw InputError("output folder '" + o.out + "' exists and was not made by this calibration "
+                                 "(scenario, seeds, scale); choose another --out or pass --force");
+            // forced over another folder: only one demlab made, holding no input (output_dir.h)
+            check_output_dir(o.out, true, {c.source, c.scenario});
+        }
     }
     fs::create_directories(o.out + "/runs");
+    mark_output_dir(o.out);
     write_file_atomic(marker, cfg.str());
 }
 
@@ -224,8 +243,22 @@ std::vector<AngleResult> evaluate_angles(const CalibrationConfig& c, const Calib
     std::vector<Job> todo;
     for (double a : angles)
         for (int k = 0; k < c.seeds; ++k) todo.push_back({a, k});
+    // each run's scenario and fingerprint (scenario/fingerprint.h): a finished run in the
+    // folder is reused only when it ran this scenario with these input files (the scenario
+    // file edited since, or a file it reads, and the run is made again)
+    std::vector<Scenario> scenarios;
+    std::vector<std::string> fingerprints;
+    for (const Job& job : todo) {
+        Scenario s = load_scenario(c.scenario);
+        apply_override(s, "material.friction_disc_deg=" + format_number(job.angle));
+        if (c.scale) apply_override(s, "release.scale=" + std::to_string(c.scale));
+        apply_override(s, "scenario.seed=" + std::to_string(s.seed + unsigned(job.seed)));
+        finish_scenario(s);
+        fingerprints.push_back(scenario_fingerprint(s));
+        scenarios.push_back(std::move(s));
+    }
     std::map<std::pair<double, int>, std::map<std::string, double>> done;
-    auto dir_of = [&](const Job& job) { return o.out + "/runs/" + angle_tag(job.angle) + "-seed" + std::to_string(job.seed + 1); };
+    auto dir_of = [&](const Job& job) { return o.out + "/runs/" + calibration_run_name(job.angle, job.seed); };
     // a run's figures: its summary and the angles of its saved envelope with this
     // configuration's sections (changing them needs no rerun)
     auto figures_of = [&](const std::string& dir) {
@@ -240,16 +273,12 @@ std::vector<AngleResult> evaluate_angles(const CalibrationConfig& c, const Calib
     def.threads = jobs;
     def.what = "calibration";
     def.folder = [&](size_t k) { return dir_of(todo[k]); };
+    def.finished = [&](size_t k) { return finished_run_of(dir_of(todo[k]), fingerprints[k]); };
     def.run = [&](size_t k) {
-        const Job& job = todo[k];
-        Scenario s = load_scenario(c.scenario);
-        apply_override(s, "material.friction_disc_deg=" + format_number(job.angle));
-        if (c.scale) apply_override(s, "release.scale=" + std::to_string(c.scale));
-        apply_override(s, "scenario.seed=" + std::to_string(s.seed + unsigned(job.seed)));
-        finish_scenario(s);
+        const Scenario& s = scenarios[k];
         if (make_setup(s)->kind() != "dam_break") throw InputError(c.scenario + ": not a [dam_break] scenario");
         RunOptions ro;
-        ro.out_dir = dir_of(job);
+        ro.out_dir = dir_of(todo[k]);
         run_scenario(s, ro);
     };
     def.describe = [&](size_t k) {
@@ -266,6 +295,8 @@ std::vector<AngleResult> evaluate_angles(const CalibrationConfig& c, const Calib
     const RankJobsCount count = run_rank_jobs(def);
     res.runs_done += count.ran;
     res.runs_reused += count.reused;
+    for (size_t k = 0; k < todo.size(); ++k)
+        if (count.reused_jobs[k]) res.reused_runs.insert(calibration_run_name(todo[k].angle, todo[k].seed));
     for (const Job& job : todo) done[{job.angle, job.seed}] = figures_of(dir_of(job));
     std::vector<AngleResult> out;
     for (double a : angles) {
@@ -436,13 +467,14 @@ CalibrationResult calibrate(const CalibrationConfig& c, const CalibrationOptions
         write_calibration_table(c, o, res, all);
         plot_envelopes(c, o, all);
         std::ostringstream t;
-        t << "run,wall_seconds\n";
+        t << "run,wall_seconds,reused\n";
         for (const AngleResult& a : all)
             for (size_t k = 0; k < a.runs.size(); ++k) {
                 const auto w = a.runs[k].find("wall_seconds");
-                t << angle_tag(a.angle) << "-seed" << k + 1 << ',' << (w == a.runs[k].end() ? NAN : w->second) << '\n';
+                const std::string run = calibration_run_name(a.angle, int(k));
+                t << run << ',' << (w == a.runs[k].end() ? NAN : w->second) << ',' << (res.reused_runs.count(run) ? 1 : 0) << '\n';
             }
-        t << "sweep," << res.wall_seconds << '\n';
+        t << "sweep," << res.wall_seconds << ",\n";
         write_file_atomic(o.out + "/timings.csv", t.str());
     }
     return res;

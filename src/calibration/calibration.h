@@ -4,6 +4,7 @@
 // then with a golden-section search to a set tolerance.
 #pragma once
 #include <map>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -41,10 +42,15 @@ struct CalibrationResult {
     std::vector<AngleResult> grid, refined;
     double best_angle = 0, best_objective = 0;
     int runs_done = 0, runs_reused = 0;
+    std::set<std::string> reused_runs;  // "phi15.00-seed1": taken from an earlier invocation (all ranks')
     double wall_seconds = 0;
 };
 
 CalibrationResult calibrate(const CalibrationConfig& c, const CalibrationOptions& o);
+
+// The run folder of an angle and seed (0-based) under OUT/runs/: "phi15.50-seed1", with more
+// decimals where two decimals would not tell the angle apart ("phi15.001-seed1").
+std::string calibration_run_name(double angle, int seed);
 
 // Writes a copy of a scenario with material.friction_disc_deg set (never over an existing file
 // unless force). Returns the path written.

@@ -1,5 +1,7 @@
 #include "calibration/rank_jobs.h"
 
+#include "core/output_dir.h"
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -12,8 +14,19 @@
 #include "calibration/ranks.h"
 #include "core/error.h"
 #include "core/validate.h"
+#include "run/summary_file.h"
 
 namespace demlab {
+
+bool finished_run_of(const std::string& dir, const std::string& fingerprint) {
+    const std::string summary = dir + "/summary.json";
+    if (!std::filesystem::exists(summary)) return false;
+    try {
+        return read_summary_file(summary).text("scenario_fingerprint") == fingerprint;
+    } catch (const std::exception&) {
+        return false;  // unreadable: not a finished run of ours
+    }
+}
 
 RankJobsCount run_rank_jobs(const RankJobsDef& def) {
     const Ranks& ranks = Ranks::world();
@@ -21,6 +34,11 @@ RankJobsCount run_rank_jobs(const RankJobsDef& def) {
     for (size_t k = 0; k < def.count; ++k)
         if (int(k % size_t(ranks.size())) == ranks.rank()) mine.push_back(k);
     RankJobsCount count;
+    // which runs an earlier invocation finished: decided on every rank before any rank starts
+    // one (the collective call below), so that rank 0's table says the same as the runs did
+    count.reused_jobs.assign(def.count, false);
+    for (size_t k = 0; k < def.count; ++k) count.reused_jobs[k] = def.finished(k);
+    (void)ranks.any_failed(false);
     std::mutex mu;
     size_t next = 0;
     std::string error;
@@ -35,16 +53,22 @@ RankJobsCount run_rank_jobs(const RankJobsDef& def) {
             }
             const std::string dir = def.folder(k);
             try {
-                const bool reused = std::filesystem::exists(dir + "/summary.json");
+                const bool reused = count.reused_jobs[k];
                 if (!reused) {
-                    std::filesystem::remove_all(dir);  // an unfinished run of our own
+                    // an unfinished run, or one of another scenario or other input files: removed
+                    // when it is a run folder demlab made (never a folder of someone else's)
+                    if (std::filesystem::exists(dir)) {
+                        if (!is_demlab_output(dir) && !std::filesystem::exists(dir + "/scenario.toml"))
+                            throw InputError(dir + ": a folder demlab did not make stands where this run goes; move it");
+                        std::filesystem::remove_all(dir);
+                    }
                     def.run(k);
                 }
                 const std::string line = def.describe(k);
                 std::lock_guard<std::mutex> lock(mu);
                 (reused ? count.reused : count.ran) += 1;
                 long finished = 0;
-                for (size_t j = 0; j < def.count; ++j) finished += std::filesystem::exists(def.folder(j) + "/summary.json") ? 1 : 0;
+                for (size_t j = 0; j < def.count; ++j) finished += def.finished(j) ? 1 : 0;
                 const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
                 const double eta = count.ran > 0 ? secs / count.ran * double(def.count - size_t(finished)) / ranks.size() : 0.0;
                 std::printf("  %s%s; %ld / %zu runs done%s\n", line.c_str(), reused ? " (reused)" : "", finished, def.count,

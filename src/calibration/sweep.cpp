@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <set>
 #include <sstream>
 #include <thread>
@@ -16,9 +17,12 @@
 #include "calibration/ranks.h"
 #include "core/error.h"
 #include "core/fileio.h"
+#include "core/output_dir.h"
 #include "core/progress.h"
+#include "run/measures.h"
 #include "run/run.h"
 #include "run/summary_file.h"
+#include "scenario/fingerprint.h"
 #include "scenario/key_registry.h"
 #include "scenario/scenario.h"
 
@@ -54,6 +58,18 @@ std::string row_tag(size_t row, int seed) {
     std::snprintf(b, sizeof b, "row%03zu-seed%d", row + 1, seed + 1);
     return b;
 }
+
+// "material.density=2000, rotation.model=1" (for messages)
+std::string row_values(const SweepConfig& c, size_t row) {
+    std::string out;
+    for (size_t k = 0; k < c.keys.size(); ++k) out += (k ? ", " : "") + c.keys[k] + "=" + c.rows[row][k];
+    return out.empty() ? "the scenario alone" : out;
+}
+
+// A run's folder under runs/: named by its scenario's content (scenario/fingerprint.h), not by
+// its row, so that a rerun with the rows reordered, added or changed reuses exactly the runs
+// of the same scenario and input files.
+std::string run_name(const std::string& fingerprint) { return fingerprint.substr(0, 16); }
 
 // the scenario of one run: the file, the common overrides, the row's, the seed
 Scenario scenario_of(const SweepConfig& c, size_t row, int seed) {
@@ -155,13 +171,27 @@ SweepConfig load_sweep(const std::string& path) {
     if (c.scenario.empty()) throw InputError(path + ": [sweep] scenario is required (the scenario file to sweep)");
     if (fs::path(c.scenario).is_relative()) c.scenario = (fs::path(path).parent_path() / c.scenario).lexically_normal().string();
     if (c.rows.empty()) c.rows = {{}};  // the scenario alone, over its seeds
-    // every run's scenario is checked now, before any output
+    // a column that no run's summary.json holds is refused now, not after every run
+    const std::vector<std::string> numbers = summary_number_keys();
+    for (const std::string& col : c.columns)
+        if (std::find(numbers.begin(), numbers.end(), col) == numbers.end()) {
+            const std::string near = keys::nearest(col, numbers);
+            throw InputError(path + ": [sweep] columns: '" + col + "' is not a number of a run's summary.json" +
+                             (near.empty() ? std::string() : "; did you mean '" + near + "'?"));
+        }
+    // every run's scenario is checked now, before any output; two rows that resolve to the
+    // same scenario (a value listed twice, 2000 and 2000.0) would run it twice: refused
+    std::vector<std::string> fingerprints;
     for (size_t r = 0; r < c.rows.size(); ++r) {
         try {
-            (void)scenario_of(c, r, 0);
+            fingerprints.push_back(scenario_fingerprint(scenario_of(c, r, 0)));
         } catch (const InputError& e) {
             throw InputError(path + ": row " + std::to_string(r + 1) + ": " + e.what());
         }
+        for (size_t q = 0; q < r; ++q)
+            if (fingerprints[q] == fingerprints[r])
+                throw InputError(path + ": row " + std::to_string(r + 1) + " (" + row_values(c, r) + ") is the same scenario as row " +
+                                 std::to_string(q + 1) + " (" + row_values(c, q) + "): a sweep runs each scenario once; remove the duplicate");
     }
     return c;
 }
@@ -169,6 +199,26 @@ SweepConfig load_sweep(const std::string& path) {
 SweepResult run_sweep(const SweepConfig& c, const SweepOptions& o) {
     const auto t0 = std::chrono::steady_clock::now();
     const Ranks& ranks = Ranks::world();
+    // every run's scenario and its fingerprint (the files it reads hashed now): its folder's
+    // name, and what a finished run in that folder must have been run with to be reused
+    struct Job {
+        size_t row;
+        int seed;
+        Scenario scenario;
+        std::string fingerprint;
+    };
+    std::vector<Job> todo;
+    std::map<std::string, size_t> by_name;
+    for (size_t r = 0; r < c.rows.size(); ++r)
+        for (int k = 0; k < c.seeds; ++k) {
+            Scenario s = scenario_of(c, r, k);
+            const std::string fp = scenario_fingerprint(s);
+            const auto [it, fresh] = by_name.emplace(run_name(fp), todo.size());
+            if (!fresh)  // (load_sweep refuses a duplicate row; a file edited since could make one)
+                throw InputError(c.source + ": " + row_tag(r, k) + " (" + row_values(c, r) + ") is the same scenario as " +
+                                 row_tag(todo[it->second].row, todo[it->second].seed) + ": a sweep runs each scenario once");
+            todo.push_back({r, k, std::move(s), fp});
+        }
     // the folder: new, or made by this same sweep (resume); rank 0 opens it
     std::ostringstream id;
     id << "scenario = " << c.scenario << "\nseeds = " << c.seeds << "\n";
@@ -182,9 +232,14 @@ SweepResult run_sweep(const SweepConfig& c, const SweepOptions& o) {
     if (ranks.root()) {
         try {
             const std::string marker = o.out + "/sweep.id";
-            if (fs::exists(o.out) && read_text_or_empty(marker) != id.str() && !o.force)
-                throw InputError("output folder '" + o.out + "' exists and was not made by this sweep; choose another --out or pass --force");
+            if (fs::exists(o.out) && read_text_or_empty(marker) != id.str()) {
+                if (!o.force)
+                    throw InputError("output folder '" + o.out + "' exists and was not made by this sweep; choose another --out or pass --force");
+                // forced over another folder: only one demlab made, holding no input (output_dir.h)
+                check_output_dir(o.out, true, {c.source, c.scenario});
+            }
             fs::create_directories(o.out + "/runs");
+            mark_output_dir(o.out);
             write_file_atomic(marker, id.str());
         } catch (const std::exception& e) {
             error = e.what();
@@ -193,25 +248,19 @@ SweepResult run_sweep(const SweepConfig& c, const SweepOptions& o) {
     if (ranks.any_failed(!error.empty()))
         throw InputError(error.empty() ? "output folder '" + o.out + "' was refused by rank 0 (its output says why)" : error);
 
-    struct Job {
-        size_t row;
-        int seed;
-    };
-    std::vector<Job> todo;
-    for (size_t r = 0; r < c.rows.size(); ++r)
-        for (int k = 0; k < c.seeds; ++k) todo.push_back({r, k});
-    auto dir_of = [&](const Job& j) { return o.out + "/runs/" + row_tag(j.row, j.seed); };
+    auto dir_of = [&](const Job& j) { return o.out + "/runs/" + run_name(j.fingerprint); };
     RankJobsDef def;
     def.count = todo.size();
     def.threads = o.jobs > 0 ? o.jobs : std::max(1, int(std::thread::hardware_concurrency()));
     def.what = "sweep";
     def.folder = [&](size_t k) { return dir_of(todo[k]); };
+    def.finished = [&](size_t k) { return finished_run_of(dir_of(todo[k]), todo[k].fingerprint); };
     def.run = [&](size_t k) {
         RunOptions ro;
         ro.out_dir = dir_of(todo[k]);
-        run_scenario(scenario_of(c, todo[k].row, todo[k].seed), ro);
+        run_scenario(todo[k].scenario, ro);
     };
-    def.describe = [&](size_t k) { return row_tag(todo[k].row, todo[k].seed); };
+    def.describe = [&](size_t k) { return row_tag(todo[k].row, todo[k].seed) + " (runs/" + run_name(todo[k].fingerprint) + ")"; };
     SweepResult res;
     g_progress_muted = true;
     RankJobsCount count;
@@ -227,7 +276,8 @@ SweepResult run_sweep(const SweepConfig& c, const SweepOptions& o) {
     res.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     if (!ranks.root()) return res;
 
-    // sweep.csv: row, seed, the varied values, the summary's numbers; timings.csv apart
+    // sweep.csv: row, seed, its run's folder, whether that run was taken from an earlier
+    // invocation, the varied values, the summary's numbers; timings.csv apart
     std::vector<SummaryFile> sums;
     for (const Job& j : todo) sums.push_back(read_summary_file(dir_of(j) + "/summary.json"));
     std::vector<std::string> columns = c.columns;
@@ -238,14 +288,15 @@ SweepResult run_sweep(const SweepConfig& c, const SweepOptions& o) {
             if (!kClockKeys.count(k) && k.rfind("broadphase_", 0) != 0 && k.rfind("force_pass_", 0) != 0) columns.push_back(k);
     std::ostringstream csv, timings;
     csv.precision(10);
-    csv << "row,seed";
+    csv << "row,seed,run,reused";
     for (const std::string& k : c.keys) csv << ',' << k;
     for (const std::string& k : columns) csv << ',' << column_name(k, sums.front().unit(k));
     csv << '\n';
-    timings << "run,wall_seconds,release_wall_seconds,machine\n";
+    timings << "run,wall_seconds,release_wall_seconds,machine,reused\n";
     for (size_t n = 0; n < todo.size(); ++n) {
         const Job& j = todo[n];
-        csv << j.row + 1 << ',' << j.seed + 1;
+        const int reused = count.reused_jobs[n] ? 1 : 0;
+        csv << j.row + 1 << ',' << j.seed + 1 << ',' << run_name(j.fingerprint) << ',' << reused;
         for (const std::string& v : c.rows[j.row]) csv << ',' << (v.find(',') != std::string::npos ? "\"" + v + "\"" : v);
         for (const std::string& k : columns) {
             const auto it = sums[n].numbers.find(k);
@@ -258,10 +309,10 @@ SweepResult run_sweep(const SweepConfig& c, const SweepOptions& o) {
             const auto it = sums[n].numbers.find(k);
             return it == sums[n].numbers.end() ? NAN : it->second;
         };
-        timings << row_tag(j.row, j.seed) << ',' << num("wall_seconds") << ',' << num("release_wall_seconds") << ",\""
-                << sums[n].text("machine") << "\"\n";
+        timings << run_name(j.fingerprint) << ',' << num("wall_seconds") << ',' << num("release_wall_seconds") << ",\""
+                << sums[n].text("machine") << "\"," << reused << "\n";
     }
-    timings << "sweep," << res.wall_seconds << ",,\n";
+    timings << "sweep," << res.wall_seconds << ",,,\n";
     write_file_atomic(o.out + "/sweep.csv", csv.str());
     write_file_atomic(o.out + "/timings.csv", timings.str());
     return res;

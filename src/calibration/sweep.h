@@ -1,6 +1,7 @@
 // `demlab sweep SWEEP.toml`: any scenario run over a table of overrides (a grid of values, or
 // explicit rows), several seeds a row, on one machine (--jobs) or spread over MPI ranks as the
-// calibration is (ranks.h), resumable; sweep.csv gathers each run's summary by row.
+// calibration is (ranks.h), resumable (a finished run of the same scenario fingerprint is
+// reused); sweep.csv gathers each run's summary by row.
 //
 //   [sweep]
 //   scenario = "../scenarios/geometry-A.toml"   # relative to the sweep file
@@ -35,7 +36,7 @@ struct SweepConfig {
 SweepConfig load_sweep(const std::string& path);
 
 struct SweepOptions {
-    std::string out;   // folder: runs/<row>-seed<k>/, sweep.csv, timings.csv
+    std::string out;   // folder: runs/<fingerprint>/ (a run each, named by its scenario), sweep.csv, timings.csv
     int jobs = 0;      // runs at once on this machine; 0 = the cores
     bool force = false;
 };

@@ -15,7 +15,8 @@ namespace {
 constexpr char kMagic[8] = {'D', 'E', 'M', 'L', 'A', 'B', 'C', 'K'};
 // 2: the file ends with the CRC-32C of all that comes before it; 1 (earlier builds): no checksum
 // 3: the barrier outputs' peaks after the solver's state (BarrierOutputs::save)
-constexpr uint32_t kCheckpointVersion = 3;
+// 4: the header ends with the scenario's input files and their content hashes
+constexpr uint32_t kCheckpointVersion = 4;
 constexpr uint32_t kByteOrder = 0x01020304;
 
 // The scenario's settings: its text without the comment lines (the header names the file the
@@ -29,8 +30,8 @@ std::string without_comments(const std::string& text) {
 }
 }  // namespace
 
-void put_checkpoint_header(BinaryWriter& out, const std::string& scenario_text, double t, double t_max, long steps,
-                           const RunOptions& o) {
+void put_checkpoint_header(BinaryWriter& out, const std::string& scenario_text, const std::vector<ScenarioInput>& inputs,
+                           double t, double t_max, long steps, const RunOptions& o) {
     out.put(kMagic);
     out.put(kCheckpointVersion);
     out.put(kByteOrder);
@@ -42,6 +43,33 @@ void put_checkpoint_header(BinaryWriter& out, const std::string& scenario_text, 
     out.put(o.checkpoint_every);
     out.put(uint8_t(o.frames));
     out.put(uint8_t(o.plots));
+    out.put(uint32_t(inputs.size()));
+    for (const ScenarioInput& in : inputs) {
+        out.put(in.key);
+        out.put(in.path);
+        out.put(in.hash);
+    }
+}
+
+void check_same_inputs(const std::vector<ScenarioInput>& stored, const std::vector<ScenarioInput>& now, const std::string& dir) {
+    for (const ScenarioInput& then : stored) {
+        const ScenarioInput* cur = nullptr;
+        for (const ScenarioInput& n : now)
+            if (n.key == then.key) cur = &n;
+        if (!cur || cur->path != then.path)
+            throw InputError(dir + ": the checkpoint's run read " + then.key + " = \"" + then.path +
+                             "\", which the scenario no longer names; a resumed run must read the same files");
+        if (cur->hash != then.hash)
+            throw InputError(then.path + " (" + then.key + ") has changed since the checkpoint of " + dir +
+                             " was written: a resumed run must read the same files. Restore it, or run the scenario again");
+    }
+    for (const ScenarioInput& n : now) {
+        bool known = false;
+        for (const ScenarioInput& then : stored) known = known || then.key == n.key;
+        if (!known)
+            throw InputError(dir + ": the scenario names " + n.key + " = \"" + n.path +
+                             "\", which the checkpoint's run did not read; a resumed run must read the same files");
+    }
 }
 
 CheckpointHeader get_checkpoint_header(BinaryReader& in, const std::string& path) {
@@ -49,7 +77,7 @@ CheckpointHeader get_checkpoint_header(BinaryReader& in, const std::string& path
     in.get(magic);
     if (std::memcmp(magic, kMagic, 8) != 0) throw InputError(path + ": not a demlab checkpoint");
     const uint32_t version = in.get<uint32_t>();
-    if (version != kCheckpointVersion && version != 1 && version != 2) throw InputError(path + ": written by another version of demlab");
+    if (version < 1 || version > kCheckpointVersion) throw InputError(path + ": written by another version of demlab");
     if (in.get<uint32_t>() != kByteOrder || in.get<uint32_t>() != sizeof(double))
         throw InputError(path + ": written on a machine of another architecture (byte order or number size)");
     CheckpointHeader h;
@@ -60,6 +88,18 @@ CheckpointHeader get_checkpoint_header(BinaryReader& in, const std::string& path
     in.get(h.info.checkpoint_every);
     h.info.frames = in.get<uint8_t>() != 0;
     h.info.plots = in.get<uint8_t>() != 0;
+    h.has_inputs = version >= 4;
+    if (h.has_inputs) {
+        const uint32_t n = in.get<uint32_t>();
+        if (n > 64) throw InputError(path + ": corrupt checkpoint (" + std::to_string(n) + " input files)");
+        for (uint32_t k = 0; k < n; ++k) {
+            ScenarioInput i;
+            in.get(i.key);
+            in.get(i.path);
+            in.get(i.hash);
+            h.inputs.push_back(i);
+        }
+    }
     return h;
 }
 

@@ -6,16 +6,23 @@
 
 #include "core/binary_io.h"
 #include "run/run.h"
+#include "scenario/fingerprint.h"
 
 namespace demlab {
 
 struct CheckpointHeader {
     std::string scenario_text;
     CheckpointInfo info;
+    // the files the scenario reads, with their content hashes (format 4; empty before)
+    std::vector<ScenarioInput> inputs;
+    bool has_inputs = false;  // format 4 or later (an earlier build's checkpoint is not checked)
 };
 
-void put_checkpoint_header(BinaryWriter& out, const std::string& scenario_text, double t, double t_max, long steps,
-                           const RunOptions& o);
+void put_checkpoint_header(BinaryWriter& out, const std::string& scenario_text, const std::vector<ScenarioInput>& inputs,
+                           double t, double t_max, long steps, const RunOptions& o);
+// InputError naming the first input file whose content (or path) is not the one the
+// checkpoint was written with.
+void check_same_inputs(const std::vector<ScenarioInput>& stored, const std::vector<ScenarioInput>& now, const std::string& dir);
 CheckpointHeader get_checkpoint_header(BinaryReader& in, const std::string& path);
 
 // The file's bytes with the CRC-32C of all of them appended (written last), and a checkpoint

@@ -112,8 +112,9 @@ RunSummary run_dan(const Scenario& s, const RunOptions& o) {
     if (!d.sync_front.empty()) reference = read_front(d.sync_front);
 
     const std::string dir = o.out_dir;
+    const std::vector<ScenarioInput> inputs = scenario_inputs(s);
     std::unique_ptr<RunFolderLock> lock;
-    open_run_folder(o, resolved_toml(s), lock, run_inputs(s, o));
+    open_run_folder(o, resolved_toml(s), inputs, lock, run_inputs(s, o, inputs));
     const auto t0 = std::chrono::steady_clock::now();
 
     const DanPath& path = dan.path();
@@ -313,6 +314,7 @@ RunSummary run_dan(const Scenario& s, const RunOptions& o) {
     write_file_atomic(dir + "/deposit.csv", dep.str());
     SummaryJson j;
     j.text("scenario", s.name);
+    j.text("scenario_fingerprint", scenario_fingerprint(s, inputs));  // what a sweep's reuse compares
     j.text("model", "dan");
     j.integer("blocks", long(n));
     j.text("columns", d.columns == DanColumns::Vertical ? "vertical" : "normal");

@@ -1,5 +1,6 @@
 #include "run/measures.h"
 
+#include <algorithm>
 #include <cmath>
 #include <sstream>
 
@@ -227,11 +228,12 @@ void write_lost_discs(const World& w, const std::string& dir) {
     write_file_atomic(dir + "/lost.csv", o.str());
 }
 
-void write_summary(const std::string& path, const Scenario& s, const RunSummary& sum, const ReleaseFigures& release,
-                   const SlopeAngles* angles) {
+namespace {
+SummaryJson summary_json(const Scenario& s, const RunSummary& sum, const ReleaseFigures& release, const SlopeAngles* angles) {
     const bool r = release.generated;
     SummaryJson j;
     j.text("scenario", s.name);
+    j.text("scenario_fingerprint", sum.scenario_fingerprint);
     j.integer("n_discs", sum.n_discs);
     j.integer("lost_discs", sum.lost_discs);
     j.number("total_mass", sum.total_mass, "kg/m");
@@ -281,7 +283,26 @@ void write_summary(const std::string& path, const Scenario& s, const RunSummary&
         j.number("toe_x", angles->toe_x, "m");
         j.number("surface_at_back_wall", angles->h_wall, "m");
     }
-    write_file_atomic(path, j.str());
+    return j;
+}
+}  // namespace
+
+void write_summary(const std::string& path, const Scenario& s, const RunSummary& sum, const ReleaseFigures& release,
+                   const SlopeAngles* angles) {
+    write_file_atomic(path, summary_json(s, sum, release, angles).str());
+}
+
+std::vector<std::string> summary_number_keys() {
+    // the DEM summary with every optional part: a barrier, bonds, the dam break's angles
+    RunSummary sum;
+    sum.s_peak_barrier_pressure = 0;
+    sum.bonds = 0;
+    const SlopeAngles angles{};
+    std::vector<std::string> keys = summary_json(Scenario{}, sum, ReleaseFigures{}, &angles).number_keys();
+    // and DAN's own (dan_run.cpp)
+    for (const char* k : {"blocks", "volume", "max_front_s", "left_flume", "sync_shift", "max_cfl", "momentum_corrected"})
+        if (std::find(keys.begin(), keys.end(), k) == keys.end()) keys.push_back(k);
+    return keys;
 }
 
 }  // namespace demlab

@@ -92,5 +92,8 @@ struct ReleaseFigures {
 };
 void write_summary(const std::string& path, const Scenario& s, const RunSummary& sum, const ReleaseFigures& release,
                    const SlopeAngles* angles);
+// Every number a DEM or DAN run's summary.json can hold (a set-up writes a subset: the dam
+// break's gamma_*, a barrier's pressure, bonds): what a sweep's `columns` may name.
+std::vector<std::string> summary_number_keys();
 
 }  // namespace demlab

@@ -281,14 +281,17 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
     const std::string dir = o.out_dir;
     const std::string checkpoint_path = dir + "/" + kCheckpointFile;
     const std::string scenario_text = resolved_toml(s);
+    // the files the scenario reads, hashed now: a resume compares them with the checkpoint's
+    const std::vector<ScenarioInput> inputs = scenario_inputs(s);
     std::unique_ptr<RunFolderLock> lock;
-    const std::vector<std::string> inputs = run_inputs(s, o);
+    // the files a forced folder must not hold (output_dir.h)
+    const std::vector<std::string> held = run_inputs(s, o, inputs);
     // A new run's folder is made only once everything that can be checked is: the release
     // mass (generated or read), the walls, the tracers; a refusal leaves no partial folder to
     // block the corrected retry. That the folder is free is checked first.
     std::unique_ptr<BinaryReader> restore;
-    if (o.resume) restore = open_run_folder(o, scenario_text, lock, inputs);
-    else check_output_dir(dir, o.force, inputs);
+    if (o.resume) restore = open_run_folder(o, scenario_text, inputs, lock, held);
+    else check_output_dir(dir, o.force, held);
     const bool terminal = isatty(STDERR_FILENO) != 0;
     std::unique_ptr<InterruptScope> interrupts;
     if (o.handle_signals) interrupts = std::make_unique<InterruptScope>();
@@ -298,7 +301,7 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
     std::vector<int> layer, grid;
     World w = build_world(s, *setup, mass, restore != nullptr, layer, grid);
     if (!o.resume) {
-        open_run_folder(o, scenario_text, lock, inputs);
+        open_run_folder(o, scenario_text, inputs, lock, held);
         if (setup->has_release() && !s.lattice_release.enabled) save_release(mass, dir + "/release.csv");
     }
     DemSolver dem(w);
@@ -322,6 +325,7 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
     std::unique_ptr<SnapshotWriter> snaps;
     if (s.output.snapshot_interval > 0) snaps = std::make_unique<SnapshotWriter>(dir + "/snapshots", layer, grid, s.output.snapshot_format == "binary");
     RunSummary sum;
+    sum.scenario_fingerprint = scenario_fingerprint(s, inputs);
     sum.n_discs = long(n);
     sum.total_mass = total_mass;
     sum.porosity_over_release_box = setup->has_release() ? mass.porosity_settled : -1.0;
@@ -355,7 +359,7 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
     // are flushed first and their lengths recorded, so a resume cuts off what came after.
     auto write_checkpoint = [&]() {
         BinaryWriter out;
-        put_checkpoint_header(out, scenario_text, solver.time(), s.stop.t_max, solver.step_count(), o);
+        put_checkpoint_header(out, scenario_text, inputs, solver.time(), s.stop.t_max, solver.step_count(), o);
         out.tag("RUN ");
         // what rebuilds this world: the discs at the start
         out.put(start_pos);

@@ -50,6 +50,9 @@ CheckpointInfo read_checkpoint_info(const std::string& run_dir);
 bool same_scenario(const std::string& stored, const std::string& resolved_now);
 
 struct RunSummary {
+    // the content hash of the resolved scenario and the files it read (scenario/fingerprint.h):
+    // summary.json's scenario_fingerprint, which a sweep's reuse compares
+    std::string scenario_fingerprint;
     long n_discs = 0;                   // at the start
     long lost_discs = 0;                // taken out when they left the domain (lost.csv)
     double total_mass = 0;              // kg per metre of thickness

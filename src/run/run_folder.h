@@ -15,6 +15,7 @@
 #include "core/binary_io.h"
 #include "core/error.h"
 #include "run/run.h"
+#include "scenario/fingerprint.h"
 
 namespace demlab {
 
@@ -48,15 +49,16 @@ private:
     int fd_ = -1;
 };
 
-// The files a run reads that its folder must not hold: the scenario's (scenario_input_files),
-// less the folder's own scenario.toml when the run is done again in place (RunOptions::rerun).
-std::vector<std::string> run_inputs(const Scenario& s, const RunOptions& o);
+// The files a run reads, which its folder must not hold: the scenario file (unless the run is
+// done again in place from the folder's own scenario.toml: RunOptions::rerun) and `inputs`.
+std::vector<std::string> run_inputs(const Scenario& s, const RunOptions& o, const std::vector<ScenarioInput>& inputs);
 
 // The run folder: a new one (refused if it exists, unless forced) with the resolved scenario,
-// or the checkpoint of the one to resume, checked against it; locked either way. `inputs`: the
-// files the run reads, which a forced folder must not hold (output_dir.h).
+// or the checkpoint of the one to resume, checked against it (the scenario, and the content
+// of every file it reads: `inputs`); locked either way. `held`: the
+// files a forced folder must not hold (output_dir.h).
 std::unique_ptr<BinaryReader> open_run_folder(const RunOptions& o, const std::string& scenario_text,
-                                              std::unique_ptr<RunFolderLock>& lock,
-                                              const std::vector<std::string>& inputs);
+                                              const std::vector<ScenarioInput>& inputs, std::unique_ptr<RunFolderLock>& lock,
+                                              const std::vector<std::string>& held);
 
 }  // namespace demlab

@@ -19,6 +19,13 @@ void SummaryJson::integer(const std::string& key, long v, const std::string& uni
 
 void SummaryJson::text(const std::string& key, const std::string& v) { entries_.emplace_back(key, json_string(v)); }
 
+std::vector<std::string> SummaryJson::number_keys() const {
+    std::vector<std::string> keys;
+    for (const auto& [k, v] : entries_)
+        if (v.empty() || v[0] != '"') keys.push_back(k);
+    return keys;
+}
+
 void SummaryJson::boolean(const std::string& key, bool v) { entries_.emplace_back(key, v ? "true" : "false"); }
 
 std::string SummaryJson::str() const {

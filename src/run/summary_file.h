@@ -18,6 +18,8 @@ public:
     void text(const std::string& key, const std::string& v);
     void boolean(const std::string& key, bool v);
     std::string str() const;
+    // the keys whose value is a number (true and false count: the reader takes them as 1, 0)
+    std::vector<std::string> number_keys() const;
 
 private:
     std::vector<std::pair<std::string, std::string>> entries_, units_;  // key, its JSON value / unit

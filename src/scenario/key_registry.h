@@ -26,6 +26,8 @@ const std::vector<Key>& registry();
 const Key* find_key(const std::string& name);
 std::vector<std::string> key_names();
 // InputError "WHERE: unknown key; did you mean ...?"
+// the name of `names` nearest to key (a few edits away), or "" (what "did you mean" offers)
+std::string nearest(const std::string& key, const std::vector<std::string>& names);
 [[noreturn]] void unknown_key(const std::string& where, const std::string& key, const std::vector<std::string>& names);
 
 // Helpers of the parsers: "FILE:LINE: key 'KEY'", TOML literals, a node's text, checked reads.

@@ -527,14 +527,6 @@ static bool section_in_use(const Scenario& s, const std::string& sec) {
     return true;
 }
 
-std::vector<std::string> scenario_input_files(const Scenario& s) {
-    std::vector<std::string> files;
-    for (const std::string* f : {&s.source, &s.terrain.profile, &s.terrain.grid, &s.lattice_release.top,
-                                 &s.release.from_file, &s.dan.sync_front})
-        if (!f->empty()) files.push_back(*f);
-    return files;
-}
-
 std::string resolved_toml(const Scenario& s) {
     std::ostringstream o;
     o << "# Resolved scenario: every key with the value the run used (defaults included).\n";

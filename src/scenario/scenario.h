@@ -155,10 +155,6 @@ void apply_override(Scenario& s, const std::string& assignment);
 void finish_scenario(Scenario& s);
 // The resolved scenario as TOML (every key, with its value).
 std::string resolved_toml(const Scenario& s);
-
-// The files a scenario reads, as given (the scenario file itself first, then terrain profile or
-// grid, the mass's top, a saved release mass, DAN's reference front); empty names left out.
-std::vector<std::string> scenario_input_files(const Scenario& s);
 // The reference page: every key with its unit, default, range and meaning (Markdown).
 std::string scenario_reference_markdown();
 
