@@ -123,15 +123,22 @@ void print_ceiling(const std::vector<XyrDisc>& discs, const BenchOptions& o, dou
                 c.same_bits ? "" : " (the runs' checksums differ: a bug)");
 }
 
-// Runs the LAMMPS script and returns its particle-steps/s (0 if it could not run); `echo`
-// passes its lines on.
-double run_peer(long steps, int ranks, bool echo = true) {
+// The peer's two styles of the same contact law on the same work: LAMMPS' general
+// `pair_style granular` (Hooke, linear history) and its faster `gran/hooke/history` with
+// `fix wall/gran hooke/history` (bench/db9k/lammps; ../docs/performance.md).
+enum class PeerStyle { Granular, HookeHistory };
+const char* peer_style_name(PeerStyle st) { return st == PeerStyle::Granular ? "granular" : "gran/hooke/history"; }
+
+// Runs the LAMMPS script in one style and returns its particle-steps/s (0 if it could not
+// run); `echo` passes its lines on.
+double run_peer(long steps, int ranks, PeerStyle style, bool echo = true) {
     const std::string script = std::string(DEMLAB_SOURCE_DIR) + "/bench/db9k/lammps/run.sh";
     double rate = 0.0;
     ProcessDef peer;  // no shell
-    peer.argv = {"bash", script, std::to_string(steps), std::to_string(ranks)};
+    peer.argv = {"bash", script, std::to_string(steps), std::to_string(ranks),
+                 style == PeerStyle::Granular ? "bench.in" : "bench_hooke_history.in"};
     peer.on_line = [&](const std::string& line) {
-        if (echo) std::fputs(("  [lammps] " + line).c_str(), stdout);
+        if (echo) std::fputs(("  [lammps " + std::string(peer_style_name(style)) + "] " + line).c_str(), stdout);
         const auto pos = line.find("particle-steps/s  max ");
         if (pos != std::string::npos) rate = std::atof(line.c_str() + pos + 22);
     };
@@ -180,18 +187,25 @@ int targets(const BenchOptions& o, const std::vector<XyrDisc>& discs) {
     const int rounds = o.rounds > 0 ? o.rounds : 5;
     std::printf("DB-9k targets: %d round(s) of %ld steps; each round demlab on 1 thread%s, demlab on 2 threads%s, "
                 "then two 1-thread copies side by side against one alone\n",
-                rounds, o.steps, o.peer ? ", LAMMPS on 1 rank" : "", o.peer ? ", LAMMPS on 2 ranks" : "");
+                rounds, o.steps, o.peer ? ", LAMMPS on 1 rank (granular, then gran/hooke/history)" : "",
+                o.peer ? ", LAMMPS on 2 ranks (both styles)" : "");
+    if (o.peer) std::printf("ratios: demlab against LAMMPS' faster style, gran/hooke/history (against granular in brackets)\n");
     std::printf("machine: %s\n", machine_summary(machine_info()).c_str());
     // per round
-    std::vector<double> ns1, ns2, peer1, peer2, ratio1, ratio2, speedup, busy, cores, of_ceiling;
+    // peer1, peer2: gran/hooke/history (the faster style, the one the ratios are taken to);
+    // gpeer1, gpeer2: pair_style granular
+    std::vector<double> ns1, ns2, peer1, peer2, gpeer1, gpeer2, ratio1, ratio2, gratio1, gratio2, speedup, busy, cores,
+        of_ceiling;
     bool peer = o.peer, same_bits = true;
     uint64_t hash = 0;
     long fallbacks = 0, runs = 0;
     for (int r = 0; r < rounds; ++r) {
         const TimedRun one = timed_db9k(discs, o, 1, nullptr);
-        const double p1 = peer ? run_peer(o.steps, 1, false) : 0.0;
+        const double g1 = peer ? run_peer(o.steps, 1, PeerStyle::Granular, false) : 0.0;
+        const double p1 = peer ? run_peer(o.steps, 1, PeerStyle::HookeHistory, false) : 0.0;
         const TimedRun two = timed_db9k(discs, o, 2, nullptr);
-        const double p2 = peer ? run_peer(o.steps, 2, false) : 0.0;
+        const double g2 = peer ? run_peer(o.steps, 2, PeerStyle::Granular, false) : 0.0;
+        const double p2 = peer ? run_peer(o.steps, 2, PeerStyle::HookeHistory, false) : 0.0;
         const Ceiling c = measure_ceiling(discs, o, 2);
         if (r == 0) hash = one.hash;
         same_bits = same_bits && one.hash == hash && two.hash == hash && c.alone.hash == hash && c.same_bits;
@@ -206,15 +220,21 @@ int targets(const BenchOptions& o, const std::vector<XyrDisc>& discs) {
         of_ceiling.push_back(rate2 / (c.cores_give * n / c.alone.seconds));
         std::printf("  round %d: 1 thread %.1f ns, 2 threads %.1f ns (%.2fx), the two cores give %.2fx", r + 1, ns1.back(),
                     ns2.back(), speedup.back(), c.cores_give);
-        if (peer && (p1 <= 0.0 || p2 <= 0.0)) {
+        if (peer && (p1 <= 0.0 || p2 <= 0.0 || g1 <= 0.0 || g2 <= 0.0)) {
             peer = false;
             std::printf("; LAMMPS did not run (install it with scripts/install-deps.sh --peer)");
         } else if (peer) {
             peer1.push_back(p1);
             peer2.push_back(p2);
+            gpeer1.push_back(g1);
+            gpeer2.push_back(g2);
             ratio1.push_back(rate1 / p1);
             ratio2.push_back(rate2 / p2);
-            std::printf("; demlab vs LAMMPS %.2f (1 thread vs 1 rank), %.2f (2 threads vs 2 ranks)", ratio1.back(), ratio2.back());
+            gratio1.push_back(rate1 / g1);
+            gratio2.push_back(rate2 / g2);
+            std::printf("; demlab vs LAMMPS gran/hooke/history %.2f (1 thread vs 1 rank), %.2f (2 threads vs 2 ranks); "
+                        "vs granular %.2f, %.2f",
+                        ratio1.back(), ratio2.back(), gratio1.back(), gratio2.back());
         }
         std::printf("\n");
         std::fflush(stdout);
@@ -223,26 +243,34 @@ int targets(const BenchOptions& o, const std::vector<XyrDisc>& discs) {
     // the rounds as a table (figures as particle-steps/s, with ns per particle-step)
     auto rate_cell = [](double ns) { return strf("%.3e (%.1f)", 1e9 / ns, ns); };
     auto peer_cell = [&](const std::vector<double>& v, size_t r, const char* fmt) { return peer ? strf(fmt, v[r]) : "-"; };
-    std::printf("\n| round | 1 thread: demlab (ns) | LAMMPS 1 rank | ratio | 2 threads: demlab (ns) | LAMMPS 2 ranks | ratio "
+    // (LAMMPS columns: particle-steps/s of granular, then of gran/hooke/history; the ratio is
+    // demlab's to the faster style, gran/hooke/history)
+    std::printf("\n| round | 1 thread: demlab (ns) | LAMMPS 1 rank: granular | gran/hooke/history | ratio to the faster "
+                "| 2 threads: demlab (ns) | LAMMPS 2 ranks: granular | gran/hooke/history | ratio to the faster "
                 "| 2 threads / 1 | busy share | the two cores give | 2 threads, of the ceiling |\n"
-                "|---|---|---|---|---|---|---|---|---|---|---|\n");
+                "|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
     for (size_t r = 0; r < ns1.size(); ++r)
-        std::printf("| %zu | %s | %s | %s | %s | %s | %s | %.2f | %.1f %% | %.2fx | %.0f %% |\n", r + 1, rate_cell(ns1[r]).c_str(),
-                    peer_cell(peer1, r, "%.3e").c_str(), peer_cell(ratio1, r, "%.2f").c_str(), rate_cell(ns2[r]).c_str(),
+        std::printf("| %zu | %s | %s | %s | %s | %s | %s | %s | %s | %.2f | %.1f %% | %.2fx | %.0f %% |\n", r + 1,
+                    rate_cell(ns1[r]).c_str(), peer_cell(gpeer1, r, "%.3e").c_str(), peer_cell(peer1, r, "%.3e").c_str(),
+                    peer_cell(ratio1, r, "%.2f").c_str(), rate_cell(ns2[r]).c_str(), peer_cell(gpeer2, r, "%.3e").c_str(),
                     peer_cell(peer2, r, "%.3e").c_str(), peer_cell(ratio2, r, "%.2f").c_str(), speedup[r], 100.0 * busy[r],
                     cores[r], 100.0 * of_ceiling[r]);
-    const std::string med_p1 = peer ? strf("%.3e", median_of(peer1)) : "-", med_r1 = peer ? strf("%.2f", median_of(ratio1)) : "-";
-    const std::string med_p2 = peer ? strf("%.3e", median_of(peer2)) : "-", med_r2 = peer ? strf("%.2f", median_of(ratio2)) : "-";
-    std::printf("| median | %s | %s | %s | %s | %s | %s | %.2f (%.2f from the medians) | %.1f %% | %.2fx | %.0f %% |\n",
-                rate_cell(median_of(ns1)).c_str(), med_p1.c_str(), med_r1.c_str(), rate_cell(median_of(ns2)).c_str(),
-                med_p2.c_str(), med_r2.c_str(), median_of(speedup), median_of(ns1) / median_of(ns2), 100.0 * median_of(busy),
-                median_of(cores), 100.0 * median_of(of_ceiling));
-    std::printf("| range | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s |\n", range_of(ns1, "%.1f-%.1f ns").c_str(),
-                range_of(peer1, "%.3e-%.3e").c_str(), range_of(ratio1, "%.2f-%.2f").c_str(),
-                range_of(ns2, "%.1f-%.1f ns").c_str(), range_of(peer2, "%.3e-%.3e").c_str(),
+    auto med = [&](const std::vector<double>& v, const char* fmt) { return peer ? strf(fmt, median_of(v)) : std::string("-"); };
+    std::printf("| median | %s | %s | %s | %s | %s | %s | %s | %s | %.2f (%.2f from the medians) | %.1f %% | %.2fx | %.0f %% |\n",
+                rate_cell(median_of(ns1)).c_str(), med(gpeer1, "%.3e").c_str(), med(peer1, "%.3e").c_str(),
+                med(ratio1, "%.2f").c_str(), rate_cell(median_of(ns2)).c_str(), med(gpeer2, "%.3e").c_str(),
+                med(peer2, "%.3e").c_str(), med(ratio2, "%.2f").c_str(), median_of(speedup), median_of(ns1) / median_of(ns2),
+                100.0 * median_of(busy), median_of(cores), 100.0 * median_of(of_ceiling));
+    std::printf("| range | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s | %s |\n", range_of(ns1, "%.1f-%.1f ns").c_str(),
+                range_of(gpeer1, "%.3e-%.3e").c_str(), range_of(peer1, "%.3e-%.3e").c_str(), range_of(ratio1, "%.2f-%.2f").c_str(),
+                range_of(ns2, "%.1f-%.1f ns").c_str(), range_of(gpeer2, "%.3e-%.3e").c_str(), range_of(peer2, "%.3e-%.3e").c_str(),
                 range_of(ratio2, "%.2f-%.2f").c_str(), range_of(speedup, "%.2f-%.2f").c_str(),
                 range_of(busy, "%.1f-%.1f %%", 100.0).c_str(), range_of(cores, "%.2f-%.2fx").c_str(),
                 range_of(of_ceiling, "%.0f-%.0f %%", 100.0).c_str());
+    if (peer)
+        std::printf("\nAgainst the slower style, granular: %.2fx on 1 thread vs 1 rank (%s), %.2fx on 2 threads vs 2 ranks (%s).\n",
+                    median_of(gratio1), range_of(gratio1, "%.2f-%.2f").c_str(), median_of(gratio2),
+                    range_of(gratio2, "%.2f-%.2f").c_str());
     if (fallbacks > 0)
         std::printf("\nThe 2-thread runs fell back to one range %ld time(s): another process took a core, and their "
                     "figures are not the machine's.\n",
@@ -250,11 +278,15 @@ int targets(const BenchOptions& o, const std::vector<XyrDisc>& discs) {
 
     // the targets (issue #6), against the medians, and in how many rounds
     std::printf("\n| target | required | measured | verdict |\n|---|---|---|---|\n");
-    if (peer)
-        std::printf("| 1 thread vs LAMMPS 1 rank | 5x | %.2fx (median; %s) | %s |\n", median_of(ratio1),
+    if (peer) {
+        std::printf("| 1 thread vs LAMMPS gran/hooke/history 1 rank | 5x | %.2fx (median; %s) | %s |\n", median_of(ratio1),
                     range_of(ratio1, "%.2f-%.2f").c_str(), verdict(ratio1, 5.0).c_str());
-    else
-        std::printf("| 1 thread vs LAMMPS 1 rank | 5x | - | not measured (give --peer; LAMMPS from scripts/install-deps.sh --peer) |\n");
+        std::printf("| 2 threads vs LAMMPS gran/hooke/history 2 ranks | 5x | %.2fx (median; %s) | %s |\n", median_of(ratio2),
+                    range_of(ratio2, "%.2f-%.2f").c_str(), verdict(ratio2, 5.0).c_str());
+    } else {
+        std::printf("| 1 and 2 threads vs LAMMPS' faster style on 1 and 2 ranks | 5x | - | not measured (give --peer; LAMMPS "
+                    "from scripts/install-deps.sh --peer) |\n");
+    }
     std::printf("| 2 threads vs demlab's 1 thread | 1.8x | %.2fx (median pair by pair; %s; two independent copies got "
                 "%.2fx) | %s |\n",
                 median_of(speedup), range_of(speedup, "%.2f-%.2f").c_str(), median_of(cores), verdict(speedup, 1.8).c_str());
@@ -380,12 +412,15 @@ int bench(const BenchOptions& o) {
     if (o.ceiling) print_ceiling(discs, o, rate);
     if (o.peer) {
         const int ranks = o.threads > 1 ? 2 : 1;
-        std::printf("peer: LAMMPS, %ld steps, %d rank(s)\n", o.steps, ranks);
-        const double peer = run_peer(o.steps, ranks);
-        if (peer > 0)
-            std::printf("  demlab %.3e vs LAMMPS %.3e particle-steps/s: ratio %.2f\n", rate, peer, rate / peer);
-        else
-            std::printf("  LAMMPS did not run (install it with scripts/install-deps.sh --peer)\n");
+        for (const PeerStyle style : {PeerStyle::Granular, PeerStyle::HookeHistory}) {
+            std::printf("peer: LAMMPS %s, %ld steps, %d rank(s)\n", peer_style_name(style), o.steps, ranks);
+            const double peer = run_peer(o.steps, ranks, style);
+            if (peer > 0)
+                std::printf("  demlab %.3e vs LAMMPS %s %.3e particle-steps/s: ratio %.2f%s\n", rate, peer_style_name(style),
+                            peer, rate / peer, style == PeerStyle::HookeHistory ? " (the faster style: the ratio that counts)" : "");
+            else
+                std::printf("  LAMMPS did not run (install it with scripts/install-deps.sh --peer)\n");
+        }
     }
     return kExitOk;
 }
@@ -417,7 +452,9 @@ Command add_bench_command(CLI::App& app) {
     sub->add_flag("--ceiling", opts->ceiling,
                   "With --threads T >= 2: also run one 1-thread copy alone and T side by side, and print what the "
                   "cores give together (the ceiling of the T-thread figure on this machine)");
-    sub->add_flag("--peer", opts->peer, "Also run LAMMPS (bench/db9k/lammps/run.sh) on the same work and print the ratio");
+    sub->add_flag("--peer", opts->peer,
+                  "Also run LAMMPS (bench/db9k/lammps/run.sh) on the same work in both its styles, pair_style granular and the "
+                  "faster gran/hooke/history, and print the ratios (the one to the faster counts)");
     sub->add_flag("--targets", opts->targets,
                   "The issue's side-by-side figures: rounds of 1 thread, 2 threads and the two cores' ceiling (with "
                   "--peer, LAMMPS on 1 and 2 ranks too); prints a table with medians and ranges, and each target met or not");
