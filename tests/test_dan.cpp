@@ -432,5 +432,20 @@ TEST(Dan, RefusalsAndGeometryAReference) {
     EXPECT_NE(read_file(out / "comparison.md").find("(DAN, 41 blocks) | 0.388 | 2.088 | 0.194"), std::string::npos)
         << read_file(out / "comparison.md");
     fs::remove_all(out);
+    // runs on different flumes: each deposit over its own flume, in its colour, named by its
+    // geometry (not every deposit over the first run's flume)
+    const fs::path dir_b = temp_dir("dan-b");
+    fs::remove_all(dir_b);
+    run_dan(load("geometry-B.toml", {}), {dir_b.string(), false, {}});
+    c.runs = {dir.string(), dir_b.string()};
+    compare_runs(c);
+    EXPECT_FALSE(fs::exists(out / "bed.csv"));
+    ASSERT_TRUE(fs::exists(out / "bed_0.csv"));
+    ASSERT_TRUE(fs::exists(out / "bed_1.csv"));
+    EXPECT_NE(read_file(out / "bed_0.csv"), read_file(out / "bed_1.csv"));
+    EXPECT_NE(read_file(out / "compare.gp").find("flume of "), std::string::npos);
+    EXPECT_NE(read_file(out / "comparison.md").find(", geometry-B |"), std::string::npos) << read_file(out / "comparison.md");
+    fs::remove_all(out);
+    fs::remove_all(dir_b);
     fs::remove_all(dir);
 }

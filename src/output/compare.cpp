@@ -97,13 +97,32 @@ std::vector<std::string> compare_into(const CompareOptions& o, const std::vector
        << "set key below\n";
     {
         std::ostringstream plot;
+        // each run's flume from its own scenario: one grey line when all runs share it, else each
+        // run's bed in the run's colour (a deposit is drawn over the flume it ran on)
+        bool one_bed = all_flume;
+        std::vector<std::string> beds;
         if (all_flume) {
-            const DanPath bed = flume_dan_path(runs[0].scenario);
-            std::ostringstream b;
-            b << "x_m,y_m\n";
-            for (double s = 0.0; s <= bed.length() + 1e-9; s += 0.005) b << bed.at(s).p.x() << ',' << bed.at(s).p.y() << '\n';
-            write_file_atomic(o.out + "/bed.csv", b.str());
+            for (const RunInfo& r : runs) {
+                const DanPath bed = flume_dan_path(r.scenario);
+                std::ostringstream b;
+                b.precision(10);
+                b << "x_m,y_m\n";
+                for (double s = 0.0; s <= bed.length() + 1e-9; s += 0.005) b << bed.at(s).p.x() << ',' << bed.at(s).p.y() << '\n';
+                beds.push_back(b.str());
+                one_bed = one_bed && beds.back() == beds.front();
+            }
+        }
+        if (one_bed) {
+            write_file_atomic(o.out + "/bed.csv", beds.front());
             plot << "plot 'bed.csv' using 1:2 with lines lw 3 lc rgb '#303030' title 'flume'";
+        } else if (all_flume) {
+            plot << "plot ";
+            for (size_t k = 0; k < runs.size(); ++k) {
+                const std::string file = "bed_" + std::to_string(k) + ".csv";
+                write_file_atomic(o.out + "/" + file, beds[k]);
+                plot << (k ? ", " : "") << "'" << file << "' using 1:2 with lines lw 3 lc " << k + 1 << " dt 3 title "
+                     << quoted("flume of " + runs[k].label);
+            }
         } else {
             plot << "plot ";
         }
@@ -147,7 +166,8 @@ std::vector<std::string> compare_into(const CompareOptions& o, const std::vector
             }
             const std::string file = "deposit_" + std::to_string(k) + ".csv";
             write_file_atomic(o.out + "/" + file, surf.str());
-            plot << (k > 0 || all_flume ? ", " : "") << "'" << file << "' using 1:2 with lines lw 2 title " << quoted(r.label);
+            plot << (k > 0 || all_flume ? ", " : "") << "'" << file << "' using 1:2 with lines lw 2 lc " << k + 1 << " title "
+                 << quoted(r.label);
         }
         gp << "set output 'deposit.png'\nset title 'Final deposits'\n";
         if (all_flume) gp << "set size ratio -1\nset xlabel 'x (m)'\nset ylabel 'y (m)'\n";
@@ -223,6 +243,11 @@ std::vector<std::string> compare_runs(const CompareOptions& o) {
     if (o.runs.empty()) throw InputError("compare: give one or more run folders");
     std::vector<RunInfo> runs;
     for (const std::string& d : o.runs) runs.push_back(read_run(d));
+    // runs of different scenarios (geometries): each label names its scenario
+    bool same_scenario = true;
+    for (const RunInfo& r : runs) same_scenario = same_scenario && r.scenario.name == runs[0].scenario.name;
+    if (!same_scenario)
+        for (RunInfo& r : runs) r.label += ", " + r.scenario.name;
     if (!gnuplot_available())
         throw RunError("gnuplot is not installed, so no comparison was drawn (apt-get install gnuplot-nox, or "
                        "scripts/install-deps.sh)");
