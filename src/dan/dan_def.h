@@ -13,6 +13,7 @@ enum class DanEndHeight { Half, Zero };                // D7, D8 at the end bloc
 enum class DanSpacing { Horizontal, Path };            // X of the smoothing, D12
 enum class DanMomentum { None, Global };               // D13
 enum class DanStep { Fixed, Auto };                    // the step size, section 2
+enum class DanPosition { Symplectic, Trapezoid };      // D14: S += dt v-hat, or the thesis' (2.31)
 
 struct DanDef {
     int blocks = 41;                       // -, n boundary blocks (n - 1 mass blocks), [3, 100000]
@@ -40,6 +41,7 @@ struct DanDef {
     DanMomentum momentum_correction = DanMomentum::Global;
     double dt = 1e-4;                      // s, the time step
     DanStep dt_mode = DanStep::Fixed;
+    DanPosition position_update = DanPosition::Symplectic;  // D14 (dan_solver.cpp says why)
     double cfl_max = 0.5;                  // -, stability limit
     double path_extension = 1.0;           // m, straight continuation past the path's ends
     double sync_time = 0.4;                // s, t_sync of the front's time synchronisation

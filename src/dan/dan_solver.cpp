@@ -234,10 +234,22 @@ void DanSolver::step() {
             momentum_corrected_ += std::abs(before - after);
         }
     }
-    // D14
+    // D14. The thesis' form (2.31), S += dt (v + v-hat) / 2, takes the pressure at the old
+    // positions with weight dt into the velocity but dt^2 / 2 into the position: for a mode of
+    // frequency w (the pressure's stiffness between neighbouring blocks, w ~ 2 sqrt(k g h) / l)
+    // the step's matrix [[1 - (w dt)^2 / 2, dt], [-w^2 dt, 1]] has the determinant
+    // 1 + (w dt)^2 / 2, so every mode grows by sqrt(1 + (w dt)^2 / 2) a step whatever dt. The
+    // smoothing damps the shortest mode by about 1 - 4 c a step, a c that does not grow with the
+    // blocks, while (w dt)^2 grows as n^2 at a fixed step (and stays near (2 C)^2 at the automatic
+    // one, where c falls as 1/n): past about 300 blocks on the flume the growth wins and a block
+    // collapses ("the blocks crowd"). Moving by the new velocity (symplectic Euler) has the
+    // determinant 1: stable up to w dt = 2, i.e. within the CFL limit, for any number of blocks.
+    // On a constant acceleration a it puts a block a t dt / 2 further than the exact a t^2 / 2
+    // (the trapezoid is exact there); the 41-block flume's landmarks are the same to 1 mm and 1 ms.
     l_before_ = l_;  // (a member: no allocation a step)
+    const bool trapezoid = d.position_update == DanPosition::Trapezoid;
     for (size_t i = 0; i < n; ++i) {
-        s_[i] += 0.5 * dt * (v_hat_[i] + v_[i]);
+        s_[i] += trapezoid ? 0.5 * dt * (v_hat_[i] + v_[i]) : dt * v_hat_[i];
         v_[i] = v_hat_[i];
     }
     for (size_t j = 0; j + 1 < n; ++j)
