@@ -432,3 +432,43 @@ TEST(Dan, RefusalsAndGeometryAReference) {
     fs::remove_all(dir_b);
     fs::remove_all(dir);
 }
+
+namespace demlab {
+
+// Refinement: geometry A at 41, 82, 164, 328 and 656 blocks with the automatic step runs to
+// rest every time, and its run-out, run-up and front arrival converge: each refinement changes
+// them less than the one before (docs/dan.md, "Refinement"). With D14 as the thesis prints it
+// (trapezoid) the 656 blocks crowd at 0.13 s; B's run-out and arrival converge the same way.
+TEST(Dan, RefinementConverges) {
+    const std::string root = DEMLAB_SOURCE_DIR;
+    struct Landmarks {
+        double runout, runup, arrival;
+    };
+    auto run = [&](const std::string& geometry, int blocks) {
+        Scenario s = load_scenario(root + "/scenarios/" + geometry);
+        apply_override(s, "scenario.solver=\"dan\"");
+        apply_override(s, "dan.blocks=" + std::to_string(blocks));
+        apply_override(s, "dan.dt_mode=\"auto\"");
+        finish_scenario(s);
+        const fs::path dir = temp_dir("dan-refine-" + std::to_string(blocks));
+        fs::remove_all(dir);
+        const RunSummary r = run_dan(s, {dir.string(), false, {}});
+        fs::remove_all(dir);
+        EXPECT_EQ(r.stop_reason, "rest") << geometry << " at " << blocks << " blocks";
+        return Landmarks{r.runout_s, r.runup_height, r.t_front_at_barrier};
+    };
+    for (const std::string geometry : {"geometry-A.toml", "geometry-B.toml"}) {
+        std::vector<Landmarks> l;
+        for (int n : {41, 82, 164, 328, 656}) l.push_back(run(geometry, n));
+        for (size_t k = 2; k < l.size(); ++k) {
+            auto shrinks = [&](double Landmarks::*m) {
+                return std::abs(l[k].*m - l[k - 1].*m) < std::abs(l[k - 1].*m - l[k - 2].*m);
+            };
+            EXPECT_TRUE(shrinks(&Landmarks::runout)) << geometry << " run-out, refinement " << k;
+            EXPECT_TRUE(shrinks(&Landmarks::arrival)) << geometry << " arrival, refinement " << k;
+            if (geometry == "geometry-A.toml") EXPECT_TRUE(shrinks(&Landmarks::runup)) << geometry << " run-up, refinement " << k;
+        }
+    }
+}
+
+}  // namespace demlab
