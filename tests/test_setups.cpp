@@ -28,11 +28,8 @@ namespace fs = std::filesystem;
 namespace {
 WallGeom seg(Vec2 a, Vec2 b) { return make_geom(test::segment(a, b, 0.0, SegmentSolid::Right)); }
 
-std::string write_temp(const std::string& name, const std::string& text) {
-    const fs::path p = fs::temp_directory_path() / ("demlab-test-" + name + "-" + std::to_string(::getpid()));
-    std::ofstream(p) << text;
-    return p.string();
-}
+// removed when the test's variable goes out of scope
+test::TempFile write_temp(const std::string& name, const std::string& text) { return test::TempFile(name, text); }
 }  // namespace
 
 // A chain of a 3-4-5 segment and a horizontal one: s adds up along the parts, h is the
@@ -71,26 +68,26 @@ TEST(BedPath, ArcPartsCountTheirAngle) {
 }
 
 TEST(TerrainProfile, CsvIsReadWithHeaderAndComments) {
-    const auto p = read_profile_csv(write_temp("profile-ok.csv", "# ground\nx,y\n0,1\n1.5,0.5\n\n2,0.5\n"));
+    const auto p = read_profile_csv(write_temp("profile-ok.csv", "# ground\nx,y\n0,1\n1.5,0.5\n\n2,0.5\n").path());
     ASSERT_EQ(p.size(), 3u);
     EXPECT_DOUBLE_EQ(p[1].x(), 1.5);
     EXPECT_DOUBLE_EQ(p[2].y(), 0.5);
 }
 
 TEST(TerrainProfile, BadCsvIsRefusedWithFileAndLine) {
-    const std::string back = write_temp("profile-back.csv", "x,y\n0,1\n1,0.5\n0.5,0.4\n");
-    expect_refused([&] { read_profile_csv(back); }, {":4:", "must exceed the previous row's x"});
-    const std::string text = write_temp("profile-text.csv", "x,y\n0,1\n1,abc\n");
-    expect_refused([&] { read_profile_csv(text); }, {":3:", "two numbers"});
-    const std::string one = write_temp("profile-one.csv", "0,1\n");
-    expect_refused([&] { read_profile_csv(one); }, {"at least 2 points"});
+    const test::TempFile back = write_temp("profile-back.csv", "x,y\n0,1\n1,0.5\n0.5,0.4\n");
+    expect_refused([&] { read_profile_csv(back.path()); }, {":4:", "must exceed the previous row's x"});
+    const test::TempFile text = write_temp("profile-text.csv", "x,y\n0,1\n1,abc\n");
+    expect_refused([&] { read_profile_csv(text.path()); }, {":3:", "two numbers"});
+    const test::TempFile one = write_temp("profile-one.csv", "0,1\n");
+    expect_refused([&] { read_profile_csv(one.path()); }, {"at least 2 points"});
     expect_refused([] { read_profile_csv("/nonexistent/profile.csv"); }, {"cannot open", "no such file"});
 }
 
 TEST(TerrainProfile, ScenarioRefusesWhatCannotRun) {
-    const std::string prof = write_temp("profile-s.csv", "0,1\n1,0\n2,0\n");
+    const test::TempFile prof = write_temp("profile-s.csv", "0,1\n1,0\n2,0\n");
     auto load = [&](const std::string& extra) {
-        Scenario s = parse_scenario("[terrain]\nprofile = \"" + prof + "\"\n" + extra, "t.toml");
+        Scenario s = parse_scenario("[terrain]\nprofile = \"" + prof.path() + "\"\n" + extra, "t.toml");
         finish_scenario(s);
         return s;
     };
@@ -114,9 +111,9 @@ TEST(TerrainProfile, ScenarioRefusesWhatCannotRun) {
 // A barrier on the profile (terrain.barrier): walls after the profile's, the bed path up its
 // face; refused off the ground, going down from its foot, or of one point.
 TEST(TerrainProfile, BarrierStandsOnTheProfile) {
-    const std::string prof = write_temp("profile-b.csv", "0,1\n1,0\n3,0\n");
+    const test::TempFile prof = write_temp("profile-b.csv", "0,1\n1,0\n3,0\n");
     auto load = [&](const std::string& barrier) {
-        Scenario s = parse_scenario("[terrain]\nprofile = \"" + prof + "\"\nbarrier = " + barrier +
+        Scenario s = parse_scenario("[terrain]\nprofile = \"" + prof.path() + "\"\nbarrier = " + barrier +
                                         "\n[[discs]]\nposition = [0.2, 0.9]\nradius = 0.05\n",
                                     "t.toml");
         finish_scenario(s);

@@ -23,6 +23,18 @@ using namespace demlab::test;
 
 namespace {
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+// Tests clean up what they write (issue 48, row 6): after the tests this process ran (ctest runs
+// each in a process of its own), nothing named "demlab-...-PID..." is left in the temporary
+// directory. A leftover fails the run, naming the file or folder.
+class TempLeftoversCheck final : public ::testing::Environment {
+public:
+    void TearDown() override {
+        for (const std::string& name : temp_leftovers())
+            ADD_FAILURE() << "left in the temporary directory: " << name << " (a test must remove what it writes; tests/files.h: TempFile)";
+    }
+};
+[[maybe_unused]] ::testing::Environment* const kTempLeftoversCheck = ::testing::AddGlobalTestEnvironment(new TempLeftoversCheck);
 }  // namespace
 
 TEST(Validation, DiscsAndMaterials) {
