@@ -6,15 +6,20 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <tuple>
 
 #include "core/error.h"
 #include "files.h"
+#include "core/csv.h"
 #include "geometry/bed_path.h"
+#include "geometry/esri_grid.h"
 #include "geometry/packing.h"
 #include "geometry/profile.h"
 #include "helpers.h"
 #include "run/run.h"
 #include "scenario/scenario.h"
+#include "setups/db9k.h"
+#include "setups/release.h"
 #include "setups/setup.h"
 #include "dem/world.h"
 
@@ -106,6 +111,35 @@ TEST(TerrainProfile, ScenarioRefusesWhatCannotRun) {
     const Scenario back = parse_scenario(resolved_toml(s), "resolved.toml");
     EXPECT_EQ(make_setup(back)->kind(), "terrain");
     EXPECT_EQ(back.terrain.release.size(), 4u);
+}
+
+// A file saved with a UTF-8 byte-order mark (spreadsheet programs' "CSV UTF-8") reads as the
+// same file without it (issue 48, row 3): a profile (its mark before a number, which was taken
+// for a header and lost a point, or before a comment, which was refused), an elevation grid, a
+// release mass, a disc file, a CSV table and a header read on its own.
+TEST(Files, AByteOrderMarkIsReadAsTheSameFileWithoutIt) {
+    const std::string bom = "\xEF\xBB\xBF";
+    auto both = [&](const std::string& name, const std::string& text, const auto& read) {
+        const test::TempFile plain(name, text), marked("bom-" + name, bom + text);
+        EXPECT_EQ(read(marked.path()), read(plain.path())) << name;
+    };
+    both("profile.csv", "0,1\n1.5,0.5\n2,0.5\n", [](const std::string& p) { return read_profile_csv(p); });
+    both("profile-h.csv", "# ground\nx,y\n0,1\n1.5,0.5\n", [](const std::string& p) { return read_profile_csv(p); });
+    both("grid.asc", "ncols 2\nnrows 2\nxllcorner 0\nyllcorner 0\ncellsize 1\n1 2\n3 4\n",
+         [](const std::string& p) { return read_esri_grid(p).z; });
+    both("release.csv", "# demlab release mass\n# settle_ratio 0.0004\nid,x_m,y_m,r_m,layer,grid\n0,0.1,0.2,0.01,0,0\n1,0.3,0.2,0.01,0,1\n",
+         [](const std::string& p) {
+             const ReleaseMass m = load_release(p);
+             return std::make_tuple(m.pos, m.radius, m.grid, m.settle_ratio);
+         });
+    both("discs.xyr", "# id x y r\n0 0.1 0.2 0.01\n", [](const std::string& p) { return read_xyr(p).size(); });
+    both("table.csv", "t_s,x_m\n0,1\n0.5,2\n", [](const std::string& p) {
+        const CsvTable t = read_csv_table(p);
+        return std::make_pair(t.names, t.rows);
+    });
+    EXPECT_EQ(CsvHeader(bom + "t_s,x_m", "h.csv").column("t_s"), 0u);
+    // a scenario file, for completeness
+    both("s.toml", "[scenario]\nname = \"marked\"\n", [](const std::string& p) { return load_scenario(p).name; });
 }
 
 // A barrier on the profile (terrain.barrier): walls after the profile's, the bed path up its
