@@ -2,7 +2,10 @@
 // from a CSV polyline end to end, and its refusals.
 #include <gtest/gtest.h>
 
+#include <sys/wait.h>
+
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -111,6 +114,53 @@ TEST(TerrainProfile, ScenarioRefusesWhatCannotRun) {
     const Scenario back = parse_scenario(resolved_toml(s), "resolved.toml");
     EXPECT_EQ(make_setup(back)->kind(), "terrain");
     EXPECT_EQ(back.terrain.release.size(), 4u);
+}
+
+// A release polygon must lie above the ground (issue 48, rows 1 and 2): the shipped slope-dam
+// profile (x from 0 to 2.9 m) with the polygon over no ground, partly under the slope, or with
+// a ridge of the ground through it, is refused naming terrain.release and the corner or the
+// ground's point; demlab run exits 2 and makes no folder. The shipped polygon still loads.
+TEST(TerrainProfile, ReleaseMustLieAboveTheGround) {
+    const std::string scenario = std::string(DEMLAB_SOURCE_DIR) + "/scenarios/terrain-slope-dam.toml";
+    auto load = [&](const std::string& release) {
+        Scenario s = load_scenario(scenario);
+        apply_override(s, "terrain.release=" + release);
+        finish_scenario(s);
+        return s;
+    };
+    expect_refused([&] { load("[[10, 10], [11, 10], [11, 11], [10, 11]]"); },
+                   {"terrain.release", "corner 0 [10, 10]", "beyond the terrain's profile", "x from 0 to 2.9 m"});
+    expect_refused([&] { load("[[-1, 1.5], [0.2, 1.5], [0.2, 2], [-1, 2]]"); }, {"terrain.release", "corner 0 [-1, 1.5]", "beyond"});
+    // the ground at x = 0.5 is at 0.911 m and at x = 1 at 0.623 m: the lower corners are in it
+    expect_refused([&] { load("[[0.5, 0.5], [1, 0.5], [1, 1.2], [0.5, 1.2]]"); },
+                   {"terrain.release", "corner 0 [0.5, 0.5]", "under the ground"});
+    expect_refused([&] { load("[[0.5, 0], [1, 0], [1, 0.3], [0.5, 0.3]]"); }, {"terrain.release", "corner 0", "under the ground"});
+    expect_refused([&] { load("[[0.5, 1.2], [0.5, 0.5], [1, 0.5], [1, 1.2]]"); }, {"terrain.release", "corner 1 [0.5, 0.5]", "under the ground"});
+    EXPECT_EQ(load("[[0.06, 1.17], [0.45, 0.95], [0.45, 1.20], [0.06, 1.20]]").terrain.release.size(), 4u);
+    // a corner on the ground is on or above it
+    EXPECT_NO_THROW(load("[[0.5, 0.9113214286], [1, 0.6226428571], [1, 1.2], [0.5, 1.2]]"));
+
+    // a ridge of the ground through the polygon, its corners above the ground: the ridge's top
+    // inside the polygon, or above it (its flanks cross the edges)
+    for (const auto& [profile, fragment] :
+         {std::pair<const char*, const char*>{"x,y\n0,1\n1,0\n1.2,1\n1.4,0\n3,0\n", "[1.2, 1] (point 3 of the profile) lies inside"},
+          {"x,y\n0,1\n1,0\n1.2,2\n1.4,0\n3,0\n", "crosses the polygon's edge"}}) {
+        const test::TempFile ridge = write_temp("ridge.csv", profile);
+        expect_refused([&] {
+            Scenario s = parse_scenario("[terrain]\nprofile = \"" + ridge.path() + "\"\nrelease = [[0.9, 0.5], [1.6, 0.5], [1.6, 1.5], [0.9, 1.5]]\n", "t.toml");
+            finish_scenario(s);
+        }, {"terrain.release", fragment});
+    }
+
+    // the command: exit 2, no output folder (a coarse, short run should it be accepted)
+    const fs::path out = temp_dir("release-nowhere");
+    const int status = std::system((std::string(DEMLAB_EXE) + " run " + scenario + " --out " + out.string() +
+                                    " --scale 20 --set stop.t_max=0.01 --set stop.rest_duration=0.005 --set output.snapshot_interval=0"
+                                    " --set 'terrain.release=[[10, 10], [11, 10], [11, 11], [10, 11]]' >/dev/null 2>&1").c_str());
+    ASSERT_TRUE(WIFEXITED(status));
+    EXPECT_EQ(WEXITSTATUS(status), 2);
+    EXPECT_FALSE(fs::exists(out));
+    fs::remove_all(out);
 }
 
 // A file saved with a UTF-8 byte-order mark (spreadsheet programs' "CSV UTF-8") reads as the
