@@ -143,8 +143,8 @@ void add_bonds(const Scenario& s, World& w) {
 }
 
 // The world: the release mass, then the explicit discs (a checkpoint's mass holds them
-// already), the set-up's walls, then the explicit ones; the domain is their box padded by
-// 0.5 m (a disc leaving it stops the run).
+// already), the set-up's walls, then the explicit ones; the domain is world.domain, or their
+// box padded by 0.5 m (a disc leaving it is lost: taken out, or the run stops).
 World build_world(const Scenario& s, const Setup& setup, const ReleaseMass& mass, bool restored, std::vector<int>& layer,
                   std::vector<int>& grid) {
     WorldDef def = s.world;
@@ -166,6 +166,14 @@ World build_world(const Scenario& s, const Setup& setup, const ReleaseMass& mass
     for (const Vec2& p : setup.extent()) grow(p);
     def.domain_lo = lo - Vec2(0.5, 0.5);
     def.domain_hi = hi + Vec2(0.5, 0.5);
+    if (!s.domain.empty()) {  // world.domain: given; every disc at the start inside it
+        def.domain_lo = s.domain[0];
+        def.domain_hi = s.domain[1];
+        for (const Vec2& p : mass.pos)
+            if (p.x() < def.domain_lo.x() || p.x() > def.domain_hi.x() || p.y() < def.domain_lo.y() || p.y() > def.domain_hi.y())
+                throw InputError(s.source + ": world.domain: a disc of the release at [" + format_number(p.x()) + ", " +
+                                 format_number(p.y()) + "] lies outside it: the domain must hold every disc at t = 0");
+    }
     World w(def);
     const int mat = w.add_material(s.disc);
     for (size_t i = 0; i < mass.pos.size(); ++i) {
@@ -415,6 +423,11 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
         if (w.lost_discs().size() != lost_seen) {
             lost_seen = w.lost_discs().size();
             check_energy_growth(solver, st.e0, s.stop.max_energy_gain, ledger_noise, st.peak_put_in);
+            // nothing left to move: not "rest" (the kinetic energy of no disc is 0)
+            if (w.disc_count() == 0) {
+                sum.stop_reason = kStopAllDiscsLeft;
+                break;
+            }
         }
         // a step so small that the run would not end in any time is refused at once
         if (solver.step_count() == steps_start + 1 && (s.stop.t_max - solver.time()) / solver.dt() > kMaxRunSteps)

@@ -577,6 +577,22 @@ void finish_scenario(Scenario& s) {
         if (!s.discs.empty() && id >= long(s.discs.size()))
             throw InputError(where + "output.track: disc id " + std::to_string(id) + " does not exist (" +
                              std::to_string(s.discs.size()) + " discs)");
+    if (!s.domain.empty()) {
+        if (s.domain.size() != 2)
+            throw InputError(where + "world.domain: " + std::to_string(s.domain.size()) +
+                             (s.domain.size() == 1 ? " point" : " points") + "; the domain's box is [[x_lo, y_lo], [x_hi, y_hi]] (m), or [] for the walls' box padded by 0.5 m");
+        if (!(s.domain[0].x() < s.domain[1].x()) || !(s.domain[0].y() < s.domain[1].y()))
+            throw InputError(where + "world.domain = [[" + format_number(s.domain[0].x()) + ", " + format_number(s.domain[0].y()) +
+                             "], [" + format_number(s.domain[1].x()) + ", " + format_number(s.domain[1].y()) +
+                             "]]: the first point is the lower left corner, the second the upper right (x_lo < x_hi, y_lo < y_hi)");
+        // explicit discs are known now (a release mass's are checked when it exists, run.cpp)
+        for (size_t i = 0; i < s.discs.size(); ++i) {
+            const Vec2 p = s.discs[i].pos;
+            if (p.x() < s.domain[0].x() || p.x() > s.domain[1].x() || p.y() < s.domain[0].y() || p.y() > s.domain[1].y())
+                throw InputError(where + "world.domain: discs[" + std::to_string(i) + "] at [" + format_number(p.x()) + ", " +
+                                 format_number(p.y()) + "] lies outside it: the domain must hold every disc at t = 0");
+        }
+    }
 }
 
 // A set-up's table is written only when the scenario has it (its presence chooses the set-up).
