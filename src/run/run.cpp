@@ -350,6 +350,8 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
         series.open();
         barrier.open();
     }
+    // the dissipation accounts as they are now (a resume: as restored)
+    DissipationPeaks dissipation(solver.energy());
     const long steps_start = solver.step_count();
     Progress progress(s.stop.t_max, "s", solver.time(), steps_start);
     const auto t0 = std::chrono::steady_clock::now();
@@ -415,14 +417,14 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
             solver.step();
         } catch (const RunError&) {
             // a lost disc or an overlap after energy was created: name the runaway as such
-            check_energy_growth(solver, st.e0, s.stop.max_energy_gain, ledger_noise, st.peak_put_in);
+            check_energy_growth(solver, st.e0, s.stop.max_energy_gain, ledger_noise, st.peak_put_in, dissipation);
             throw;
         }
         sampled_now = false;
         // a disc thrown out by created energy is a blow-up, not a stray: look at once
         if (w.lost_discs().size() != lost_seen) {
             lost_seen = w.lost_discs().size();
-            check_energy_growth(solver, st.e0, s.stop.max_energy_gain, ledger_noise, st.peak_put_in);
+            check_energy_growth(solver, st.e0, s.stop.max_energy_gain, ledger_noise, st.peak_put_in, dissipation);
             // nothing left to move: not "rest" (the kinetic energy of no disc is 0)
             if (w.disc_count() == 0) {
                 sum.stop_reason = kStopAllDiscsLeft;
@@ -444,7 +446,7 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
             // calling thread's time on 2 threads, with the other one waiting)
             const double ke = solver.kinetic_energy();
             st.peak_ke = std::max(st.peak_ke, ke);
-            if (solver.step_count() % kEnergyWatchSteps == 0) check_energy_growth(solver, st.e0, s.stop.max_energy_gain, ledger_noise, st.peak_put_in);
+            if (solver.step_count() % kEnergyWatchSteps == 0) check_energy_growth(solver, st.e0, s.stop.max_energy_gain, ledger_noise, st.peak_put_in, dissipation);
             if (ke < s.stop.rest_ke_fraction * st.peak_ke) {
                 if (st.rest_since < 0) st.rest_since = solver.time();
                 if (solver.time() - st.rest_since >= s.stop.rest_duration) {
