@@ -3,6 +3,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <csignal>
 #include <filesystem>
@@ -26,13 +27,19 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 // Tests clean up what they write (issue 48, row 6): after the tests this process ran (ctest runs
 // each in a process of its own), nothing named "demlab-...-PID..." is left in the temporary
-// directory. A leftover fails the run, naming the file or folder.
+// directory that was not there before them (a file an earlier process of the same pid left is
+// not this one's). A leftover fails the run, naming the file or folder.
 class TempLeftoversCheck final : public ::testing::Environment {
 public:
+    void SetUp() override { before_ = temp_leftovers(); }
     void TearDown() override {
         for (const std::string& name : temp_leftovers())
-            ADD_FAILURE() << "left in the temporary directory: " << name << " (a test must remove what it writes; tests/files.h: TempFile)";
+            if (std::find(before_.begin(), before_.end(), name) == before_.end())
+                ADD_FAILURE() << "left in the temporary directory: " << name << " (a test must remove what it writes; tests/files.h: TempFile)";
     }
+
+private:
+    std::vector<std::string> before_;
 };
 [[maybe_unused]] ::testing::Environment* const kTempLeftoversCheck = ::testing::AddGlobalTestEnvironment(new TempLeftoversCheck);
 }  // namespace
