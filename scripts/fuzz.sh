@@ -2,7 +2,9 @@
 # Fuzzes with libFuzzer (clang) under ASan and UBSan:
 #  - fuzz_scenario: scenario parsing and validation, seeded with scenarios/*.toml, RUNS inputs;
 #  - fuzz_run: small random scenarios built and run (explicit discs and walls, any model,
-#    dashpot mode and time step, a few hundred steps, every output written), RUNS/5 inputs.
+#    dashpot mode and time step, a few hundred steps, every output written; one in three a
+#    terrain: a profile or grid section of any shape, a release polygon, lattice region or top
+#    anywhere, which must start with every disc above the ground and inside the domain), RUNS/5 inputs.
 # usage: scripts/fuzz.sh [RUNS] [SEED]   (default 10000 and 1)
 # With a fixed SEED a pass explores the same inputs every time, so a finding is reproducible and
 # the test command does not pass or fail by chance; SEED = 0 lets libFuzzer draw a new one (for
