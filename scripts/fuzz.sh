@@ -2,7 +2,9 @@
 # Fuzzes with libFuzzer (clang) under ASan and UBSan:
 #  - fuzz_scenario: scenario parsing and validation, seeded with scenarios/*.toml, RUNS inputs;
 #  - fuzz_run: small random scenarios built and run (explicit discs and walls, any model,
-#    dashpot mode and time step, a few hundred steps, every output written), RUNS/5 inputs;
+#    dashpot mode and time step, a few hundred steps, every output written; one in three a
+#    terrain: a profile or grid section of any shape, a release polygon, lattice region or top
+#    anywhere, which must start with every disc above the ground and inside the domain), RUNS/5 inputs;
 #  - fuzz_output: runs into output paths and names with quotes, $(), newlines and `..`, over
 #    folders that hold a user's files, at times with a file size limit: nothing outside the
 #    run's own folder changes, and a run whose output could not be written does not return

@@ -46,4 +46,46 @@ inline std::filesystem::path temp_dir(const std::string& name) {
     return p;
 }
 
+// A file written in the temporary directory under a name unique to this process
+// ("demlab-test-PID-NAME": the name's extension stays last), removed when the object goes out
+// of scope: a test leaves nothing behind however it ends (a failed assertion returns early).
+// Not copyable: one owner.
+class TempFile {
+public:
+    TempFile(const std::string& name, const std::string& text)
+        : path_((std::filesystem::temp_directory_path() / ("demlab-test-" + std::to_string(::getpid()) + "-" + name)).string()) {
+        std::ofstream(path_, std::ios::binary) << text;
+    }
+    ~TempFile() {
+        std::error_code ec;
+        std::filesystem::remove(path_, ec);
+    }
+    TempFile(const TempFile&) = delete;
+    TempFile& operator=(const TempFile&) = delete;
+    const std::string& path() const { return path_; }
+
+private:
+    std::string path_;
+};
+
+// What this process left in the temporary directory: the entries named "demlab-...-PID..."
+// (the names temp_dir, TempFile and the tests' own give).
+inline std::vector<std::string> temp_leftovers() {
+    std::vector<std::string> out;
+    const std::string pid = std::to_string(::getpid());
+    std::error_code ec;
+    for (const auto& e : std::filesystem::directory_iterator(std::filesystem::temp_directory_path(), ec)) {
+        const std::string name = e.path().filename().string();
+        if (name.rfind("demlab-", 0) != 0) continue;
+        for (size_t at = name.find("-" + pid); at != std::string::npos; at = name.find("-" + pid, at + 1)) {
+            const size_t end = at + 1 + pid.size();
+            if (end == name.size() || name[end] == '-' || name[end] == '.') {
+                out.push_back(name);
+                break;
+            }
+        }
+    }
+    return out;
+}
+
 }  // namespace demlab::test

@@ -492,11 +492,8 @@ TEST(Debris, ScenarioKeysAndRefusals) {
 }
 
 namespace {
-std::string write_grid(const std::string& name, const std::string& text) {
-    const std::string path = (std::filesystem::temp_directory_path() / ("demlab-grid-" + std::to_string(::getpid()) + "-" + name)).string();
-    std::ofstream(path) << text;
-    return path;
-}
+// removed when the test's variable goes out of scope
+demlab::test::TempFile write_grid(const std::string& name, const std::string& text) { return demlab::test::TempFile(name, text); }
 }  // namespace
 
 // A release given by the mass's top surface (lattice_release.top), filled down to the terrain:
@@ -504,16 +501,16 @@ std::string write_grid(const std::string& name, const std::string& text) {
 // the faults refused with the key. Bed: a floor from (0, 0) to (40, 0) and a rise to (60, 10);
 // top: from the floor at x = 10 up to (30, 6) and (50, 8), ending 3 m above the rise at x = 50.
 TEST(LatticeRelease, TopSurfaceIsFilledDownToTheTerrain) {
-    const std::string bed = write_grid("bed.csv", "x,y\n0,0\n40,0\n60,10\n");
-    const std::string top = write_grid("top.csv", "# the mass's top\nx,y\n10,0\n30,6\n50,8\n");
+    const demlab::test::TempFile bed = write_grid("bed.csv", "x,y\n0,0\n40,0\n60,10\n");
+    const demlab::test::TempFile top = write_grid("top.csv", "# the mass's top\nx,y\n10,0\n30,6\n50,8\n");
     auto scenario = [&](const std::string& release) {
-        Scenario s = parse_scenario("[terrain]\nprofile = \"" + bed + "\"\n[lattice_release]\n" + release +
+        Scenario s = parse_scenario("[terrain]\nprofile = \"" + bed.path() + "\"\n[lattice_release]\n" + release +
                                         "origin = [10.0, 0.5]\nr_min = 0.5\n[contact]\nlaw = \"debris\"\n[rotation]\nmodel = 1\n",
                                     "top.toml");
         finish_scenario(s);
         return s;
     };
-    const Scenario by_top = scenario("top = \"" + top + "\"\n");
+    const Scenario by_top = scenario("top = \"" + top.path() + "\"\n");
     // the polygon: the top left to right, then the bed back (the rise's foot at x = 40, the
     // rise's height at x = 50); the top's first point is on the floor
     const std::vector<Vec2> polygon = {{10, 0}, {30, 6}, {50, 8}, {50, 5}, {40, 0}};
@@ -530,17 +527,17 @@ TEST(LatticeRelease, TopSurfaceIsFilledDownToTheTerrain) {
     Scenario again = parse_scenario(resolved_toml(by_top), "top.toml");
     finish_scenario(again);
     EXPECT_EQ(again.lattice_release.fill, polygon);
-    const std::string below = write_grid("below.csv", "x,y\n10,0\n30,-1\n50,8\n");
-    const std::string wide = write_grid("wide.csv", "x,y\n-5,3\n30,6\n");
-    const std::string flat = write_grid("flat.csv", "x,y\n5,0\n35,0\n");
-    expect_refused([&] { scenario("top = \"" + top + "\"\nregion = [[10, 0], [30, 6], [40, 0]]\n"); },
+    const demlab::test::TempFile below = write_grid("below.csv", "x,y\n10,0\n30,-1\n50,8\n");
+    const demlab::test::TempFile wide = write_grid("wide.csv", "x,y\n-5,3\n30,6\n");
+    const demlab::test::TempFile flat = write_grid("flat.csv", "x,y\n5,0\n35,0\n");
+    expect_refused([&] { scenario("top = \"" + top.path() + "\"\nregion = [[10, 0], [30, 6], [40, 0]]\n"); },
                    {"lattice_release.region and lattice_release.top", "one of the two"});
-    expect_refused([&] { scenario("top = \"" + below + "\"\n"); }, {"lattice_release.top", "x = 30", "1 m below the terrain"});
-    expect_refused([&] { scenario("top = \"" + wide + "\"\n"); }, {"lattice_release.top", "beyond the terrain's profile"});
-    expect_refused([&] { scenario("top = \"" + flat + "\"\n"); }, {"lattice_release.top", "no mass between them"});
-    expect_refused([&] { scenario("top = \"" + top + "x\"\n"); }, {"top.csvx", "lattice_release.top"});
+    expect_refused([&] { scenario("top = \"" + below.path() + "\"\n"); }, {"lattice_release.top", "x = 30", "1 m below the terrain"});
+    expect_refused([&] { scenario("top = \"" + wide.path() + "\"\n"); }, {"lattice_release.top", "beyond the terrain's profile"});
+    expect_refused([&] { scenario("top = \"" + flat.path() + "\"\n"); }, {"lattice_release.top", "no mass between them"});
+    expect_refused([&] { scenario("top = \"" + top.path() + "x\"\n"); }, {"top.csvx", "lattice_release.top"});
     expect_refused([&] {
-        Scenario s = parse_scenario("[lattice_release]\ntop = \"" + top + "\"\norigin = [10.0, 0.5]\nr_min = 0.5\n[contact]\n"
+        Scenario s = parse_scenario("[lattice_release]\ntop = \"" + top.path() + "\"\norigin = [10.0, 0.5]\nr_min = 0.5\n[contact]\n"
                                     "law = \"debris\"\n[rotation]\nmodel = 1\n", "top.toml");
         finish_scenario(s);
     }, {"lattice_release.top", "needs a [terrain]"});
@@ -559,27 +556,27 @@ TEST(EsriGrid, PlaneSampledAlongASectionAndFaultsRefused) {
         }
         t << "\n";
     }
-    const std::string plane = write_grid("plane.asc", t.str());
-    const EsriGrid g = read_esri_grid(plane);
+    const demlab::test::TempFile plane = write_grid("plane.asc", t.str());
+    const EsriGrid g = read_esri_grid(plane.path());
     EXPECT_EQ(g.ncols, 5);
     EXPECT_EQ(g.nrows, 4);
     EXPECT_DOUBLE_EQ(g.x0, 105.0);
     const Vec2 a(105, 205), b(145, 235);
-    const std::vector<Vec2> s = sample_section(g, plane, a, b, 7.0);
+    const std::vector<Vec2> s = sample_section(g, plane.path(), a, b, 7.0);
     ASSERT_EQ(s.size(), 9u);  // 50 m every 7 m, and the end
     for (const Vec2& p : s) {
         const Vec2 q = a + (b - a) * (p.x() / 50.0);
         EXPECT_NEAR(p.y(), 100 + 0.5 * q.x() - 0.25 * q.y(), 1e-9);
     }
     EXPECT_DOUBLE_EQ(s.back().x(), 50.0);
-    expect_refused([&] { sample_section(g, plane, Vec2(100, 205), b, 5.0); }, {"outside the grid", "terrain.section"});
+    expect_refused([&] { sample_section(g, plane.path(), Vec2(100, 205), b, 5.0); }, {"outside the grid", "terrain.section"});
     // a section far longer than any grid: refused by its sample count, not by an integer overflow
-    expect_refused([&] { sample_section(g, plane, a, Vec2(1e60, 1e60), 1.0); }, {"more than 1,000,000", "terrain.section"});
+    expect_refused([&] { sample_section(g, plane.path(), a, Vec2(1e60, 1e60), 1.0); }, {"more than 1,000,000", "terrain.section"});
     std::string holed = t.str();
     const size_t south = holed.rfind("\n", holed.size() - 2) + 1;  // the south-west cell
     holed.replace(south, holed.find(' ', south) - south, "-9999");
-    const std::string hole = write_grid("hole.asc", holed);
-    expect_refused([&] { sample_section(read_esri_grid(hole), hole, a, b, 5.0); }, {"NODATA"});
+    const demlab::test::TempFile hole = write_grid("hole.asc", holed);
+    expect_refused([&] { sample_section(read_esri_grid(hole.path()), hole.path(), a, b, 5.0); }, {"NODATA"});
     for (const auto& [name, text, fragment] :
          {std::tuple<const char*, const char*, const char*>{"nohead.asc", "ncols 2\nnrows 2\ncellsize 1\n1 2\n3 4\n", "xllcorner"},
           {"badkey.asc", "ncols 2\nnrows 2\nxllcorner 0\nyllcorner 0\ncells 1\n1 2\n3 4\n", "unknown header keyword"},
@@ -587,22 +584,19 @@ TEST(EsriGrid, PlaneSampledAlongASectionAndFaultsRefused) {
           {"rows.asc", "ncols 2\nnrows 3\nxllcorner 0\nyllcorner 0\ncellsize 1\n1 2\n3 4\n", "2 rows"},
           {"text.asc", "ncols 2\nnrows 2\nxllcorner 0\nyllcorner 0\ncellsize 1\n1 x\n3 4\n", "'x' is not a number"},
           {"zero.asc", "ncols 2\nnrows 2\nxllcorner 0\nyllcorner 0\ncellsize 0\n1 2\n3 4\n", "cellsize"}}) {
-        const std::string p = write_grid(name, text);
-        expect_refused([&] { read_esri_grid(p); }, {fragment});
-        std::filesystem::remove(p);
+        const demlab::test::TempFile p = write_grid(name, text);
+        expect_refused([&] { read_esri_grid(p.path()); }, {fragment});
     }
     // the scenario keys: a grid and a profile at once, or a section that is not a line, are refused
     const std::string terrain = "[lattice_release]\nregion = [[0, 1], [1, 1], [1, 2]]\norigin = [0, 1]\nr_min = 0.1\n[terrain]\n";
     expect_refused([&] {
-        Scenario sc = parse_scenario(terrain + "grid = \"" + plane + "\"\nprofile = \"p.csv\"\nsection = [[105, 205], [145, 235]]\n", "both.toml");
+        Scenario sc = parse_scenario(terrain + "grid = \"" + plane.path() + "\"\nprofile = \"p.csv\"\nsection = [[105, 205], [145, 235]]\n", "both.toml");
         finish_scenario(sc);
     }, {"terrain.profile and terrain.grid", "one of the two"});
     expect_refused([&] {
-        Scenario sc = parse_scenario(terrain + "grid = \"" + plane + "\"\nsection = [[105, 205], [145, 235], [145, 205]]\n", "three.toml");
+        Scenario sc = parse_scenario(terrain + "grid = \"" + plane.path() + "\"\nsection = [[105, 205], [145, 235], [145, 205]]\n", "three.toml");
         finish_scenario(sc);
     }, {"terrain.section", "3 points"});
-    std::filesystem::remove(plane);
-    std::filesystem::remove(hole);
 }
 
 // The shipped demonstration on both terrain inputs: the grid's section is the profile where

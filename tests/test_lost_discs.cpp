@@ -12,6 +12,7 @@
 #include "core/interrupt.h"
 #include "dem/world.h"
 #include "files.h"
+#include "helpers.h"
 #include "resume.h"
 #include "run/run.h"
 #include "scenario/scenario.h"
@@ -235,4 +236,37 @@ TEST(LostDiscs, BondsOfALostDiscGoWithIt) {
     EXPECT_EQ(w.bonds_lost_with_discs(), 1u);
     EXPECT_EQ(w.bond_breaks().size(), 0u);
     EXPECT_NEAR(w.energy().balance(), e0, 1e-3 * std::abs(e0));
+}
+
+// Two bonded discs in a world without walls fly apart once the bond breaks (issue 48, row 4):
+// with the default domain (their box padded by 0.5 m) both are taken out and the run ends
+// saying so, not "rest"; world.domain gives the box, and one that does not hold a disc at
+// t = 0, or has its corners the wrong way round, is refused naming the key.
+TEST(LostDiscs, EveryDiscGoneEndsTheRunSayingSo) {
+    auto scenario = [](const std::string& extra) {
+        Scenario s = parse_scenario("[world]\ngravity = [0.0, 0.0]\n" + extra +
+                                        "\n[cohesion]\nenabled = true\nmodulus = 1e6\nmax_strain = 0.01\nbonds = [[0, 1]]\n"
+                                        "[stop]\nt_max = 1.0\n[output]\nsnapshot_interval = 0\n"
+                                        "[[discs]]\nposition = [0.0, 0.0]\nradius = 0.01\nvelocity = [-2.0, 0.0]\n"
+                                        "[[discs]]\nposition = [0.02, 0.0]\nradius = 0.01\nvelocity = [2.0, 0.0]\n",
+                                    "pair.toml");
+        finish_scenario(s);
+        return s;
+    };
+    const fs::path dir = temp_dir("all-lost");
+    const RunSummary gone = run_scenario(scenario(""), {dir.string(), false, {}});
+    EXPECT_EQ(gone.stop_reason, "all discs left the domain");
+    EXPECT_EQ(gone.lost_discs, 2);
+    EXPECT_LT(gone.t_end, 0.3);  // 0.5 m at 2 m/s
+    EXPECT_NE(read_file(dir / "summary.json").find("\"stop_reason\": \"all discs left the domain\""), std::string::npos);
+    fs::remove_all(dir);
+    // a box 5 m either side: still flying at t_max
+    const RunSummary kept = run_scenario(scenario("domain = [[-5.0, -1.0], [5.0, 1.0]]"), {dir.string(), false, {}});
+    EXPECT_EQ(kept.stop_reason, "t_max");
+    EXPECT_EQ(kept.lost_discs, 0);
+    EXPECT_NE(read_file(dir / "scenario.toml").find("domain = [[-5.0, -1.0], [5.0, 1.0]]"), std::string::npos);
+    fs::remove_all(dir);
+    demlab::test::expect_refused([&] { scenario("domain = [[0.01, -1.0], [5.0, 1.0]]"); }, {"world.domain", "discs[0]", "outside"});
+    demlab::test::expect_refused([&] { scenario("domain = [[5.0, 1.0], [-5.0, -1.0]]"); }, {"world.domain", "lower left"});
+    demlab::test::expect_refused([&] { scenario("domain = [[-5.0, -1.0]]"); }, {"world.domain", "1 point;"});
 }

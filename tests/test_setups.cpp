@@ -2,19 +2,27 @@
 // from a CSV polyline end to end, and its refusals.
 #include <gtest/gtest.h>
 
+#include <sys/wait.h>
+
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <tuple>
 
 #include "core/error.h"
 #include "files.h"
+#include "core/csv.h"
 #include "geometry/bed_path.h"
+#include "geometry/esri_grid.h"
 #include "geometry/packing.h"
 #include "geometry/profile.h"
 #include "helpers.h"
 #include "run/run.h"
 #include "scenario/scenario.h"
+#include "setups/db9k.h"
+#include "setups/release.h"
 #include "setups/setup.h"
 #include "dem/world.h"
 
@@ -28,11 +36,8 @@ namespace fs = std::filesystem;
 namespace {
 WallGeom seg(Vec2 a, Vec2 b) { return make_geom(test::segment(a, b, 0.0, SegmentSolid::Right)); }
 
-std::string write_temp(const std::string& name, const std::string& text) {
-    const fs::path p = fs::temp_directory_path() / ("demlab-test-" + name + "-" + std::to_string(::getpid()));
-    std::ofstream(p) << text;
-    return p.string();
-}
+// removed when the test's variable goes out of scope
+test::TempFile write_temp(const std::string& name, const std::string& text) { return test::TempFile(name, text); }
 }  // namespace
 
 // A chain of a 3-4-5 segment and a horizontal one: s adds up along the parts, h is the
@@ -71,26 +76,26 @@ TEST(BedPath, ArcPartsCountTheirAngle) {
 }
 
 TEST(TerrainProfile, CsvIsReadWithHeaderAndComments) {
-    const auto p = read_profile_csv(write_temp("profile-ok.csv", "# ground\nx,y\n0,1\n1.5,0.5\n\n2,0.5\n"));
+    const auto p = read_profile_csv(write_temp("profile-ok.csv", "# ground\nx,y\n0,1\n1.5,0.5\n\n2,0.5\n").path());
     ASSERT_EQ(p.size(), 3u);
     EXPECT_DOUBLE_EQ(p[1].x(), 1.5);
     EXPECT_DOUBLE_EQ(p[2].y(), 0.5);
 }
 
 TEST(TerrainProfile, BadCsvIsRefusedWithFileAndLine) {
-    const std::string back = write_temp("profile-back.csv", "x,y\n0,1\n1,0.5\n0.5,0.4\n");
-    expect_refused([&] { read_profile_csv(back); }, {":4:", "must exceed the previous row's x"});
-    const std::string text = write_temp("profile-text.csv", "x,y\n0,1\n1,abc\n");
-    expect_refused([&] { read_profile_csv(text); }, {":3:", "two numbers"});
-    const std::string one = write_temp("profile-one.csv", "0,1\n");
-    expect_refused([&] { read_profile_csv(one); }, {"at least 2 points"});
+    const test::TempFile back = write_temp("profile-back.csv", "x,y\n0,1\n1,0.5\n0.5,0.4\n");
+    expect_refused([&] { read_profile_csv(back.path()); }, {":4:", "must exceed the previous row's x"});
+    const test::TempFile text = write_temp("profile-text.csv", "x,y\n0,1\n1,abc\n");
+    expect_refused([&] { read_profile_csv(text.path()); }, {":3:", "two numbers"});
+    const test::TempFile one = write_temp("profile-one.csv", "0,1\n");
+    expect_refused([&] { read_profile_csv(one.path()); }, {"at least 2 points"});
     expect_refused([] { read_profile_csv("/nonexistent/profile.csv"); }, {"cannot open", "no such file"});
 }
 
 TEST(TerrainProfile, ScenarioRefusesWhatCannotRun) {
-    const std::string prof = write_temp("profile-s.csv", "0,1\n1,0\n2,0\n");
+    const test::TempFile prof = write_temp("profile-s.csv", "0,1\n1,0\n2,0\n");
     auto load = [&](const std::string& extra) {
-        Scenario s = parse_scenario("[terrain]\nprofile = \"" + prof + "\"\n" + extra, "t.toml");
+        Scenario s = parse_scenario("[terrain]\nprofile = \"" + prof.path() + "\"\n" + extra, "t.toml");
         finish_scenario(s);
         return s;
     };
@@ -111,12 +116,88 @@ TEST(TerrainProfile, ScenarioRefusesWhatCannotRun) {
     EXPECT_EQ(back.terrain.release.size(), 4u);
 }
 
+// A release polygon must lie above the ground (issue 48, rows 1 and 2): the shipped slope-dam
+// profile (x from 0 to 2.9 m) with the polygon over no ground, partly under the slope, or with
+// a ridge of the ground through it, is refused naming terrain.release and the corner or the
+// ground's point; demlab run exits 2 and makes no folder. The shipped polygon still loads.
+TEST(TerrainProfile, ReleaseMustLieAboveTheGround) {
+    const std::string scenario = std::string(DEMLAB_SOURCE_DIR) + "/scenarios/terrain-slope-dam.toml";
+    auto load = [&](const std::string& release) {
+        Scenario s = load_scenario(scenario);
+        apply_override(s, "terrain.release=" + release);
+        finish_scenario(s);
+        return s;
+    };
+    expect_refused([&] { load("[[10, 10], [11, 10], [11, 11], [10, 11]]"); },
+                   {"terrain.release", "corner 0 [10, 10]", "beyond the terrain's profile", "x from 0 to 2.9 m"});
+    expect_refused([&] { load("[[-1, 1.5], [0.2, 1.5], [0.2, 2], [-1, 2]]"); }, {"terrain.release", "corner 0 [-1, 1.5]", "beyond"});
+    // the ground at x = 0.5 is at 0.911 m and at x = 1 at 0.623 m: the lower corners are in it
+    expect_refused([&] { load("[[0.5, 0.5], [1, 0.5], [1, 1.2], [0.5, 1.2]]"); },
+                   {"terrain.release", "corner 0 [0.5, 0.5]", "under the ground"});
+    expect_refused([&] { load("[[0.5, 0], [1, 0], [1, 0.3], [0.5, 0.3]]"); }, {"terrain.release", "corner 0", "under the ground"});
+    expect_refused([&] { load("[[0.5, 1.2], [0.5, 0.5], [1, 0.5], [1, 1.2]]"); }, {"terrain.release", "corner 1 [0.5, 0.5]", "under the ground"});
+    EXPECT_EQ(load("[[0.06, 1.17], [0.45, 0.95], [0.45, 1.20], [0.06, 1.20]]").terrain.release.size(), 4u);
+    // a corner on the ground is on or above it
+    EXPECT_NO_THROW(load("[[0.5, 0.9113214286], [1, 0.6226428571], [1, 1.2], [0.5, 1.2]]"));
+
+    // a ridge of the ground through the polygon, its corners above the ground: the ridge's top
+    // inside the polygon, or above it (its flanks cross the edges)
+    for (const auto& [profile, fragment] :
+         {std::pair<const char*, const char*>{"x,y\n0,1\n1,0\n1.2,1\n1.4,0\n3,0\n", "[1.2, 1] (point 3 of the profile) lies inside"},
+          {"x,y\n0,1\n1,0\n1.2,2\n1.4,0\n3,0\n", "crosses the polygon's edge"}}) {
+        const test::TempFile ridge = write_temp("ridge.csv", profile);
+        expect_refused([&] {
+            Scenario s = parse_scenario("[terrain]\nprofile = \"" + ridge.path() + "\"\nrelease = [[0.9, 0.5], [1.6, 0.5], [1.6, 1.5], [0.9, 1.5]]\n", "t.toml");
+            finish_scenario(s);
+        }, {"terrain.release", fragment});
+    }
+
+    // the command: exit 2, no output folder (a coarse, short run should it be accepted)
+    const fs::path out = temp_dir("release-nowhere");
+    const int status = std::system((std::string(DEMLAB_EXE) + " run " + scenario + " --out " + out.string() +
+                                    " --scale 20 --set stop.t_max=0.01 --set stop.rest_duration=0.005 --set output.snapshot_interval=0"
+                                    " --set 'terrain.release=[[10, 10], [11, 10], [11, 11], [10, 11]]' >/dev/null 2>&1").c_str());
+    ASSERT_TRUE(WIFEXITED(status));
+    EXPECT_EQ(WEXITSTATUS(status), 2);
+    EXPECT_FALSE(fs::exists(out));
+    fs::remove_all(out);
+}
+
+// A file saved with a UTF-8 byte-order mark (spreadsheet programs' "CSV UTF-8") reads as the
+// same file without it (issue 48, row 3): a profile (its mark before a number, which was taken
+// for a header and lost a point, or before a comment, which was refused), an elevation grid, a
+// release mass, a disc file, a CSV table and a header read on its own.
+TEST(Files, AByteOrderMarkIsReadAsTheSameFileWithoutIt) {
+    const std::string bom = "\xEF\xBB\xBF";
+    auto both = [&](const std::string& name, const std::string& text, const auto& read) {
+        const test::TempFile plain(name, text), marked("bom-" + name, bom + text);
+        EXPECT_EQ(read(marked.path()), read(plain.path())) << name;
+    };
+    both("profile.csv", "0,1\n1.5,0.5\n2,0.5\n", [](const std::string& p) { return read_profile_csv(p); });
+    both("profile-h.csv", "# ground\nx,y\n0,1\n1.5,0.5\n", [](const std::string& p) { return read_profile_csv(p); });
+    both("grid.asc", "ncols 2\nnrows 2\nxllcorner 0\nyllcorner 0\ncellsize 1\n1 2\n3 4\n",
+         [](const std::string& p) { return read_esri_grid(p).z; });
+    both("release.csv", "# demlab release mass\n# settle_ratio 0.0004\nid,x_m,y_m,r_m,layer,grid\n0,0.1,0.2,0.01,0,0\n1,0.3,0.2,0.01,0,1\n",
+         [](const std::string& p) {
+             const ReleaseMass m = load_release(p);
+             return std::make_tuple(m.pos, m.radius, m.grid, m.settle_ratio);
+         });
+    both("discs.xyr", "# id x y r\n0 0.1 0.2 0.01\n", [](const std::string& p) { return read_xyr(p).size(); });
+    both("table.csv", "t_s,x_m\n0,1\n0.5,2\n", [](const std::string& p) {
+        const CsvTable t = read_csv_table(p);
+        return std::make_pair(t.names, t.rows);
+    });
+    EXPECT_EQ(CsvHeader(bom + "t_s,x_m", "h.csv").column("t_s"), 0u);
+    // a scenario file, for completeness
+    both("s.toml", "[scenario]\nname = \"marked\"\n", [](const std::string& p) { return load_scenario(p).name; });
+}
+
 // A barrier on the profile (terrain.barrier): walls after the profile's, the bed path up its
 // face; refused off the ground, going down from its foot, or of one point.
 TEST(TerrainProfile, BarrierStandsOnTheProfile) {
-    const std::string prof = write_temp("profile-b.csv", "0,1\n1,0\n3,0\n");
+    const test::TempFile prof = write_temp("profile-b.csv", "0,1\n1,0\n3,0\n");
     auto load = [&](const std::string& barrier) {
-        Scenario s = parse_scenario("[terrain]\nprofile = \"" + prof + "\"\nbarrier = " + barrier +
+        Scenario s = parse_scenario("[terrain]\nprofile = \"" + prof.path() + "\"\nbarrier = " + barrier +
                                         "\n[[discs]]\nposition = [0.2, 0.9]\nradius = 0.05\n",
                                     "t.toml");
         finish_scenario(s);

@@ -3,6 +3,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <csignal>
 #include <filesystem>
@@ -23,6 +24,24 @@ using namespace demlab::test;
 
 namespace {
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+// Tests clean up what they write (issue 48, row 6): after the tests this process ran (ctest runs
+// each in a process of its own), nothing named "demlab-...-PID..." is left in the temporary
+// directory that was not there before them (a file an earlier process of the same pid left is
+// not this one's). A leftover fails the run, naming the file or folder.
+class TempLeftoversCheck final : public ::testing::Environment {
+public:
+    void SetUp() override { before_ = temp_leftovers(); }
+    void TearDown() override {
+        for (const std::string& name : temp_leftovers())
+            if (std::find(before_.begin(), before_.end(), name) == before_.end())
+                ADD_FAILURE() << "left in the temporary directory: " << name << " (a test must remove what it writes; tests/files.h: TempFile)";
+    }
+
+private:
+    std::vector<std::string> before_;
+};
+[[maybe_unused]] ::testing::Environment* const kTempLeftoversCheck = ::testing::AddGlobalTestEnvironment(new TempLeftoversCheck);
 }  // namespace
 
 TEST(Validation, DiscsAndMaterials) {
@@ -266,6 +285,39 @@ TEST(BlowUp, EnergyWatchCatchesStepsJustAboveTheCriticalOne) {
     // critical one, and the undamped bounces lose energy the ledger cannot book: now reported
     // (91 % of the energy put in after 2 s), where "0.00 %" was printed for want of dissipation
     EXPECT_GT(r.energy_balance_error, 0.5);
+    std::filesystem::remove_all(dir);
+}
+
+// A damper that makes energy is an instability even when the ledger closes (issue 48, row 5):
+// a pair pressed together by constant forces, one spinning, free rotation, at PFC's step rule
+// as printed (timestep.damping_correction = false): the dashpots booked -70 J/m of
+// "dissipation" and the run ended as if sound. The watch names the account, the time and the
+// likely cause; with the correction the same pair runs without a word, its accounts growing.
+TEST(BlowUp, FallingDissipationAccountIsAnInstability) {
+    auto scenario = [](const char* correction) {
+        Scenario s = parse_scenario(std::string("[world]\ngravity = [0.0, 0.0]\n[rotation]\nmodel = 2\n[timestep]\ndamping_correction = ") +
+                                        correction + "\n[stop]\nt_max = 0.5\n[output]\nsnapshot_interval = 0\n"
+                                        "[[discs]]\nposition = [0.0, 0.0]\nradius = 0.01\nomega = 10.0\nforce = [1000.0, 0.0]\n"
+                                        "[[discs]]\nposition = [0.0199, 0.0]\nradius = 0.01\nforce = [-1000.0, 0.0]\n",
+                                    "pressed-pair.toml");
+        finish_scenario(s);
+        return s;
+    };
+    const auto dir = temp_dir("dissipation-watch");
+    try {
+        run_scenario(scenario("false"), {dir.string(), false, {}});
+        ADD_FAILURE() << "a damper made energy and the run ended without a word";
+    } catch (const RunError& e) {
+        const std::string msg = e.what();
+        for (const char* fragment : {"dissipated_contacts", "fell by", "t = 0.03", "Likely cause", "timestep.damping_correction"})
+            EXPECT_NE(msg.find(fragment), std::string::npos) << fragment << ": " << msg;
+    }
+    EXPECT_FALSE(std::filesystem::exists(dir / "summary.json"));
+    std::filesystem::remove_all(dir);
+    EXPECT_NO_THROW(run_scenario(scenario("true"), {dir.string(), false, {}}));
+    const std::vector<double> booked = csv_column(dir / "energy.csv", "dissipated_contacts_J_per_m");
+    ASSERT_GT(booked.size(), 2u);
+    for (size_t k = 1; k < booked.size(); ++k) EXPECT_GE(booked[k], booked[k - 1]) << "row " << k;
     std::filesystem::remove_all(dir);
 }
 

@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "core/error.h"
+#include "core/fileio.h"
 
 namespace demlab {
 
@@ -29,7 +30,16 @@ std::vector<std::string> csv_cells(const std::string& line) {
     return out;
 }
 
-CsvHeader::CsvHeader(const std::string& header_line, std::string file) : names_(csv_cells(header_line)), file_(std::move(file)) {}
+namespace {
+// a header line read by a reader of its own (a file's first line): without a byte-order mark
+std::string without_bom(std::string line) {
+    strip_utf8_bom(line);
+    return line;
+}
+}  // namespace
+
+CsvHeader::CsvHeader(const std::string& header_line, std::string file)
+    : names_(csv_cells(without_bom(header_line))), file_(std::move(file)) {}
 
 bool CsvHeader::has(const std::string& name) const {
     for (const std::string& n : names_)
@@ -49,8 +59,7 @@ size_t CsvHeader::column(const std::string& name, const std::string& legacy) con
 }
 
 CsvTable read_csv_table(const std::string& path) {
-    std::ifstream in(path);
-    if (!in) throw InputError(path + ": cannot be read");
+    std::istringstream in(read_input_file(path, kMaxTableBytes, "CSV table"));
     CsvTable t;
     std::string line;
     if (!std::getline(in, line)) throw InputError(path + ": empty (no header line)");

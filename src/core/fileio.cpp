@@ -70,7 +70,12 @@ std::string read_input_file(const std::string& path, uint64_t max_bytes, const s
     std::string text(size_t(size), '\0');
     in.read(text.data(), std::streamsize(size));
     if (uint64_t(in.gcount()) != size) throw InputError(path + ": cannot read the " + what + " whole");
+    strip_utf8_bom(text);
     return text;
+}
+
+void strip_utf8_bom(std::string& text) {
+    if (text.size() >= 3 && text.compare(0, 3, "\xEF\xBB\xBF") == 0) text.erase(0, 3);
 }
 
 void SeriesFile::open(const std::string& path) {

@@ -13,8 +13,12 @@ void write_file_atomic(const std::string& path, const std::string& content);
 
 // An input file read whole: refused (InputError, exit 2, naming the file and `what` it is)
 // when it is missing, not a regular file (a directory, /dev/zero, a pipe) or larger than
-// max_bytes, before a byte of it is read.
+// max_bytes, before a byte of it is read. A UTF-8 byte-order mark at its start (what
+// spreadsheet programs write for "CSV UTF-8") is dropped: the text is the same file without it.
+// Every input file (scenario, profile, grid, release mass, top, table, checkpoint) is read here.
 std::string read_input_file(const std::string& path, uint64_t max_bytes, const std::string& what);
+// Drops a UTF-8 byte-order mark (EF BB BF) from the start of `text`, if it has one.
+void strip_utf8_bom(std::string& text);
 // The limits, in bytes
 inline constexpr uint64_t kMaxScenarioBytes = uint64_t(16) << 20;     // scenario, calibration: 16 MiB
 inline constexpr uint64_t kMaxTableBytes = uint64_t(1) << 30;         // release mass, terrain profile: 1 GiB

@@ -2,8 +2,10 @@
 
 #include <cmath>
 #include <fstream>
+#include <sstream>
 
 #include "core/error.h"
+#include "core/fileio.h"
 #include <unordered_map>
 
 namespace demlab {
@@ -100,8 +102,7 @@ SlopeAngles slope_angles(const Envelope& e, double w, double wall_gap) {
 }
 
 Envelope read_envelope_csv(const std::string& path) {
-    std::ifstream in(path);
-    if (!in) throw InputError(path + ": cannot open the envelope");
+    std::istringstream in(read_input_file(path, kMaxTableBytes, "envelope"));
     std::string line;
     std::getline(in, line);
     std::vector<Vec2> pts;

@@ -142,10 +142,43 @@ void RunSeries::sample(const World& w, const MeasureContext& m, RunState& st, Ru
 // 2-thread flume run (one World::energy() took 225 us on geometry A, more than a step).
 double energy_put_in(const EnergyReport& e, double e0) { return e0 - e.potential - e.lost_potential + e.work_by_walls; }
 
-void check_energy_growth(const Solver& w, double e0, double max_gain, double noise, double& peak_put_in) {
+void check_energy_growth(const Solver& w, double e0, double max_gain, double noise, double& peak_put_in,
+                         DissipationPeaks& dissipation) {
     const EnergyReport e = w.energy();
     peak_put_in = std::max(peak_put_in, energy_put_in(e, e0));
     const double gain = e.balance() - e0, put_in = peak_put_in;
+    // A dissipation account only grows: a damper takes energy out. One that falls is a damper
+    // that made energy, an unstable step, even when the ledger closes (the energy made shows as
+    // motion, booked on both sides); the drop is measured against the energy put in, so the
+    // rounding of the accounts' sums (each step adds to them) never counts.
+    const double drop_allowed = kDissipationDrop * std::max(put_in, 0.0) + noise;
+    struct Account {
+        const char* name;
+        double now;
+        double& peak;
+        const char* cause;
+    };
+    for (const Account& a :
+         {Account{"dissipated_contacts", e.dissipated_contacts, dissipation.contacts,
+                  "a time step too large for the damped contacts (the dashpots of an unstable step push instead of "
+                  "damping; timestep.damping_correction = false is PFC's rule as printed, unstable with free rotation "
+                  "and a shear dashpot: docs/engine.md): use the automatic step with the damping correction, or a "
+                  "smaller timestep.safety or timestep.fixed"},
+          Account{"dissipated_local", e.dissipated_local, dissipation.local,
+                  "a time step too large for the local damping (damping.local_alpha; the automatic step with "
+                  "timestep.damping_correction shrinks it by 1/sqrt(1 + alpha))"},
+          Account{"dissipated_rotation", e.dissipated_rotation, dissipation.rotation,
+                  "a time step too large for the rotation (rolling resistance, rotational damping: rotation.model, "
+                  "rotation.mu_br, rotation.u_rr): use the automatic step with the damping correction, or a smaller "
+                  "timestep.safety"}}) {
+        if (a.peak - a.now > drop_allowed)
+            throw RunError("blow-up: the energy ledger's " + std::string(a.name) + " account fell by " +
+                           format_number(a.peak - a.now) + " J/m (from " + format_number(a.peak) + " to " + format_number(a.now) +
+                           " J/m" + (put_in > 0 ? ", " + format_number((a.peak - a.now) / put_in) + " times the energy put in" : std::string()) +
+                           "): a damper made energy, at step " + std::to_string(w.step_count()) + ", t = " + format_number(w.time()) +
+                           " s. Likely cause: " + a.cause);
+        a.peak = std::max(a.peak, a.now);
+    }
     if (gain > max_gain * std::max(put_in, 0.0) && gain > noise)
         throw RunError("blow-up: energy growth: the energy balance rose by " + format_number(gain) + " J/m, " +
                        (put_in > 0 ? format_number(gain / put_in) + " times the energy put in (" + format_number(put_in) + " J/m"

@@ -143,8 +143,8 @@ void add_bonds(const Scenario& s, World& w) {
 }
 
 // The world: the release mass, then the explicit discs (a checkpoint's mass holds them
-// already), the set-up's walls, then the explicit ones; the domain is their box padded by
-// 0.5 m (a disc leaving it stops the run).
+// already), the set-up's walls, then the explicit ones; the domain is world.domain, or their
+// box padded by 0.5 m (a disc leaving it is lost: taken out, or the run stops).
 World build_world(const Scenario& s, const Setup& setup, const ReleaseMass& mass, bool restored, std::vector<int>& layer,
                   std::vector<int>& grid) {
     WorldDef def = s.world;
@@ -166,6 +166,14 @@ World build_world(const Scenario& s, const Setup& setup, const ReleaseMass& mass
     for (const Vec2& p : setup.extent()) grow(p);
     def.domain_lo = lo - Vec2(0.5, 0.5);
     def.domain_hi = hi + Vec2(0.5, 0.5);
+    if (!s.domain.empty()) {  // world.domain: given; every disc at the start inside it
+        def.domain_lo = s.domain[0];
+        def.domain_hi = s.domain[1];
+        for (const Vec2& p : mass.pos)
+            if (p.x() < def.domain_lo.x() || p.x() > def.domain_hi.x() || p.y() < def.domain_lo.y() || p.y() > def.domain_hi.y())
+                throw InputError(s.source + ": world.domain: a disc of the release at [" + format_number(p.x()) + ", " +
+                                 format_number(p.y()) + "] lies outside it: the domain must hold every disc at t = 0");
+    }
     World w(def);
     const int mat = w.add_material(s.disc);
     for (size_t i = 0; i < mass.pos.size(); ++i) {
@@ -345,6 +353,8 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
         series.open();
         barrier.open();
     }
+    // the dissipation accounts as they are now (a resume: as restored)
+    DissipationPeaks dissipation(solver.energy());
     const long steps_start = solver.step_count();
     Progress progress(s.stop.t_max, "s", solver.time(), steps_start);
     const auto t0 = std::chrono::steady_clock::now();
@@ -410,14 +420,19 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
             solver.step();
         } catch (const RunError&) {
             // a lost disc or an overlap after energy was created: name the runaway as such
-            check_energy_growth(solver, st.e0, s.stop.max_energy_gain, ledger_noise, st.peak_put_in);
+            check_energy_growth(solver, st.e0, s.stop.max_energy_gain, ledger_noise, st.peak_put_in, dissipation);
             throw;
         }
         sampled_now = false;
         // a disc thrown out by created energy is a blow-up, not a stray: look at once
         if (w.lost_discs().size() != lost_seen) {
             lost_seen = w.lost_discs().size();
-            check_energy_growth(solver, st.e0, s.stop.max_energy_gain, ledger_noise, st.peak_put_in);
+            check_energy_growth(solver, st.e0, s.stop.max_energy_gain, ledger_noise, st.peak_put_in, dissipation);
+            // nothing left to move: not "rest" (the kinetic energy of no disc is 0)
+            if (w.disc_count() == 0) {
+                sum.stop_reason = kStopAllDiscsLeft;
+                break;
+            }
         }
         // a step so small that the run would not end in any time is refused at once
         if (solver.step_count() == steps_start + 1 && (s.stop.t_max - solver.time()) / solver.dt() > kMaxRunSteps)
@@ -434,7 +449,7 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
             // calling thread's time on 2 threads, with the other one waiting)
             const double ke = solver.kinetic_energy();
             st.peak_ke = std::max(st.peak_ke, ke);
-            if (solver.step_count() % kEnergyWatchSteps == 0) check_energy_growth(solver, st.e0, s.stop.max_energy_gain, ledger_noise, st.peak_put_in);
+            if (solver.step_count() % kEnergyWatchSteps == 0) check_energy_growth(solver, st.e0, s.stop.max_energy_gain, ledger_noise, st.peak_put_in, dissipation);
             if (ke < s.stop.rest_ke_fraction * st.peak_ke) {
                 if (st.rest_since < 0) st.rest_since = solver.time();
                 if (solver.time() - st.rest_since >= s.stop.rest_duration) {

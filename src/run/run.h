@@ -49,6 +49,10 @@ CheckpointInfo read_checkpoint_info(const std::string& run_dir);
 // read is a different scenario.
 bool same_scenario(const std::string& stored, const std::string& resolved_now);
 
+// The stop reason of a run whose every disc left the domain and was taken out (world.lost_discs
+// = "remove"): nothing is left to come to rest.
+inline constexpr const char* kStopAllDiscsLeft = "all discs left the domain";
+
 struct RunSummary {
     // the content hash of the resolved scenario and the files it read (scenario/fingerprint.h):
     // summary.json's scenario_fingerprint, which a sweep's reuse compares
@@ -65,7 +69,7 @@ struct RunSummary {
     double dt_min = 0, dt_max = 0;
     long steps = 0;
     double t_end = 0;
-    std::string stop_reason;            // "rest" or "t_max"
+    std::string stop_reason;            // "rest", "t_max", "max_steps" or kStopAllDiscsLeft
     double wall_seconds = 0;            // of the run after the release mass was ready
     double particle_steps_per_second = 0;
     double runout_s = 0;                // m along the path: the deposit's front

@@ -174,6 +174,8 @@ Key choice(std::string name, std::string doc, E& (*ref)(Scenario&), std::vector<
     return k;
 }
 
+Key polygon(std::string name, std::string accepted, std::string doc, std::vector<Vec2>& (*ref)(Scenario&));  // below
+
 void add_scenario_and_material_keys(std::vector<Key>& k) {
     // scenario
     k.push_back(text("scenario.name", "name of the scenario, used in outputs", [](Scenario& s) -> std::string& { return s.name; }));
@@ -222,7 +224,8 @@ void add_dynamics_keys(std::vector<Key>& k) {
     k.push_back(vec2("world.gravity", "m/s2", "gravity vector", [](Scenario& s) -> Vec2& { return s.world.gravity; }));
     k.push_back(real("world.broadphase_margin", "m", "smallest pad of the broad phase's fat boxes (moving discs get wider ones); 0 = half the smallest radius", [](Scenario& s) -> double& { return s.world.broadphase_margin; }, 0, 1));
     k.push_back(real("world.joint_tolerance", "m", "wall ends closer than this are joined", [](Scenario& s) -> double& { return s.world.joint_tolerance; }, 0, 0.1));
-    k.push_back(choice<LostDiscs>("world.lost_discs", "a disc whose centre leaves the domain (the walls' box padded by 0.5 m: over a wall's free end, off a profile's end): remove (taken out, recorded in lost.csv, its energy booked in the ledger) or stop (the run ends with exit 3)", [](Scenario& s) -> LostDiscs& { return s.world.lost_discs; }, {{"remove", LostDiscs::Remove}, {"stop", LostDiscs::Stop}}));
+    k.push_back(polygon("world.domain", "[] or 2 points [[x_lo, y_lo], [x_hi, y_hi]], x_lo < x_hi, y_lo < y_hi, holding every disc at t = 0", "the domain's box: a disc whose centre leaves it is lost (world.lost_discs); [] = the box of the walls, the discs and the set-up padded by 0.5 m (give it where there are no walls to bound the flight)", [](Scenario& s) -> std::vector<Vec2>& { return s.domain; }));
+    k.push_back(choice<LostDiscs>("world.lost_discs", "a disc whose centre leaves the domain (world.domain; by default the walls' box padded by 0.5 m: over a wall's free end, off a profile's end): remove (taken out, recorded in lost.csv, its energy booked in the ledger) or stop (the run ends with exit 3)", [](Scenario& s) -> LostDiscs& { return s.world.lost_discs; }, {{"remove", LostDiscs::Remove}, {"stop", LostDiscs::Stop}}));
     k.push_back(real("world.max_overlap_ratio", "-", "an overlap beyond this fraction of the smaller radius stops the run (blow-up)", [](Scenario& s) -> double& { return s.world.max_overlap_ratio; }, 0, 2, true));
     k.push_back(choice<ContactLawKind>("contact.law", "the contact law of every contact: linear (PFC's linear model with dashpots, thesis 2.3.4-2.3.5) or debris (Mikhailov's DEBRIS: elastic force from Young's modulus and the contact's chord, one friction force per disc; [debris], docs/debris.md)", [](Scenario& s) -> ContactLawKind& { return s.world.law; }, {{"linear", ContactLawKind::Linear}, {"debris", ContactLawKind::Debris}}));
     k.push_back(real("debris.youngs_modulus", "Pa", "E of the discs and of the bed (Mikhailov, Attabad: 40 GPa): F = E S delta / R (bed), E S delta / (Ri + Rj) (pair)", [](Scenario& s) -> double& { return s.world.debris.youngs_modulus; }, 0, 1e12, true));

@@ -201,8 +201,66 @@ static void resolve_beside_scenario(const Scenario& s, std::string& file) {
         file = (std::filesystem::absolute(std::filesystem::path(s.source)).parent_path() / p).lexically_normal().string();
 }
 
+// The ground's height at x on a profile (x increasing; x within its range).
+static double ground_at(const std::vector<Vec2>& line, double x) {
+    size_t k = 0;
+    while (k + 2 < line.size() && line[k + 1].x() < x) ++k;
+    const Vec2 a = line[k], b = line[k + 1];
+    return a.y() + (b.y() - a.y()) * (x - a.x()) / (b.x() - a.x());
+}
+
+// A polygon that discs fill must lie above the ground: every corner within the profile's x
+// range and on or above the ground at its x (a corner under the ground is named), and no part
+// of the ground inside it (a profile point inside, or a profile segment crossing an edge: a
+// ridge through the polygon). Otherwise discs would be made over no ground or inside it.
+// `tol` is "on the ground": a corner that far below it, or the ground that far inside, passes.
+static void require_above_ground(const std::vector<Vec2>& poly, const std::vector<Vec2>& ground, double tol,
+                                 const std::string& what) {
+    const double gx0 = ground.front().x(), gx1 = ground.back().x();
+    const size_t n = poly.size();
+    for (size_t k = 0; k < n; ++k) {
+        const Vec2 c = poly[k];
+        const std::string corner = what + ": corner " + std::to_string(k) + " [" + format_number(c.x()) + ", " + format_number(c.y()) + "]";
+        if (c.x() < gx0 || c.x() > gx1)
+            throw InputError(corner + " lies beyond the terrain's profile (x from " + format_number(gx0) + " to " +
+                             format_number(gx1) + " m): the polygon must lie above the ground, within the profile's x range");
+        const double g = ground_at(ground, std::clamp(c.x(), gx0, gx1));
+        if (c.y() < g - tol)
+            throw InputError(corner + " lies " + format_number(g - c.y()) + " m under the ground (the ground is at y = " +
+                             format_number(g) + " m there): the polygon must lie on or above the ground");
+    }
+    // signed distance of p from the line a-b, positive on its left
+    auto side = [](const Vec2& a, const Vec2& b, const Vec2& p) { return cross(b - a, p - a) / (b - a).norm(); };
+    for (size_t j = 0; j < ground.size(); ++j) {
+        const Vec2 q = ground[j];
+        // strictly inside (more than tol from every edge): even-odd crossings
+        bool in = false;
+        double edge_distance = INFINITY;
+        for (size_t a = 0, b = n - 1; a < n; b = a++) {
+            const Vec2 pa = poly[a], pb = poly[b], e = pb - pa;
+            const double t = std::clamp((q - pa).dot(e) / e.squaredNorm(), 0.0, 1.0);
+            edge_distance = std::min(edge_distance, (pa + t * e - q).norm());
+            if ((pa.y() > q.y()) != (pb.y() > q.y()) && q.x() < pa.x() + (q.y() - pa.y()) / (pb.y() - pa.y()) * e.x()) in = !in;
+        }
+        if (in && edge_distance > tol)
+            throw InputError(what + ": the ground's point [" + format_number(q.x()) + ", " + format_number(q.y()) +
+                             "] (point " + std::to_string(j + 1) + " of the profile) lies inside the polygon: it must lie above the ground");
+    }
+    for (size_t j = 0; j + 1 < ground.size(); ++j) {
+        const Vec2 q = ground[j], r = ground[j + 1];
+        for (size_t a = 0; a < n; ++a) {
+            const Vec2 pa = poly[a], pb = poly[(a + 1) % n];
+            const double d1 = side(q, r, pa), d2 = side(q, r, pb), d3 = side(pa, pb, q), d4 = side(pa, pb, r);
+            if (((d1 > tol && d2 < -tol) || (d1 < -tol && d2 > tol)) && ((d3 > tol && d4 < -tol) || (d3 < -tol && d4 > tol)))
+                throw InputError(what + ": the ground from [" + format_number(q.x()) + ", " + format_number(q.y()) + "] to [" +
+                                 format_number(r.x()) + ", " + format_number(r.y()) + "] crosses the polygon's edge " +
+                                 std::to_string(a) + ": the polygon must lie above the ground");
+        }
+    }
+}
+
 // The profile read and the release polygon checked: a convex polygon of >= 3 corners that
-// holds discs of the release's radii.
+// holds discs of the release's radii, above the ground.
 void finish_terrain(Scenario& s) {
     const std::string where = s.source + ": ";
     TerrainDef& t = s.terrain;
@@ -266,6 +324,8 @@ void finish_terrain(Scenario& s) {
         x0 = std::min(x0, q.x());
         x1 = std::max(x1, q.x());
     }
+    // "on the ground": a millionth of the polygon's size (coordinates typed to a few digits)
+    require_above_ground(p, t.points, 1e-6 * std::max(x1 - x0, hi - lo), where + "terrain.release");
     const ReleaseDef& r = s.release;
     if (s.world.rotation.model >= 2 && !(s.world.rotation.u_rr < 0.6 * r.r_min * (1.0 - r.radius_reduction)))
         throw InputError(where + "rotation.u_rr = " + format_number(s.world.rotation.u_rr) +
@@ -427,6 +487,10 @@ void finish_lattice(Scenario& s) {
     if (l.spacing < 2.0 * l.r_max)
         throw InputError(where + "lattice_release.spacing = " + format_number(l.spacing) + " m must be >= 2 r_max = " +
                          format_number(2.0 * l.r_max) + " m: neighbouring discs would overlap");
+    // a region on a terrain lies above its ground (as terrain.release); a node closer than its
+    // radius to the ground is left out (lattice_mass), so the region may reach half of r_min
+    // into it (a row meant to touch the bed, given to 0.1 mm) without a disc under the ground
+    if (s.terrain.enabled && l.top.empty()) require_above_ground(l.fill, s.terrain.points, 0.5 * l.r_min, where + "lattice_release.region");
 }
 
 // The keys the linear law reads and DEBRIS does not: set to anything but their defaults with
@@ -513,6 +577,22 @@ void finish_scenario(Scenario& s) {
         if (!s.discs.empty() && id >= long(s.discs.size()))
             throw InputError(where + "output.track: disc id " + std::to_string(id) + " does not exist (" +
                              std::to_string(s.discs.size()) + " discs)");
+    if (!s.domain.empty()) {
+        if (s.domain.size() != 2)
+            throw InputError(where + "world.domain: " + std::to_string(s.domain.size()) +
+                             (s.domain.size() == 1 ? " point" : " points") + "; the domain's box is [[x_lo, y_lo], [x_hi, y_hi]] (m), or [] for the walls' box padded by 0.5 m");
+        if (!(s.domain[0].x() < s.domain[1].x()) || !(s.domain[0].y() < s.domain[1].y()))
+            throw InputError(where + "world.domain = [[" + format_number(s.domain[0].x()) + ", " + format_number(s.domain[0].y()) +
+                             "], [" + format_number(s.domain[1].x()) + ", " + format_number(s.domain[1].y()) +
+                             "]]: the first point is the lower left corner, the second the upper right (x_lo < x_hi, y_lo < y_hi)");
+        // explicit discs are known now (a release mass's are checked when it exists, run.cpp)
+        for (size_t i = 0; i < s.discs.size(); ++i) {
+            const Vec2 p = s.discs[i].pos;
+            if (p.x() < s.domain[0].x() || p.x() > s.domain[1].x() || p.y() < s.domain[0].y() || p.y() > s.domain[1].y())
+                throw InputError(where + "world.domain: discs[" + std::to_string(i) + "] at [" + format_number(p.x()) + ", " +
+                                 format_number(p.y()) + "] lies outside it: the domain must hold every disc at t = 0");
+        }
+    }
 }
 
 // A set-up's table is written only when the scenario has it (its presence chooses the set-up).

@@ -126,6 +126,9 @@ struct Scenario {
     std::string description;
     unsigned long long seed = 1;
     WorldDef world = scenario_world();     // gravity, damping, time step, rotation model, rules
+    // m, the domain's box [[x_lo, y_lo], [x_hi, y_hi]] (world.domain): a disc whose centre leaves
+    // it is lost; empty: the box of the walls, the discs and the set-up, padded by 0.5 m
+    std::vector<Vec2> domain;
     MaterialDef disc;                      // disc material (friction as a coefficient)
     double disc_friction_deg = 15.5;
     double wall_friction_deg = 21.7;

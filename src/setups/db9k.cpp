@@ -7,12 +7,12 @@
 #include <string>
 
 #include "core/error.h"
+#include "core/fileio.h"
 
 namespace demlab {
 
 std::vector<XyrDisc> read_xyr(const std::string& path) {
-    std::ifstream in(path);
-    if (!in) throw InputError(path + ": cannot open the file");
+    std::istringstream in(read_input_file(path, kMaxTableBytes, "disc file ('id x y r' rows)"));
     std::vector<XyrDisc> out;
     std::string line;
     long lineno = 0;
