@@ -1,0 +1,120 @@
+// Guards on the physics and the input (issue 54's rows 8-15): no disc crosses a wall between
+// two steps, magnitudes are bounded at input and a non-finite ledger ends the run, a wall
+// without its points is refused, options that do not apply or disagree are named, a cut CSV
+// and an absurd disc count are input errors, and `demo` has the absurd-steps guard.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "core/csv.h"
+#include "core/error.h"
+#include "dem/world.h"
+#include "helpers.h"
+#include "run/run.h"
+#include "scenario/scenario.h"
+#include "setups/lattice_release.h"
+#include "setups/release.h"
+#include "setups/setup.h"
+
+namespace fs = std::filesystem;
+using namespace demlab;
+using demlab::test::expect_refused;
+
+namespace {
+
+fs::path temp_dir(const std::string& name) {
+    const fs::path d = fs::temp_directory_path() / ("demlab-guards-" + name + "-" + std::to_string(::getpid()));
+    fs::remove_all(d);
+    return d;
+}
+
+// One disc of 1 cm above a floor from x = -1 to 1 m, the rest of the scenario as given.
+Scenario one_disc(const std::string& disc, const std::string& rest) {
+    Scenario s = parse_scenario("[stop]\nt_max = 1.0\nrest_duration = 0.1\nrest_ke_fraction = 1e-12\n[output]\nsnapshot_interval = 0\n" +
+                                    rest + "\n[[discs]]\nradius = 0.01\n" + disc + "\n[[walls]]\nname = \"floor\"\nstart = [-1.0, 0.0]\nend = [1.0, 0.0]\n",
+                                "one-disc.toml");
+    finish_scenario(s);
+    return s;
+}
+
+// The executable's exit code, its standard error in `err`; stopped after 60 s (exit 124), so
+// that an option accepted by mistake (a flume generated at scale 4, a demo to t = 1e300 s)
+// fails the test instead of hanging it.
+int run_exe(const std::string& args, std::string& err) {
+    const fs::path log = temp_dir("stderr");
+    const int status = std::system(("timeout 60 " + std::string(DEMLAB_EXE) + " " + args + " >/dev/null 2>" + log.string()).c_str());
+    std::ifstream in(log);
+    std::stringstream ss;
+    ss << in.rdbuf();
+    err = ss.str();
+    fs::remove(log);
+    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+void write_text(const fs::path& p, const std::string& text) {
+    std::ofstream(p) << text;
+}
+
+}  // namespace
+
+// Row 8. A DEBRIS disc falls 2 m at the default ceiling debris.dt_max = 0.01 s (4 cm a step
+// at the floor, four radii): the step is cut by speed and radius, and it lands on the floor
+// instead of passing through it and being taken out as "lost".
+TEST(Guards, DebrisDiscDroppedOntoAFloorDoesNotPassThroughIt) {
+    const Scenario s = one_disc("position = [0.0, 2.0]", "[contact]\nlaw = \"debris\"\n[rotation]\nmodel = 1\n");
+    ASSERT_EQ(s.world.debris.dt_max, 0.01);
+    ASSERT_EQ(s.world.lost_discs, LostDiscs::Remove);
+    const fs::path dir = temp_dir("debris-drop");
+    const RunSummary r = run_scenario(s, {dir.string(), false, {}});
+    EXPECT_EQ(r.lost_discs, 0) << "the disc went through the floor";
+    World w = world_of_scenario(s);
+    while (w.time() < 1.0) w.step();
+    ASSERT_EQ(w.disc_count(), 1u);
+    EXPECT_GT(w.positions()[0].y(), 0.5 * w.radii()[0]) << "the disc is below the floor's top";
+    fs::remove_all(dir);
+}
+
+// Row 8. A linear-law disc given 3,000 m/s towards the floor with the automatic step: each
+// step takes it at most a quarter radius, so the contact sees it, and a floor too soft to
+// stop it is an overlap named with the wall (not a disc that left the domain, exit 0).
+TEST(Guards, FastDiscIsSeenByTheFloorItHits) {
+    const Scenario s = one_disc("position = [0.0, 0.5]\nvelocity = [0.0, -3000.0]", "");
+    const fs::path dir = temp_dir("fast");
+    try {
+        const RunSummary r = run_scenario(s, {dir.string(), false, {}});
+        ADD_FAILURE() << "ran to the end with " << r.lost_discs << " lost disc(s)";
+    } catch (const RunError& e) {
+        const std::string msg = e.what();
+        EXPECT_NE(msg.find("overlap"), std::string::npos) << msg;
+        EXPECT_NE(msg.find("floor"), std::string::npos) << msg;
+    }
+    fs::remove_all(dir);
+}
+
+// Row 8. A fixed timestep.dt of 0.1 s: the falling disc moves 10 cm in a step, ten radii; the
+// run is refused naming the disc and the key instead of letting it through the floor.
+TEST(Guards, FixedStepThatCarriesADiscFartherThanHalfItsRadiusIsRefused) {
+    const Scenario s = one_disc("position = [0.0, 0.5]", "[timestep]\nautomatic = false\nfixed = 0.1\n");
+    const fs::path dir = temp_dir("fixed");
+    try {
+        const RunSummary r = run_scenario(s, {dir.string(), false, {}});
+        ADD_FAILURE() << "ran to the end with " << r.lost_discs << " lost disc(s)";
+    } catch (const RunError& e) {
+        const std::string msg = e.what();
+        EXPECT_NE(msg.find("disc 0 moved"), std::string::npos) << msg;
+        EXPECT_NE(msg.find("timestep.dt = 0.1"), std::string::npos) << msg;
+    }
+    fs::remove_all(dir);
+    // the same world at a sound step falls onto the floor and stays there
+    World w = world_of_scenario(one_disc("position = [0.0, 0.5]", "[timestep]\nautomatic = false\nfixed = 1e-5\n"));
+    for (int k = 0; k < 50000; ++k) w.step();
+    ASSERT_EQ(w.disc_count(), 1u);
+    EXPECT_GT(w.positions()[0].y(), 0.5 * w.radii()[0]);
+}
