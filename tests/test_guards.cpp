@@ -118,3 +118,20 @@ TEST(Guards, FixedStepThatCarriesADiscFartherThanHalfItsRadiusIsRefused) {
     ASSERT_EQ(w.disc_count(), 1u);
     EXPECT_GT(w.positions()[0].y(), 0.5 * w.radii()[0]);
 }
+
+// Row 10. A ledger that is not finite (a spin far beyond the input bound, put in behind the
+// scenario's back) ends the run with a RunError; no energy.csv row of inf or nan is written
+// and the run does not finish.
+TEST(Guards, NonFiniteLedgerEndsTheRun) {
+    Scenario s = one_disc("position = [0.0, 0.5]", "");
+    s.discs[0].omega = 1e300;  // 0.5 I omega^2 overflows
+    const fs::path dir = temp_dir("nonfinite");
+    try {
+        run_scenario(s, {dir.string(), false, {}});
+        ADD_FAILURE() << "ran to the end";
+    } catch (const RunError& e) {
+        EXPECT_NE(std::string(e.what()).find("energy ledger is not finite"), std::string::npos) << e.what();
+    }
+    EXPECT_FALSE(fs::exists(dir / "summary.json"));
+    fs::remove_all(dir);
+}
