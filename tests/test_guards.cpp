@@ -119,6 +119,22 @@ TEST(Guards, FixedStepThatCarriesADiscFartherThanHalfItsRadiusIsRefused) {
     EXPECT_GT(w.positions()[0].y(), 0.5 * w.radii()[0]);
 }
 
+// Row 10. Velocities, spins, forces and gravity beyond the bounds are refused with the key;
+// the bounds themselves are accepted.
+TEST(Guards, MagnitudesAreBoundedAtInput) {
+    auto disc = [](const std::string& extra) { one_disc("position = [0.0, 0.5]\n" + extra, ""); };
+    expect_refused([&] { disc("velocity = [1e300, 0.0]"); }, {"discs[0].velocity", "at most 10000 m/s"});
+    expect_refused([&] { disc("omega = 1e300"); }, {"discs[0].omega", "1e+06"});
+    expect_refused([&] { disc("omega = -2e6"); }, {"discs[0].omega"});
+    expect_refused([&] { disc("force = [0.0, 1e300]"); }, {"discs[0].force", "N/m"});
+    expect_refused([&] { parse_scenario("[[discs]]\nposition = [0.0, 0.5]\nradius = 1e300\n", "d.toml"); }, {"discs[0].radius"});
+    expect_refused([&] { one_disc("position = [0.0, 0.5]", "[world]\ngravity = [0.0, -1e300]\n"); }, {"world.gravity", "1000"});
+    expect_refused([&] { one_disc("position = [0.0, 0.5]", "[world]\ngravity = [800.0, -800.0]\n"); }, {"world.gravity"});
+    expect_refused([&] { parse_scenario("[[walls]]\nstart = [0.0, 0.0]\nend = [1.0, 0.0]\nvelocity = [2e4, 0.0]\n", "w.toml"); },
+                   {"walls[0].velocity"});
+    EXPECT_NO_THROW(one_disc("position = [0.0, 0.5]\nvelocity = [1e4, 0.0]\nomega = -1e6\nforce = [0.0, 1e12]", "[world]\ngravity = [0.0, -1e3]\n"));
+}
+
 // Row 10. A ledger that is not finite (a spin far beyond the input bound, put in behind the
 // scenario's back) ends the run with a RunError; no energy.csv row of inf or nan is written
 // and the run does not finish.
@@ -134,4 +150,20 @@ TEST(Guards, NonFiniteLedgerEndsTheRun) {
     }
     EXPECT_FALSE(fs::exists(dir / "summary.json"));
     fs::remove_all(dir);
+}
+
+// Row 11. A wall without one of its points is refused naming the wall and the key, as a disc
+// without its position is.
+TEST(Guards, WallWithoutItsPointsIsRefused) {
+    expect_refused([] { parse_scenario("[[walls]]\nend = [1.0, 0.0]\n", "w.toml"); }, {"walls[0]", "missing key 'start'"});
+    expect_refused([] { parse_scenario("[[walls]]\nstart = [1.0, 0.0]\n", "w.toml"); }, {"walls[0]", "missing key 'end'"});
+    expect_refused([] { parse_scenario("[[walls]]\ntype = \"arc\"\nradius = 1.0\nstart_deg = 0\nend_deg = 90\n", "w.toml"); },
+                   {"walls[0]", "missing key 'centre'"});
+    expect_refused([] { parse_scenario("[[walls]]\ntype = \"arc\"\ncentre = [0.0, 1.0]\nstart_deg = 0\nend_deg = 90\n", "w.toml"); },
+                   {"walls[0]", "missing key 'radius'"});
+    // an arc sweeps at most a full circle
+    expect_refused([] { parse_scenario("[[walls]]\ntype = \"arc\"\ncentre = [0.0, 1.0]\nradius = 1.0\nstart_deg = 0\nend_deg = 720\n", "w.toml"); },
+                   {"walls[0]", "sweeps 720 deg", "(0, 360]"});
+    EXPECT_NO_THROW(parse_scenario("[[walls]]\ntype = \"arc\"\ncentre = [0.0, 1.0]\nradius = 1.0\nstart_deg = 0\nend_deg = 360\n", "w.toml"));
+    EXPECT_NO_THROW(parse_scenario("[[walls]]\nstart = [0.0, 0.0]\nend = [1.0, 0.0]\n", "w.toml"));
 }
