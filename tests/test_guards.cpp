@@ -167,3 +167,40 @@ TEST(Guards, WallWithoutItsPointsIsRefused) {
     EXPECT_NO_THROW(parse_scenario("[[walls]]\ntype = \"arc\"\ncentre = [0.0, 1.0]\nradius = 1.0\nstart_deg = 0\nend_deg = 360\n", "w.toml"));
     EXPECT_NO_THROW(parse_scenario("[[walls]]\nstart = [0.0, 0.0]\nend = [1.0, 0.0]\n", "w.toml"));
 }
+
+// Row 12. A release mass file or bonds given where they do not apply are refused with the key.
+TEST(Guards, KeysThatDoNotApplyAreRefused) {
+    expect_refused([] {
+        Scenario s = parse_scenario("[release]\nfrom_file = \"mass.csv\"\n[[discs]]\nposition = [0.0, 0.5]\nradius = 0.01\n", "d.toml");
+        finish_scenario(s);
+    }, {"release.from_file", "does not apply"});
+    expect_refused([] {
+        Scenario s = parse_scenario("[cohesion]\nbonds = [[0, 1]]\n[[discs]]\nposition = [0.0, 0.5]\nradius = 0.01\n"
+                                    "[[discs]]\nposition = [0.02, 0.5]\nradius = 0.01\n", "d.toml");
+        finish_scenario(s);
+    }, {"cohesion.bonds", "cohesion.enabled"});
+}
+
+// Row 12. Command-line options that do not apply to the scenario, or that a --set of the
+// same key contradicts, are refused (exit 2) naming them.
+TEST(Guards, RunOptionsThatDoNotApplyOrDisagreeAreRefused) {
+    const fs::path dir = temp_dir("opts");
+    fs::create_directories(dir);
+    const fs::path sc = dir / "two.toml";
+    write_text(sc, "[[discs]]\nposition = [0.0, 0.5]\nradius = 0.01\n[[walls]]\nstart = [-1.0, 0.0]\nend = [1.0, 0.0]\n");
+    const std::string out = " --no-plots --out " + (dir / "run").string();
+    std::string err;
+    EXPECT_EQ(run_exe("run " + sc.string() + " --scale 4" + out, err), 2);
+    EXPECT_NE(err.find("--scale does not apply"), std::string::npos) << err;
+    EXPECT_EQ(run_exe("run " + sc.string() + " --variant II" + out, err), 2);
+    EXPECT_NE(err.find("--variant does not apply"), std::string::npos) << err;
+    EXPECT_EQ(run_exe("run " + sc.string() + " --release-from " + sc.string() + out, err), 2);
+    EXPECT_NE(err.find("release.from_file (--release-from)"), std::string::npos) << err;
+    const std::string geometry_a = std::string(DEMLAB_SOURCE_DIR) + "/scenarios/geometry-A.toml";
+    EXPECT_EQ(run_exe("run " + geometry_a + " --scale 20 --set release.scale=4" + out, err), 2);
+    EXPECT_NE(err.find("--scale and --set release.scale=4 both set release.scale"), std::string::npos) << err;
+    EXPECT_EQ(run_exe("run " + geometry_a + " --model 2 --set ' rotation.model = 3'" + out, err), 2);
+    EXPECT_NE(err.find("--model and --set"), std::string::npos) << err;
+    EXPECT_FALSE(fs::exists(dir / "run"));
+    fs::remove_all(dir);
+}

@@ -365,6 +365,9 @@ void finish_dan(Scenario& s) {
     }
 }
 
+// Bonds listed in a [cohesion] that is not enabled would be silently unused.
+static bool c_enabled_or_no_bonds(const Scenario& s) { return s.cohesion.enabled || s.cohesion.bonds.empty(); }
+
 // The bonds' keys together (COHESION.md section 7's choices).
 void finish_cohesion(Scenario& s) {
     const std::string where = s.source + ": ";
@@ -505,6 +508,12 @@ void finish_scenario(Scenario& s) {
     finish_dan(s);
     finish_lattice(s);
     finish_cohesion(s);
+    if (!r.from_file.empty() && (!has_release(s) || s.lattice_release.enabled))
+        throw InputError(where + "release.from_file (--release-from) = \"" + r.from_file + "\": does not apply: " +
+                         (s.lattice_release.enabled ? "the discs are a [lattice_release]"
+                                                    : "the discs are given ([[discs]]), not a release mass"));
+    if (!c_enabled_or_no_bonds(s))
+        throw InputError(where + "cohesion.bonds: given without cohesion.enabled = true; the bonds would not be made");
     if (has_release(s) && !(r.r_min <= r.r_max))
         throw InputError(where + "release.r_min = " + format_number(r.r_min) + " m must be <= release.r_max = " +
                          format_number(r.r_max) + " m");
