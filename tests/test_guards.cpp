@@ -204,3 +204,66 @@ TEST(Guards, RunOptionsThatDoNotApplyOrDisagreeAreRefused) {
     EXPECT_FALSE(fs::exists(dir / "run"));
     fs::remove_all(dir);
 }
+
+// Row 14. A CSV whose last row is cut (a full disk, a killed writer) is an input error naming
+// the file and the line, not an out-of-range access in `demlab plot`.
+TEST(Guards, CutCsvIsAnInputErrorNamingFileAndLine) {
+    const fs::path dir = temp_dir("csv");
+    fs::create_directories(dir);
+    const fs::path f = dir / "forces.csv";
+    write_text(f, "t_s,fx_N_per_m,fy_N_per_m\n0,1,2\n0.1,1.5\n");
+    expect_refused([&] { read_csv_table(f.string()); }, {"forces.csv:3", "2 cells, the header has 3"});
+    write_text(f, "t_s,fx_N_per_m,fy_N_per_m\n0,1,2\n0.1,1.5,2.");
+    expect_refused([&] { read_csv_table(f.string()); }, {"forces.csv:3", "no line end"});
+    write_text(f, "t_s,fx_N_per_m,fy_N_per_m\n0,1,2\n0.1,1.5,2.5\n");
+    EXPECT_EQ(read_csv_table(f.string()).rows.size(), 2u);
+    // the executable: plot on a run folder with a cut series
+    fs::create_directories(dir / "run");
+    write_text(dir / "run" / "scenario.toml", "[[discs]]\nposition = [0.0, 0.5]\nradius = 0.01\n");
+    write_text(dir / "run" / "forces.csv", "t_s,fx_slope_N_per_m\n0,1\n0.1");
+    std::string err;
+    const int code = run_exe("plot " + (dir / "run").string(), err);
+    if (err.find("gnuplot") == std::string::npos) {  // (without gnuplot, plot stops before reading)
+        EXPECT_EQ(code, 2) << err;
+        EXPECT_EQ(err.find("_M_range_check"), std::string::npos) << err;
+    }
+    fs::remove_all(dir);
+}
+
+// Row 14. A release of micrometre discs is refused from the area and the radii before any
+// disc is allocated (it ended in std::bad_alloc), naming the keys; the lattice too.
+TEST(Guards, AbsurdDiscCountsAreRefusedBeforeAllocation) {
+    Scenario s = load_scenario(std::string(DEMLAB_SOURCE_DIR) + "/scenarios/geometry-A.toml");
+    apply_override(s, "release.r_min=1e-5");
+    apply_override(s, "release.r_max=2e-5");
+    apply_override(s, "rotation.u_rr=1e-6");
+    finish_scenario(s);
+    expect_refused([&] { generate_release(s); }, {"release.r_min", "release.r_max", "more than 2e+07"});
+    Scenario l = parse_scenario("[lattice_release]\nregion = [[0.0, 0.0], [100.0, 0.0], [100.0, 100.0], [0.0, 100.0]]\n"
+                                "origin = [0.0, 0.0]\nr_min = 1e-5\n", "lattice.toml");
+    finish_scenario(l);
+    expect_refused([&] { lattice_mass(l, {}); }, {"lattice_release", "spacing", "more than 2e+07"});
+}
+
+// Discs of a --release-from file that overlap beyond world.max_overlap_ratio are named with
+// the file (exit 2) instead of stopping the first step as a blow-up (exit 3).
+TEST(Guards, OverlappingDiscsInAReleaseFileAreNamed) {
+    Scenario s = load_scenario(std::string(DEMLAB_SOURCE_DIR) + "/scenarios/geometry-A.toml");
+    apply_override(s, "release.scale=20");
+    apply_override(s, "stop.t_max=0.01");
+    apply_override(s, "stop.rest_duration=0.005");
+    apply_override(s, "output.snapshot_interval=0");
+    finish_scenario(s);
+    ReleaseMass m = generate_release(s);
+    for (const WallDef& wd : make_setup(s)->release_box().walls) m.box_walls.push_back({wd.p0, wd.p1});
+    ASSERT_GT(m.pos.size(), 10u);
+    m.pos[7] = m.pos[3] + Vec2(0.1 * m.radius[3], 0.0);  // almost on top of disc 3
+    const fs::path dir = temp_dir("overlap");
+    fs::create_directories(dir);
+    const fs::path file = dir / "release.csv";
+    save_release(m, file.string());
+    s.release.from_file = file.string();
+    expect_refused([&] { run_scenario(s, {(dir / "run").string(), false, {}}); }, {"release.csv", "discs 3 and 7", "overlap"});
+    EXPECT_FALSE(fs::exists(dir / "run"));
+    fs::remove_all(dir);
+}

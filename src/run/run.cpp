@@ -93,6 +93,9 @@ ReleaseMass start_mass(const Scenario& s, const Setup& setup, BinaryReader* rest
                                  " differs by " + format_number(d) +
                                  " m): it fits another geometry. Generate it for this scenario (omit --release-from)");
         }
+        // discs that overlap more than the run allows would stop it at its first step, blamed
+        // on the step: named here, with the file
+        refuse_overlapping_discs(mass, s.world.max_overlap_ratio, s.release.from_file);
     } else {
         if (terminal) std::fprintf(stderr, "generating the release mass ...\n");
         mass = generate_release(s);

@@ -51,3 +51,39 @@ def test_world_step_raises_run_error_on_energy_growth(tmp_path):
     w = demlab.World.from_scenario(two_discs(tmp_path, 0.5))
     w.step(20000)
     assert w.disc_count == 2
+
+
+def test_a_cut_series_is_an_input_error_naming_file_and_line(cli_run, tmp_path):
+    run = str(tmp_path / "run")
+    shutil.copytree(cli_run, run)
+    forces = os.path.join(run, "forces.csv")
+    with open(forces) as f:
+        text = f.read()
+    lines = text.splitlines()
+    with open(forces, "w") as f:  # the last row cut in its middle, without its line end
+        f.write(text[: len(text) - 1 - len(lines[-1]) // 2])
+    with pytest.raises(demlab.InputError, match=r"forces\.csv:%d: the last line has no line end" % len(lines)):
+        demlab.RunFolder(run).forces
+    with open(forces, "w") as f:  # a row with a cell missing
+        f.write("\n".join(lines[:-1] + [",".join(lines[-1].split(",")[:-1])]) + "\n")
+    with pytest.raises(demlab.InputError, match=r"forces\.csv:%d: .* cells, the header has" % len(lines)):
+        demlab.RunFolder(run).forces
+    assert len(demlab.RunFolder(cli_run).forces["t_s"]) == len(lines) - 1
+
+
+def test_run_without_out_uses_runs_name(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    sc = demlab.load_scenario(_small_file(tmp_path))
+    folder = demlab.run(sc, None, plots=False)
+    assert not (tmp_path / "None").exists()
+    assert (tmp_path / "runs" / sc.name / "summary.json").is_file()
+    assert os.path.samefile(folder.path, tmp_path / "runs" / sc.name)
+    with pytest.raises(demlab.InputError, match="output folder needs a name"):
+        demlab.run(sc, "", plots=False)
+
+
+def _small_file(tmp_path):
+    path = tmp_path / "small.toml"
+    path.write_text('[scenario]\nname = "small"\n[stop]\nt_max = 0.01\nrest_duration = 0.005\n[output]\nsnapshot_interval = 0\n'
+                    "[[discs]]\nposition = [0.0, 0.02]\nradius = 0.01\n[[walls]]\nstart = [-1.0, 0.0]\nend = [1.0, 0.0]\n")
+    return str(path)
