@@ -245,6 +245,19 @@ TEST(Guards, AbsurdDiscCountsAreRefusedBeforeAllocation) {
     expect_refused([&] { lattice_mass(l, {}); }, {"lattice_release", "spacing", "more than 2e+07"});
 }
 
+// Row 15 and the seed. `demo --t-end 1e300` is refused before its folder is made (it ran
+// until killed), and a negative seed is refused instead of wrapping to 2^64 - 1.
+TEST(Guards, DemoRefusesAbsurdRunsAndNegativeSeeds) {
+    const fs::path dir = temp_dir("demo");
+    std::string err;
+    EXPECT_EQ(run_exe("demo --t-end 1e300 --out " + dir.string(), err), 2);
+    EXPECT_NE(err.find("demo --t-end"), std::string::npos) << err;
+    EXPECT_FALSE(fs::exists(dir));
+    EXPECT_EQ(run_exe("demo --seed -1 --out " + dir.string(), err), 2);
+    EXPECT_NE(err.find("--seed -1"), std::string::npos) << err;
+    EXPECT_FALSE(fs::exists(dir));
+}
+
 // Discs of a --release-from file that overlap beyond world.max_overlap_ratio are named with
 // the file (exit 2) instead of stopping the first step as a blow-up (exit 3).
 TEST(Guards, OverlappingDiscsInAReleaseFileAreNamed) {

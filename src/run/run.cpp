@@ -36,9 +36,6 @@ namespace demlab {
 
 namespace {
 
-// Steps a run may take at most: the real sand size to rest is about 1e7.
-constexpr double kMaxRunSteps = 1e10;
-
 // The release mass: restored from a checkpoint (the discs as they were at the start), read
 // from a saved mass (release.from_file), or generated, in space order (the caller saves it to
 // release.csv once the run folder exists).
