@@ -15,7 +15,9 @@
 #include "core/interrupt.h"
 #include "output/plot.h"
 #include "output/render_run.h"
+#include "run/measures.h"
 #include "run/run.h"
+#include "run/solver.h"
 #include "scenario/key_registry.h"
 #include "scenario/scenario.h"
 #include "setups/setup.h"
@@ -117,9 +119,35 @@ void run(PyScenario sc, const std::string& out, int threads, bool force, bool fr
     }
 }
 
-// A finalized world of a scenario, owned by Python.
+// A finalized world of a scenario, owned by Python, with the run loop's energy watch
+// (run.cpp): every kEnergyWatchSteps steps, when a disc is lost and when a step fails, a
+// ledger that gained more than stop.max_energy_gain times the energy put in (or is not
+// finite) raises RunError, as `demlab run` exits 3.
 struct PyWorld {
     std::unique_ptr<World> w;
+    double e0 = 0.0, noise = 0.0, max_gain = 1.0, peak_put_in = 0.0;
+    DissipationPeaks dissipation;  // (a damper that makes energy is a blow-up there too)
+    size_t lost_seen = 0;
+
+    void watch() {
+        const DemSolver solver(*w);
+        check_energy_growth(solver, e0, max_gain, noise, peak_put_in, dissipation);
+    }
+    void step(long n) {
+        for (long k = 0; k < n; ++k) {
+            try {
+                w->step();
+            } catch (const RunError&) {
+                watch();  // a lost disc or an overlap after energy was created: named as a runaway
+                throw;
+            }
+            if (w->lost_discs().size() != lost_seen) {
+                lost_seen = w->lost_discs().size();
+                watch();
+            }
+            if (w->step_count() % kEnergyWatchSteps == 0) watch();
+        }
+    }
 };
 
 // A read-only numpy view of a world's array, kept alive by the Python World (base).
@@ -217,12 +245,17 @@ PYBIND11_MODULE(_demlab, m) {
                 PyWorld w;
                 py::gil_scoped_release nogil;
                 w.w.reset(new World(world_of_scenario(s)));  // built in place, not moved
+                w.e0 = w.w->energy().balance();
+                w.dissipation = DissipationPeaks(w.w->energy());
+                w.noise = ledger_noise(*w.w, s.world.gravity.norm());
+                w.max_gain = s.stop.max_energy_gain;
+                w.lost_seen = w.w->lost_discs().size();
                 return w;
             }, py::arg("scenario"), py::arg("threads") = 1)
         .def("step", [](PyWorld& w, long n) {
                 if (n < 0) throw InputError("World.step(" + std::to_string(n) + "): the number of steps must be >= 0");
                 py::gil_scoped_release nogil;
-                w.w->run(n);
+                w.step(n);
             }, py::arg("n") = 1)
         .def_property_readonly("time", [](const PyWorld& w) { return w.w->time(); })
         .def_property_readonly("dt", [](const PyWorld& w) { return w.w->dt(); })

@@ -94,7 +94,7 @@ TEST(Validation, WorldSettings) {
 // The integrator's one-test check (inside the finite domain) catches a disc that leaves the
 // domain and a disc whose state overflows, and tells them apart.
 TEST(BlowUp, LostAndNonFiniteDiscsStopTheRun) {
-    const auto run_one = [](double gravity_y, double dt) -> std::string {
+    const auto run_one = [](double gravity_y, double dt, double y0) -> std::string {
         WorldDef def;
         def.gravity = Vec2(0, gravity_y);
         def.timestep.automatic = false;
@@ -103,7 +103,7 @@ TEST(BlowUp, LostAndNonFiniteDiscsStopTheRun) {
         def.domain_hi = Vec2(1, 1);
         World w(def);
         const int m = w.add_material(material(0.3));
-        w.add_disc({Vec2(0, 0.5), 0.001, Vec2::Zero(), 0, 0, m});
+        w.add_disc({Vec2(0, y0), 0.001, Vec2::Zero(), 0, 0, m});
         w.add_disc({Vec2(0.5, 0.5), 0.001, Vec2::Zero(), 0, 0, m});
         w.finalize();
         try {
@@ -113,10 +113,12 @@ TEST(BlowUp, LostAndNonFiniteDiscsStopTheRun) {
         }
         return "";
     };
-    const std::string lost = run_one(-1e3, 0.1);  // falls 10 m in the first step
+    // (a disc that leaves the domain in one long step is a disc that moved more than half its
+    // radius: Guards.FixedStepThatCarriesADiscFartherThanHalfItsRadiusIsRefused)
+    const std::string lost = run_one(-100.0, 1e-3, -0.99995);  // 0.1 mm below the domain in the first step
     EXPECT_NE(lost.find("lost disc"), std::string::npos) << lost;
     EXPECT_NE(lost.find("disc 0"), std::string::npos) << lost;
-    const std::string overflow = run_one(-1.7e308, 10.0);  // v = -inf after one step
+    const std::string overflow = run_one(-1.7e308, 10.0, 0.5);  // v = -inf after one step
     EXPECT_NE(overflow.find("non-finite"), std::string::npos) << overflow;
 }
 
@@ -129,8 +131,9 @@ TEST(BlowUp, SameDiagnosisOnOneAndTwoThreads) {
     for (int threads : {1, 2}) {
         WorldDef def = db9k_world_def();
         def.threads = threads;
-        def.timestep.fixed = 2e-5;  // 4 times DB-9k's step: an overlap beyond half a radius at step 3,
-                                     // between discs 559 and 560 (the third block of 256)
+        def.timestep.fixed = 2e-5;  // 4 times DB-9k's step: disc 560 (the third block of 256) thrown
+                                     // more than half its radius in step 2 (an overlap beyond half a
+                                     // radius with disc 559 would stop step 3)
         World w(def);
         build_db9k(w, discs);
         w.finalize();
@@ -140,7 +143,7 @@ TEST(BlowUp, SameDiagnosisOnOneAndTwoThreads) {
             msg[threads - 1] = e.what();
         }
     }
-    EXPECT_NE(msg[0].find("blow-up: overlap"), std::string::npos) << msg[0];
+    EXPECT_NE(msg[0].find("blow-up: disc 560 moved"), std::string::npos) << msg[0];
     EXPECT_EQ(msg[0], msg[1]);
 }
 

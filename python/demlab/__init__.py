@@ -109,9 +109,10 @@ def key_names():
     return _demlab.key_names()
 
 
-def run(scenario, out, threads=1, progress=None, force=False, frames=False, plots=True, checkpoint_every=0.0):
+def run(scenario, out=None, threads=1, progress=None, force=False, frames=False, plots=True, checkpoint_every=0.0):
     """Runs a scenario (a demlab.Scenario or a file path) into the run folder `out`, as `demlab
     run` does: the same files with the same bytes, for any thread count. Returns a RunFolder.
+    out: a path, or None for runs/<scenario.name> (as the executable without --out).
 
     progress: None, or a callable given (t, t_max, steps_per_second) about four times a second
     (s, s, 1/s). frames: render a PNG at every snapshot (out/frames). plots: the gnuplot plots
@@ -121,7 +122,15 @@ def run(scenario, out, threads=1, progress=None, force=False, frames=False, plot
     """
     if not isinstance(scenario, Scenario):
         scenario = load_scenario(scenario)
-    _demlab.run(scenario._compiled, str(out), int(threads), bool(force), bool(frames), bool(plots),
+    if out is None:  # the executable's default: runs/<scenario.name>
+        out = _os.path.join("runs", scenario.name)
+    elif not isinstance(out, (str, bytes, _os.PathLike)):
+        raise InputError("run(out=%r): the output folder must be a path (str or os.PathLike) or None for runs/<scenario.name>"
+                         % (out,))
+    out = _os.fsdecode(_os.fspath(out))
+    if not out:
+        raise InputError("run(out=''): an output folder needs a name")
+    _demlab.run(scenario._compiled, out, int(threads), bool(force), bool(frames), bool(plots),
                 float(checkpoint_every), progress)
     return RunFolder(out)
 
@@ -188,10 +197,22 @@ class World:
 
 def _read_csv(path):
     with open(path, newline="") as f:
-        rows = list(_csv.reader(f))
+        text = f.read()
+    rows = list(_csv.reader(text.splitlines()))
     if not rows:
         raise InputError("%s: an empty CSV file" % path)
-    head, body = rows[0], rows[1:]
+    # a run writes whole lines: a last line without its line end, or a row whose cells do not
+    # match the header, is a file cut short (a full disk, a killed writer)
+    if not text.endswith("\n"):
+        raise InputError("%s:%d: the last line has no line end: the file is cut short" % (path, len(rows)))
+    head, body = rows[0], []
+    for line, r in enumerate(rows[1:], start=2):
+        if not r:
+            continue
+        if len(r) != len(head):
+            raise InputError("%s:%d: %d cells, the header has %d: the row is cut short or malformed"
+                             % (path, line, len(r), len(head)))
+        body.append(r)
     out = {}
     for j, name in enumerate(head):
         col = [r[j] for r in body]

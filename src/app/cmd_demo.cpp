@@ -15,6 +15,7 @@
 #include "core/progress.h"
 #include "core/validate.h"
 #include "dem/world.h"
+#include "run/run.h"
 
 namespace demlab {
 
@@ -24,7 +25,7 @@ struct DemoOptions {
     bool force = false;
     double t_end = 1.0;
     int model = 3;
-    unsigned long long seed = 1;
+    long long seed = 1;  // signed: "-1" would wrap to 2^64 - 1 in an unsigned option
 };
 
 // Uniform in [0, 1) from the top 53 bits: the same numbers on every platform (the standard
@@ -33,7 +34,7 @@ double uniform01(std::mt19937_64& rng) { return double(rng() >> 11) * 0x1.0p-53;
 
 int demo(const DemoOptions& o) {
     require_positive("demo --t-end", o.t_end, "s");
-    prepare_output_dir(o.out, o.force);
+    if (o.seed < 0) throw InputError("demo --seed " + std::to_string(o.seed) + ": must be an integer >= 0");
     const double width = 0.10, height = 0.20, r_min = 0.002, r_max = 0.003, t_settle = 0.3;
 
     WorldDef def;
@@ -42,7 +43,7 @@ int demo(const DemoOptions& o) {
     def.domain_hi = Vec2(2.0, 1.0);
     World world(def);
     const int sand = world.add_material(MaterialDef{});
-    std::mt19937_64 rng(o.seed);
+    std::mt19937_64 rng(static_cast<unsigned long long>(o.seed));
     const double pitch = 2.0 * r_max * 1.02;
     // hexagonal rows (each row shifted by half a pitch), so the column can collapse
     int row = 0;
@@ -69,6 +70,12 @@ int demo(const DemoOptions& o) {
     world.add_wall(gate);
     world.set_local_damping(0.7);
     world.finalize();
+    // the absurd-steps guard of `demlab run` (run.cpp), before the folder is made: a --t-end
+    // of 1e300 s ran until killed
+    if (o.t_end / world.dt() > kMaxRunSteps)
+        throw InputError("demo --t-end " + format_number(o.t_end) + " s would take " + format_number(o.t_end / world.dt()) +
+                         " steps of " + format_number(world.dt()) + " s (more than " + format_number(kMaxRunSteps) + ")");
+    prepare_output_dir(o.out, o.force);
 
     SeriesFile series_file;  // checked writes, a final name only when complete
     series_file.open(o.out + "/series.csv");

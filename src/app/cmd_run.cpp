@@ -81,6 +81,21 @@ int run_command(const RunCliOptions& o) {
     if (!std::isfinite(o.checkpoint_every)) throw InputError("--checkpoint-every nan: must be seconds in [0, 1e7]");
     if (o.out_given && o.out.empty()) throw InputError("--out '': an output folder needs a name");
     Scenario s = load_scenario(o.scenario);
+    // an option and a --set of the key it sets: which one was meant is not ours to guess
+    const std::pair<bool, const char*> option_keys[] = {{o.model != 0, "rotation.model"}, {!o.variant.empty(), "release.variant"},
+                                                       {o.scale != 0, "release.scale"}, {!o.solver.empty(), "scenario.solver"},
+                                                       {!o.release_from.empty(), "release.from_file"}};
+    const char* option_names[] = {"--model", "--variant", "--scale", "--solver", "--release-from"};
+    for (const std::string& a : o.set) {
+        const size_t eq = a.find('=');
+        std::string key = a.substr(0, eq);
+        while (!key.empty() && (key.back() == ' ' || key.back() == '\t')) key.pop_back();
+        while (!key.empty() && (key.front() == ' ' || key.front() == '\t')) key.erase(key.begin());
+        for (size_t k = 0; k < std::size(option_keys); ++k)
+            if (option_keys[k].first && key == option_keys[k].second)
+                throw InputError(std::string(option_names[k]) + " and --set " + a + " both set " + option_keys[k].second +
+                                 ": give it once");
+    }
     if (o.model) apply_override(s, "rotation.model=" + std::to_string(o.model));
     if (!o.variant.empty()) apply_override(s, "release.variant=\"" + o.variant + "\"");
     if (o.scale) apply_override(s, "release.scale=" + std::to_string(o.scale));
@@ -88,6 +103,14 @@ int run_command(const RunCliOptions& o) {
     for (const std::string& a : o.set) apply_override(s, a);
     if (!o.solver.empty()) apply_override(s, "scenario.solver=\"" + o.solver + "\"");
     finish_scenario(s);
+    // the release options apply to a generated release mass (a [flume], [dam_break] or a
+    // terrain's release polygon): on explicit discs or a lattice they would be silently unused
+    const std::string no_box = s.lattice_release.enabled ? ": its discs are a [lattice_release] (lattice_release.r_min, r_max)"
+                                                         : ": its discs are given ([[discs]]), not generated in a release box";
+    if (o.scale && (!has_release(s) || s.lattice_release.enabled))
+        throw InputError("--scale does not apply to " + o.scenario + no_box);
+    if (!o.variant.empty() && !s.flume.enabled)
+        throw InputError("--variant does not apply to " + o.scenario + ": the variants are a [flume]'s gate (removed, or lifted)");
     if (s.solver == "dan" && (o.checkpoint_every > 0 || o.model || !o.release_from.empty()))
         throw InputError(std::string("--solver dan: ") +
                          (o.checkpoint_every > 0 ? "--checkpoint-every (a DAN run takes seconds and writes no checkpoint)"

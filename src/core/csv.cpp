@@ -68,7 +68,14 @@ CsvTable read_csv_table(const std::string& path) {
     while (std::getline(in, line)) {
         ++row;
         if (line.empty()) continue;
+        // a run writes whole lines: a last line without its line end, or a row with fewer or
+        // more cells than the header, is a file cut short (a full disk, a killed writer)
+        if (in.eof())
+            throw InputError(path + ":" + std::to_string(row) + ": the last line has no line end: the file is cut short");
         const std::vector<std::string> cells = csv_cells(line);
+        if (cells.size() != t.names.size())
+            throw InputError(path + ":" + std::to_string(row) + ": " + std::to_string(cells.size()) + " cells, the header has " +
+                             std::to_string(t.names.size()) + ": the row is cut short or malformed");
         std::vector<double> v;
         v.reserve(cells.size());
         for (const std::string& c : cells) {

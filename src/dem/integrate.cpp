@@ -238,6 +238,15 @@ void World::integrate_finish() {
                         std::to_string(steps_) + ", t = " + format_number(time_) +
                         " s. Likely cause: a time step too large for the stiffness");
     };
+    // the step's largest speed: the clearance test's approach (below), the travel check and
+    // the next automatic step's cap (World::capped_by_travel)
+    double speed = 0.0, extent = 0.0;
+    for (const ChunkNote& note : chunk_note_) {
+        speed = std::max(speed, note.speed);
+        extent = std::max(extent, note.extent);
+    }
+    speed_l1_ = speed;
+    check_travel();  // before a lost disc is blamed on a wall's free end: it may have crossed one
     bool any_fault = false;
     for (const ChunkNote& note : chunk_note_) {
         const size_t i = note.fault;
@@ -274,11 +283,6 @@ void World::integrate_finish() {
     // so by at most (|vx| + |vy|) dt (1 + 2u) + u (|x| + |y|) in the plane (|.|_2 <= |.|_1).
     // The factors below are generous against the rounding of this sum. A range that was not
     // integrated met a fault, and the run stops above.
-    double speed = 0.0, extent = 0.0;
-    for (const ChunkNote& note : chunk_note_) {
-        speed = std::max(speed, note.speed);
-        extent = std::max(extent, note.extent);
-    }
     const double moved = speed * dt_ * (1.0 + 0x1p-40) + 0x1p-50 * extent;
     approach_ += 2.0 * moved;
     // Rebase now and then: clearances are floats, and the slack of PairSkip is a fraction

@@ -24,6 +24,7 @@ long World::disc_index(long id) const {
 void World::take_out_lost_discs() {
     std::vector<size_t> gone;
     gone.swap(lost_pending_);  // ascending: the scan's order (integrate_finish)
+    r_min_stale_ = true;
     const EnergyReport before = energy();
     for (size_t i : gone) {
         const double kinetic = 0.5 * mass_[i] * vel_[i].squaredNorm() + 0.5 * inertia_[i] * omega_[i] * omega_[i];

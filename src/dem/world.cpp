@@ -13,6 +13,7 @@
 #include "core/thread_pool.h"
 #include "dem/timestep.h"
 #include "core/validate.h"
+#include "dem/world_messages.h"
 
 namespace demlab {
 
@@ -65,6 +66,7 @@ int World::add_material(const MaterialDef& m) {
 
 int World::add_disc(const DiscDef& d) {
     const std::string where = "disc[" + std::to_string(pos_.size()) + "]";
+    r_min_stale_ = true;
     require_finite(where + ".position", d.pos, "m");
     require_positive(where + ".radius", d.radius, "m");
     require_finite(where + ".velocity", d.vel, "m/s");
@@ -113,6 +115,7 @@ void World::set_radius(int i, double r) {
     const size_t k = size_t(i);
     const double mass = materials_[size_t(material_[k])].density * kPi * r * r;
     radius_[k] = r;
+    r_min_stale_ = true;
     discs_may_have_escaped_ = true;
     forget_clearances();  // a larger disc may touch a pair found clear
     mass_[k] = mass;
@@ -284,7 +287,9 @@ void World::finalize() {
         // pass depends on the step)
         dt_ = def_.law == ContactLawKind::Debris ? def_.debris.dt_max : 0.0;
         compute_forces();
-        dt_ = automatic_dt();
+        speed_l1_ = 0.0;
+        for (const Vec2& v : vel_) speed_l1_ = std::max(speed_l1_, std::abs(v.x()) + std::abs(v.y()));
+        dt_ = capped_by_travel(automatic_dt());
     } else {
         dt_ = def_.timestep.fixed;
     }
@@ -436,9 +441,46 @@ void World::step() {
     if (def_.timestep.automatic) {
         double best_sq = INFINITY;
         for (const ChunkNote& note : chunk_note_) best_sq = std::min(best_sq, note.dt_sq);
-        dt_ = step_from_critical_squared(best_sq);
+        dt_ = capped_by_travel(step_from_critical_squared(best_sq));
     }
     if (!lost_pending_.empty()) take_out_lost_discs();
+}
+
+double World::smallest_radius() {
+    if (r_min_stale_) {
+        r_min_ = radius_.empty() ? 0.0 : *std::min_element(radius_.begin(), radius_.end());
+        r_min_stale_ = false;
+    }
+    return r_min_;
+}
+
+// The automatic step (the rule's, or DEBRIS' ceiling) shortened when the fastest disc would
+// move more than kTravelCap of the smallest radius in it: a disc in free flight at DEBRIS'
+// 0.01 s, or one given 3,000 m/s, would otherwise go through a wall between two steps.
+// (|vx| + |vy| >= |v|: the cap is on the safe side.) Binds only then: otherwise dt itself.
+double World::capped_by_travel(double dt) {
+    const double reach = kTravelCap * smallest_radius();
+    if (speed_l1_ * dt > reach && reach > 0.0) return reach / speed_l1_;
+    return dt;
+}
+
+// With a fixed step, a disc that moved more than kMaxTravel of its radius in the last step
+// may have crossed a wall (or another disc) without a contact ever seeing it: the run stops,
+// naming it. One comparison a step; the scan only when the largest speed trips it. (The
+// automatic step is cut instead, capped_by_travel: a sound first step of a bonded pair
+// pulled from rest moves 0.68 of a radius, Cohesion.PairStretchedByForce.)
+void World::check_travel() {
+    if (def_.timestep.automatic || !(speed_l1_ * dt_ > kMaxTravel * smallest_radius())) return;
+    for (size_t i = 0; i < pos_.size(); ++i) {
+        const double moved = vel_[i].norm() * dt_;
+        if (!(moved > kMaxTravel * radius_[i]) || !std::isfinite(moved)) continue;
+        const std::string cause = "a time step too large for its speed (timestep.dt = " + format_number(dt_) +
+                                  " s: use a smaller fixed step or the automatic one, timestep.automatic = true)";
+        throw RunError("blow-up: disc " + std::to_string(id_[i]) + " moved " + format_number(moved) + " m in one step (speed " +
+                       format_number(vel_[i].norm()) + " m/s), more than " + format_number(kMaxTravel) + " of its radius " +
+                       format_number(radius_[i]) + " m, at " + where_disc(steps_, time_, id_[i], pos_[i]) +
+                       ": it can pass through a wall or a disc unseen. Likely cause: " + cause);
+    }
 }
 
 void World::run(long steps) {

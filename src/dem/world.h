@@ -530,6 +530,19 @@ private:
         bool escaped = false;       // a disc left its fat box
     };
     std::vector<ChunkNote> chunk_note_;
+    // No disc may cross a wall between two steps unseen (integrate_finish, World::step): the
+    // automatic step is kept so that the fastest disc moves at most kTravelCap of the
+    // smallest radius, and with a fixed step a disc that moved more than kMaxTravel of its
+    // radius in one step stops the run. A sound run's discs move far less, so neither changes
+    // a bit of one (the flume and DB-9k regressions).
+    static constexpr double kMaxTravel = 0.5;
+    static constexpr double kTravelCap = 0.25;
+    double speed_l1_ = 0.0;        // m/s, the largest |vx| + |vy| after the last step
+    double r_min_ = 0.0;           // m, the smallest radius (r_min_stale_: recompute first)
+    bool r_min_stale_ = true;
+    double smallest_radius();
+    double capped_by_travel(double dt);
+    void check_travel();
     bool discs_may_have_escaped_ = true;  // false when integrate_discs() saw every disc inside its fat box
     std::vector<DiscContact> dd_, dd_scratch_;
     // The AVX2 pass' clearance test (PairSkip, pair_kernel.h): per disc-disc contact, the

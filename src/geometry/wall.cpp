@@ -33,6 +33,11 @@ void validate(const WallDef& w, const std::string& where) {
         require_positive(where + ".radius", w.radius, "m");
         require_finite(where + ".angle_start", w.angle_start_deg, "deg");
         require_finite(where + ".angle_end", w.angle_end_deg, "deg");
+        // an arc is at most a full circle: 0 to 720 deg would be drawn once and read as twice
+        if (std::abs(w.angle_end_deg - w.angle_start_deg) > 360.0)
+            throw InputError(where + ": arc from " + format_number(w.angle_start_deg) + " to " + format_number(w.angle_end_deg) +
+                             " deg sweeps " + format_number(std::abs(w.angle_end_deg - w.angle_start_deg)) +
+                             " deg; the extent must be in (0, 360] deg");
         double ext = std::fmod(w.angle_end_deg - w.angle_start_deg, 360.0);
         if (std::abs(ext) < 1e-9 && std::abs(w.angle_end_deg - w.angle_start_deg) < 1e-9)
             throw InputError(where + ": arc of zero extent (angle_start = angle_end = " +

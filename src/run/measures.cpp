@@ -80,6 +80,7 @@ void RunSeries::sample(const World& w, const MeasureContext& m, RunState& st, Ru
         sum.t_peak_fy_arc = t;
     }
     const EnergyReport e = w.energy();
+    require_finite_ledger(e, w.step_count(), t);
     st.peak_put_in = std::max(st.peak_put_in, energy_put_in(e, st.e0));
     energy_.out() << t << ',' << e.kinetic_translation << ',' << e.kinetic_rotation << ',' << e.potential << ','
                   << e.elastic << ',' << e.dissipated_contacts << ',' << e.dissipated_local << ','
@@ -142,9 +143,24 @@ void RunSeries::sample(const World& w, const MeasureContext& m, RunState& st, Ru
 // 2-thread flume run (one World::energy() took 225 us on geometry A, more than a step).
 double energy_put_in(const EnergyReport& e, double e0) { return e0 - e.potential - e.lost_potential + e.work_by_walls; }
 
+double ledger_noise(const World& w, double gravity) {
+    double noise = 0.0;
+    for (size_t i = 0; i < w.disc_count(); ++i) noise += 1e-3 * w.masses()[i] * gravity * w.radii()[i];
+    return noise;
+}
+
+void require_finite_ledger(const EnergyReport& e, long step, double t) {
+    if (std::isfinite(e.balance())) return;
+    throw RunError("blow-up: the energy ledger is not finite at step " + std::to_string(step) + ", t = " + format_number(t) +
+                   " s (kinetic " + format_number(e.kinetic_translation + e.kinetic_rotation) + ", potential " +
+                   format_number(e.potential) + ", elastic " + format_number(e.elastic) +
+                   " J/m). Likely cause: velocities, forces or gravity too large for double precision");
+}
+
 void check_energy_growth(const Solver& w, double e0, double max_gain, double noise, double& peak_put_in,
                          DissipationPeaks& dissipation) {
     const EnergyReport e = w.energy();
+    require_finite_ledger(e, w.step_count(), w.time());
     peak_put_in = std::max(peak_put_in, energy_put_in(e, e0));
     const double gain = e.balance() - e0, put_in = peak_put_in;
     // A dissipation account only grows: a damper takes energy out. One that falls is a damper

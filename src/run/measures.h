@@ -64,6 +64,7 @@ private:
 // checkpoint: a resumed run starts it from the restored accounts).
 struct DissipationPeaks {
     double contacts = 0, local = 0, rotation = 0;
+    DissipationPeaks() = default;
     explicit DissipationPeaks(const EnergyReport& e)
         : contacts(e.dissipated_contacts), local(e.dissipated_local), rotation(e.dissipated_rotation) {}
 };
@@ -77,6 +78,12 @@ constexpr double kDissipationDrop = 1e-5;
 class Solver;
 void check_energy_growth(const Solver& w, double e0, double max_gain, double noise, double& peak_put_in,
                          DissipationPeaks& dissipation);
+// The ledger's resolution, below which no gain counts (check_energy_growth): a thousandth of
+// the energy that lifts every disc by its radius at this gravity (m/s2).
+double ledger_noise(const World& w, double gravity);
+// A ledger with an infinite or NaN term ends the run (RunError): no series row or summary
+// is written from it.
+void require_finite_ledger(const EnergyReport& e, long step, double t);
 // The energy a run had and was given by time t (J/m): e0 less the potential now plus the
 // walls' work; the scale of the ledger's closure and of the energy watch
 double energy_put_in(const EnergyReport& e, double e0);

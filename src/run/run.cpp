@@ -36,9 +36,6 @@ namespace demlab {
 
 namespace {
 
-// Steps a run may take at most: the real sand size to rest is about 1e7.
-constexpr double kMaxRunSteps = 1e10;
-
 // The release mass: restored from a checkpoint (the discs as they were at the start), read
 // from a saved mass (release.from_file), or generated, in space order (the caller saves it to
 // release.csv once the run folder exists).
@@ -93,6 +90,9 @@ ReleaseMass start_mass(const Scenario& s, const Setup& setup, BinaryReader* rest
                                  " differs by " + format_number(d) +
                                  " m): it fits another geometry. Generate it for this scenario (omit --release-from)");
         }
+        // discs that overlap more than the run allows would stop it at its first step, blamed
+        // on the step: named here, with the file
+        refuse_overlapping_discs(mass, s.world.max_overlap_ratio, s.release.from_file);
     } else {
         if (terminal) std::fprintf(stderr, "generating the release mass ...\n");
         mass = generate_release(s);
@@ -318,12 +318,12 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
     // the discs at the start, by id (disc_ids: a lost disc leaves the world, not these)
     const std::vector<Vec2> start_pos = w.positions();
     const std::vector<double> start_radius = w.radii();
-    double r_max = 0, total_mass = 0, ledger_noise = 0;
+    double r_max = 0, total_mass = 0;
     for (size_t i = 0; i < n; ++i) {
         r_max = std::max(r_max, w.radii()[i]);
         total_mass += w.masses()[i];
-        ledger_noise += 1e-3 * w.masses()[i] * s.world.gravity.norm() * w.radii()[i];  // (check_energy_growth)
     }
+    const double noise = ledger_noise(w, s.world.gravity.norm());  // (check_energy_growth)
     const std::unique_ptr<BedPath> path = setup->bed_path(w);
     const MeasureContext measure{s, path.get(), path ? setup->barrier(*path) : BarrierMarks{}, setup->force_walls(),
                                  s.output.front_neighbour_gap > 0 ? s.output.front_neighbour_gap : r_max, start_pos};
@@ -420,14 +420,14 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
             solver.step();
         } catch (const RunError&) {
             // a lost disc or an overlap after energy was created: name the runaway as such
-            check_energy_growth(solver, st.e0, s.stop.max_energy_gain, ledger_noise, st.peak_put_in, dissipation);
+            check_energy_growth(solver, st.e0, s.stop.max_energy_gain, noise, st.peak_put_in, dissipation);
             throw;
         }
         sampled_now = false;
         // a disc thrown out by created energy is a blow-up, not a stray: look at once
         if (w.lost_discs().size() != lost_seen) {
             lost_seen = w.lost_discs().size();
-            check_energy_growth(solver, st.e0, s.stop.max_energy_gain, ledger_noise, st.peak_put_in, dissipation);
+            check_energy_growth(solver, st.e0, s.stop.max_energy_gain, noise, st.peak_put_in, dissipation);
             // nothing left to move: not "rest" (the kinetic energy of no disc is 0)
             if (w.disc_count() == 0) {
                 sum.stop_reason = kStopAllDiscsLeft;
@@ -449,7 +449,7 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
             // calling thread's time on 2 threads, with the other one waiting)
             const double ke = solver.kinetic_energy();
             st.peak_ke = std::max(st.peak_ke, ke);
-            if (solver.step_count() % kEnergyWatchSteps == 0) check_energy_growth(solver, st.e0, s.stop.max_energy_gain, ledger_noise, st.peak_put_in, dissipation);
+            if (solver.step_count() % kEnergyWatchSteps == 0) check_energy_growth(solver, st.e0, s.stop.max_energy_gain, noise, st.peak_put_in, dissipation);
             if (ke < s.stop.rest_ke_fraction * st.peak_ke) {
                 if (st.rest_since < 0) st.rest_since = solver.time();
                 if (solver.time() - st.rest_since >= s.stop.rest_duration) {

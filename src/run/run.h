@@ -11,6 +11,10 @@
 
 namespace demlab {
 
+// Steps a run may take at most (`run` and `demo` refuse more): the real sand size to rest is
+// about 1e7.
+constexpr double kMaxRunSteps = 1e10;
+
 struct RunOptions {
     std::string out_dir;
     bool force = false;     // replace the files of an existing folder

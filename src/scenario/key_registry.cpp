@@ -138,9 +138,17 @@ Key text(std::string name, std::string doc, SRef ref, std::vector<std::string> c
     return k;
 }
 
-Key vec2(std::string name, std::string unit, std::string doc, VRef ref) {
-    Key k{name, unit, "[x, y], finite", std::move(doc), nullptr, nullptr};
-    k.set = [=](Scenario& s, const toml::node& n, const std::string& where) { ref(s) = read_vec2(n, where, unit); };
+// [x, y], finite; with a max_norm > 0, its magnitude at most that
+Key vec2(std::string name, std::string unit, std::string doc, VRef ref, double max_norm = 0.0) {
+    Key k{name, unit, max_norm > 0.0 ? "[x, y], magnitude <= " + format_number(max_norm) : "[x, y], finite", std::move(doc),
+          nullptr, nullptr};
+    k.set = [=](Scenario& s, const toml::node& n, const std::string& where) {
+        const Vec2 v = read_vec2(n, where, unit);
+        if (max_norm > 0.0 && !(v.norm() <= max_norm))
+            throw InputError(where + " = [" + format_number(v.x()) + ", " + format_number(v.y()) + "] " + unit +
+                             ": its magnitude must be at most " + format_number(max_norm) + " " + unit);
+        ref(s) = v;
+    };
     k.get = [=](const Scenario& s) {
         const Vec2& v = ref(const_cast<Scenario&>(s));
         return "[" + toml_number(v.x()) + ", " + toml_number(v.y()) + "]";
@@ -221,7 +229,7 @@ void add_dynamics_keys(std::vector<Key>& k) {
     k.push_back(real("timestep.fixed", "s", "the step when automatic = false", [](Scenario& s) -> double& { return s.world.timestep.fixed; }, 0, 1, true));
     k.push_back(boolean("timestep.damping_correction", "shrink the rotational bound for the shear dashpot (stability, docs/engine.md)", [](Scenario& s) -> bool& { return s.world.timestep.damping_correction; }));
     // world
-    k.push_back(vec2("world.gravity", "m/s2", "gravity vector", [](Scenario& s) -> Vec2& { return s.world.gravity; }));
+    k.push_back(vec2("world.gravity", "m/s2", "gravity vector (its magnitude at most 1e3 m/s2, about a hundred g)", [](Scenario& s) -> Vec2& { return s.world.gravity; }, 1e3));
     k.push_back(real("world.broadphase_margin", "m", "smallest pad of the broad phase's fat boxes (moving discs get wider ones); 0 = half the smallest radius", [](Scenario& s) -> double& { return s.world.broadphase_margin; }, 0, 1));
     k.push_back(real("world.joint_tolerance", "m", "wall ends closer than this are joined", [](Scenario& s) -> double& { return s.world.joint_tolerance; }, 0, 0.1));
     k.push_back(polygon("world.domain", "[] or 2 points [[x_lo, y_lo], [x_hi, y_hi]], x_lo < x_hi, y_lo < y_hi, holding every disc at t = 0", "the domain's box: a disc whose centre leaves it is lost (world.lost_discs); [] = the box of the walls, the discs and the set-up padded by 0.5 m (give it where there are no walls to bound the flight)", [](Scenario& s) -> std::vector<Vec2>& { return s.domain; }));

@@ -24,6 +24,22 @@ namespace {
 
 constexpr double kInf = INFINITY;
 
+// Bounds on the magnitudes a scenario may give (docs/scenario-reference.md): far beyond any
+// flow the model is for, and far enough below overflow that a ledger of such discs stays finite.
+constexpr double kMaxSpeed = 1e4;        // m/s, a disc's or a wall's velocity
+constexpr double kMaxSpin = 1e6;         // rad/s, a disc's omega
+constexpr double kMaxDiscForce = 1e12;   // N/m, a disc's constant force
+constexpr double kMaxDiscRadius = 1e3;   // m
+
+// A vector read as read_vec2 does, with its length at most `limit`.
+Vec2 read_bounded_vec2(const toml::node& n, const std::string& where, const std::string& unit, double limit) {
+    const Vec2 v = read_vec2(n, where, unit);
+    if (!(v.norm() <= limit))
+        throw InputError(where + " = [" + format_number(v.x()) + ", " + format_number(v.y()) + "] " + unit +
+                         ": its magnitude must be at most " + format_number(limit) + " " + unit);
+    return v;
+}
+
 // ---------------------------------------------------------------- [[walls]] and [[discs]]
 
 WallDef read_wall(const toml::table& t, const std::string& file, size_t index) {
@@ -34,6 +50,7 @@ WallDef read_wall(const toml::table& t, const std::string& file, size_t index) {
                                             "move_until", "remove_at", "cap_start", "cap_end"};
     std::string type = "segment", solid;
     double friction_deg = 21.7;
+    bool has_start = false, has_end = false, has_centre = false, has_radius = false;
     for (const auto& entry : t) {  // not a structured binding: the lambdas below capture node
         const toml::node& node = entry.second;
         const std::string key(entry.first.str());
@@ -58,17 +75,27 @@ WallDef read_wall(const toml::table& t, const std::string& file, size_t index) {
             if (!v) throw InputError(where + ": must be a string");
             w.name = *v;
         } else if (key == "type") type = str({"segment", "arc"});
-        else if (key == "start") w.p0 = read_vec2(node, where, "m");
-        else if (key == "end") w.p1 = read_vec2(node, where, "m");
+        else if (key == "start") {
+            w.p0 = read_vec2(node, where, "m");
+            has_start = true;
+        } else if (key == "end") {
+            w.p1 = read_vec2(node, where, "m");
+            has_end = true;
+        }
         else if (key == "solid") solid = str({"both", "left", "right", "outside", "inside"});
-        else if (key == "centre") w.centre = read_vec2(node, where, "m");
-        else if (key == "radius") w.radius = num("m", 0, 1e3, true);
+        else if (key == "centre") {
+            w.centre = read_vec2(node, where, "m");
+            has_centre = true;
+        } else if (key == "radius") {
+            w.radius = num("m", 0, 1e3, true);
+            has_radius = true;
+        }
         else if (key == "start_deg") w.angle_start_deg = num("deg", -360, 720, false);
         else if (key == "end_deg") w.angle_end_deg = num("deg", -360, 720, false);
         else if (key == "kn") w.kn = num("N/m", 0, 1e15, true);
         else if (key == "ks") w.ks = num("N/m", 0, 1e15, true);
         else if (key == "friction_deg") friction_deg = num("deg", 0, 89, false);
-        else if (key == "velocity") w.velocity = read_vec2(node, where, "m/s");
+        else if (key == "velocity") w.velocity = read_bounded_vec2(node, where, "m/s", kMaxSpeed);
         else if (key == "move_from") w.move_from = num("s", 0, 1e9, false);
         else if (key == "move_until") w.move_until = num("s", 0, kInf, false);
         else if (key == "remove_at") w.remove_at = num("s", 0, kInf, false);
@@ -81,10 +108,18 @@ WallDef read_wall(const toml::table& t, const std::string& file, size_t index) {
     w.shape = type == "arc" ? WallShape::Arc : WallShape::Segment;
     w.friction = std::tan(deg_to_rad(friction_deg));
     const std::string where = file + ": walls[" + std::to_string(index) + "]";
+    // a point left out is refused, as a disc's position is: it would silently be (0, 0)
+    auto require = [&](bool given, const char* key, const char* what) {
+        if (!given) throw InputError(where + ": missing key '" + key + "' (" + what + ")");
+    };
     if (w.shape == WallShape::Segment) {
+        require(has_start, "start", "a segment's first end [x, y] in m");
+        require(has_end, "end", "a segment's second end [x, y] in m");
         if (solid == "outside" || solid == "inside") throw InputError(where + ".solid: a segment takes both, left or right");
         w.segment_solid = solid == "left" ? SegmentSolid::Left : (solid == "right" ? SegmentSolid::Right : SegmentSolid::Both);
     } else {
+        require(has_centre, "centre", "an arc's centre [x, y] in m");
+        require(has_radius, "radius", "an arc's radius in m, > 0");
         if (solid == "left" || solid == "right" || solid == "both") throw InputError(where + ".solid: an arc takes outside or inside");
         w.arc_solid = solid == "inside" ? ArcSolid::Inside : ArcSolid::Outside;
     }
@@ -104,12 +139,17 @@ DiscDef read_disc(const toml::table& t, const std::string& file, size_t index) {
             has_pos = true;
         } else if (key == "radius") {
             d.radius = read_number(node, where, "m");
-            if (!(d.radius > 0) || !std::isfinite(d.radius)) throw InputError(where + " = " + format_number(d.radius) + ": must be > 0 m");
+            if (!(d.radius > 0) || !(d.radius <= kMaxDiscRadius))
+                throw InputError(where + " = " + format_number(d.radius) + ": must be in (0, " + format_number(kMaxDiscRadius) + "] m");
             has_r = true;
-        } else if (key == "velocity") d.vel = read_vec2(node, where, "m/s");
-        else if (key == "omega") d.omega = read_number(node, where, "rad/s");
-        else if (key == "angle") d.angle = read_number(node, where, "rad");
-        else if (key == "force") d.force = read_vec2(node, where, "N/m");
+        } else if (key == "velocity") d.vel = read_bounded_vec2(node, where, "m/s", kMaxSpeed);
+        else if (key == "omega") {
+            d.omega = read_number(node, where, "rad/s");
+            if (!(std::abs(d.omega) <= kMaxSpin))
+                throw InputError(where + " = " + format_number(d.omega) + ": must be in [-" + format_number(kMaxSpin) + ", " +
+                                 format_number(kMaxSpin) + "] rad/s");
+        } else if (key == "angle") d.angle = read_number(node, where, "rad");
+        else if (key == "force") d.force = read_bounded_vec2(node, where, "N/m", kMaxDiscForce);
         else unknown_key(where, key, names);
     }
     const std::string where = file + ": discs[" + std::to_string(index) + "]";
@@ -385,6 +425,9 @@ void finish_dan(Scenario& s) {
     }
 }
 
+// Bonds listed in a [cohesion] that is not enabled would be silently unused.
+static bool c_enabled_or_no_bonds(const Scenario& s) { return s.cohesion.enabled || s.cohesion.bonds.empty(); }
+
 // The bonds' keys together (COHESION.md section 7's choices).
 void finish_cohesion(Scenario& s) {
     const std::string where = s.source + ": ";
@@ -529,6 +572,12 @@ void finish_scenario(Scenario& s) {
     finish_dan(s);
     finish_lattice(s);
     finish_cohesion(s);
+    if (!r.from_file.empty() && (!has_release(s) || s.lattice_release.enabled))
+        throw InputError(where + "release.from_file (--release-from) = \"" + r.from_file + "\": does not apply: " +
+                         (s.lattice_release.enabled ? "the discs are a [lattice_release]"
+                                                    : "the discs are given ([[discs]]), not a release mass"));
+    if (!c_enabled_or_no_bonds(s))
+        throw InputError(where + "cohesion.bonds: given without cohesion.enabled = true; the bonds would not be made");
     if (has_release(s) && !(r.r_min <= r.r_max))
         throw InputError(where + "release.r_min = " + format_number(r.r_min) + " m must be <= release.r_max = " +
                          format_number(r.r_max) + " m");
@@ -667,22 +716,23 @@ std::string scenario_reference_markdown() {
          "| key | unit | default | meaning |\n|---|---|---|---|\n"
          "| `name` | - | `walls[i]` | name in messages and outputs |\n"
          "| `type` | - | `\"segment\"` | `\"segment\"` or `\"arc\"` |\n"
-         "| `start`, `end` | m | | segment ends `[x, y]` |\n"
+         "| `start`, `end` | m | required (segment) | segment ends `[x, y]` |\n"
          "| `solid` | - | `\"both\"` / `\"outside\"` | segment: `both`, `left`, `right` (looking from start to end); arc: `outside` (discs run on the inside) or `inside` |\n"
-         "| `centre`, `radius`, `start_deg`, `end_deg` | m, m, deg, deg | | arc, counter-clockwise from start_deg to end_deg |\n"
+         "| `centre`, `radius` | m | required (arc) | arc's centre `[x, y]` and radius (0, 1e3] |\n"
+         "| `start_deg`, `end_deg` | deg | 0 | arc, counter-clockwise from start_deg to end_deg, at most 360 deg apart |\n"
          "| `kn`, `ks` | N/m | 1e8 | stiffness, in series with the disc's |\n"
          "| `friction_deg` | deg | 21.7 | friction angle |\n"
-         "| `velocity` | m/s | [0, 0] | prescribed velocity from `move_from` to `move_until` (s) |\n"
+         "| `velocity` | m/s | [0, 0] | prescribed velocity from `move_from` to `move_until` (s); magnitude at most 1e4 |\n"
          "| `remove_at` | s | inf | the wall disappears at this time |\n"
          "| `cap_start`, `cap_end` | - | `\"auto\"` | `auto`, `capped` or `open`: whether the end is a corner discs can touch |\n"
          "\n## Explicit discs: `[[discs]]`\n\n"
          "| key | unit | default | meaning |\n|---|---|---|---|\n"
          "| `position` | m | required | centre `[x, y]` |\n"
-         "| `radius` | m | required | > 0 |\n"
-         "| `velocity` | m/s | [0, 0] | initial velocity |\n"
-         "| `omega` | rad/s | 0 | initial angular velocity (counter-clockwise) |\n"
+         "| `radius` | m | required | in (0, 1e3] |\n"
+         "| `velocity` | m/s | [0, 0] | initial velocity; magnitude at most 1e4 |\n"
+         "| `omega` | rad/s | 0 | initial angular velocity (counter-clockwise), in [-1e6, 1e6] |\n"
          "| `angle` | rad | 0 | initial angle |\n"
-         "| `force` | N/m | [0, 0] | a constant force added every step (its work is in the ledger's potential) |\n";
+         "| `force` | N/m | [0, 0] | a constant force added every step (its work is in the ledger's potential); magnitude at most 1e12 |\n";
     return o.str();
 }
 

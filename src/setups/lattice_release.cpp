@@ -10,6 +10,7 @@
 #include "core/progress.h"
 #include "core/validate.h"
 #include "dem/world.h"
+#include "setups/release.h"
 
 namespace demlab {
 
@@ -43,6 +44,15 @@ ReleaseMass lattice_mass(const Scenario& s, const std::vector<WallDef>& walls) {
         w0 = std::min(w0, d.dot(w));
         w1 = std::max(w1, d.dot(w));
     }
+    // the discs' count from the area before any is made (a node per sp x row of area)
+    double area = 0.0;
+    for (size_t k = 0, n = l.fill.size(); k < n; ++k) area += cross(l.fill[k], l.fill[(k + 1) % n]);
+    area = 0.5 * std::abs(area);
+    if (!(area / (sp * row) <= kMaxReleaseDiscs))
+        throw InputError(s.source + ": lattice_release: the region (" + format_number(area) + " m2) would hold " +
+                         format_number(area / (sp * row)) + " discs at lattice_release.spacing = " + format_number(sp) +
+                         " m, more than " + format_number(kMaxReleaseDiscs) +
+                         ": use larger discs (lattice_release.r_min, r_max, spacing) or a smaller region");
     const long j0 = long(std::floor(w0 / row)) - 1, j1 = long(std::ceil(w1 / row)) + 1;
     const long i0 = long(std::floor(u0 / sp)) - 2, i1 = long(std::ceil(u1 / sp)) + 2;
     if (double(j1 - j0) * double(i1 - i0) > 5e7)

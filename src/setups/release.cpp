@@ -122,6 +122,16 @@ ReleaseMass generate_release(const Scenario& s) {
     ReleaseMass m;
     m.box_area = tri.area();
     m.porosity_target = rd.porosity;
+    // the count before anything is allocated: 10 um radii over a terrain's release polygon
+    // asked for 1e11 discs and ended in std::bad_alloc
+    const double r_mean = 0.5 * (rd.r_min + rd.r_max);
+    const double count = m.box_area * (1.0 - rd.porosity) / (kPi * r_mean * r_mean);
+    if (!(count <= kMaxReleaseDiscs))
+        throw InputError(s.source + ": release: the release area (" + format_number(m.box_area) + " m2) would hold " +
+                         format_number(count) + " discs of radii release.r_min = " + format_number(rd.r_min) +
+                         " m to release.r_max = " + format_number(rd.r_max) + " m (release.porosity = " +
+                         format_number(rd.porosity) + "), more than " + format_number(kMaxReleaseDiscs) +
+                         ": use larger radii (release.scale, release.r_min, release.r_max) or a smaller area");
     const long n = release_count(m.box_area, rd.porosity, rd.r_min, rd.r_max);
     if (n < 1) throw InputError(s.source + ": release: the box holds no disc of these radii");
 
@@ -316,6 +326,30 @@ void save_release(const ReleaseMass& m, const std::string& path) {
         o << i << ',' << m.pos[i].x() << ',' << m.pos[i].y() << ',' << m.radius[i] << ',' << m.layer[i] << ','
           << m.grid[i] << '\n';
     write_file_atomic(path, o.str());
+}
+
+void refuse_overlapping_discs(const ReleaseMass& m, double ratio, const std::string& path) {
+    const size_t n = m.pos.size();
+    std::vector<size_t> order(n);
+    for (size_t i = 0; i < n; ++i) order[i] = i;
+    // a sweep along x: only discs whose x ranges meet are compared
+    std::sort(order.begin(), order.end(), [&](size_t a, size_t b) {
+        const double la = m.pos[a].x() - m.radius[a], lb = m.pos[b].x() - m.radius[b];
+        return la < lb || (la == lb && a < b);
+    });
+    for (size_t a = 0; a < n; ++a) {
+        const size_t i = order[a];
+        for (size_t b = a + 1; b < n; ++b) {
+            const size_t j = order[b];
+            if (m.pos[j].x() - m.radius[j] > m.pos[i].x() + m.radius[i]) break;
+            const double overlap = m.radius[i] + m.radius[j] - (m.pos[j] - m.pos[i]).norm();
+            if (overlap > ratio * std::min(m.radius[i], m.radius[j]))
+                throw InputError(path + ": discs " + std::to_string(std::min(i, j)) + " and " + std::to_string(std::max(i, j)) +
+                                 " (rows of the file, from 0) overlap by " + format_number(overlap) +
+                                 " m, more than world.max_overlap_ratio = " + format_number(ratio) +
+                                 " of the smaller radius: not a settled release mass");
+        }
+    }
 }
 
 ReleaseMass load_release(const std::string& path) {

@@ -31,6 +31,9 @@ struct ReleaseMass {
 
 // Number of discs for a box area, porosity and radius range (PFC's rule, see above).
 long release_count(double area, double porosity, double r_min, double r_max);
+// The most discs a generated release mass may have (generate_release refuses more before
+// allocating them: an input error naming the radii's keys).
+constexpr double kMaxReleaseDiscs = 2e7;
 
 // Generates and settles the mass (deterministic for a seed). Progress on a terminal.
 ReleaseMass generate_release(const Scenario& s);
@@ -49,5 +52,8 @@ void order_in_space(ReleaseMass& m, double strip);
 // release.csv: id, x, y, r, layer, grid and the generation figures as comments.
 void save_release(const ReleaseMass& m, const std::string& path);
 ReleaseMass load_release(const std::string& path);
+// An InputError naming the file and the first two discs (by their row, 0-based) that overlap
+// by more than `ratio` of the smaller radius (world.max_overlap_ratio).
+void refuse_overlapping_discs(const ReleaseMass& m, double ratio, const std::string& path);
 
 }  // namespace demlab

@@ -1,0 +1,282 @@
+// Guards on the physics and the input (issue 54's rows 8-15): no disc crosses a wall between
+// two steps, magnitudes are bounded at input and a non-finite ledger ends the run, a wall
+// without its points is refused, options that do not apply or disagree are named, a cut CSV
+// and an absurd disc count are input errors, and `demo` has the absurd-steps guard.
+#include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <string>
+
+#include "core/csv.h"
+#include "core/error.h"
+#include "dem/world.h"
+#include "helpers.h"
+#include "run/run.h"
+#include "scenario/scenario.h"
+#include "setups/lattice_release.h"
+#include "setups/release.h"
+#include "setups/setup.h"
+
+namespace fs = std::filesystem;
+using namespace demlab;
+using demlab::test::expect_refused;
+
+namespace {
+
+fs::path temp_dir(const std::string& name) {
+    const fs::path d = fs::temp_directory_path() / ("demlab-guards-" + name + "-" + std::to_string(::getpid()));
+    fs::remove_all(d);
+    return d;
+}
+
+// One disc of 1 cm above a floor from x = -1 to 1 m, the rest of the scenario as given.
+Scenario one_disc(const std::string& disc, const std::string& rest) {
+    Scenario s = parse_scenario("[stop]\nt_max = 1.0\nrest_duration = 0.1\nrest_ke_fraction = 1e-12\n[output]\nsnapshot_interval = 0\n" +
+                                    rest + "\n[[discs]]\nradius = 0.01\n" + disc + "\n[[walls]]\nname = \"floor\"\nstart = [-1.0, 0.0]\nend = [1.0, 0.0]\n",
+                                "one-disc.toml");
+    finish_scenario(s);
+    return s;
+}
+
+// The executable's exit code, its standard error in `err`; stopped after 60 s (exit 124), so
+// that an option accepted by mistake (a flume generated at scale 4, a demo to t = 1e300 s)
+// fails the test instead of hanging it.
+int run_exe(const std::string& args, std::string& err) {
+    const fs::path log = temp_dir("stderr");
+    const int status = std::system(("timeout 60 " + std::string(DEMLAB_EXE) + " " + args + " >/dev/null 2>" + log.string()).c_str());
+    std::ifstream in(log);
+    std::stringstream ss;
+    ss << in.rdbuf();
+    err = ss.str();
+    fs::remove(log);
+    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+void write_text(const fs::path& p, const std::string& text) {
+    std::ofstream(p) << text;
+}
+
+}  // namespace
+
+// Row 8. A DEBRIS disc falls 2 m at the default ceiling debris.dt_max = 0.01 s (4 cm a step
+// at the floor, four radii): the step is cut by speed and radius, and it lands on the floor
+// instead of passing through it and being taken out as "lost".
+TEST(Guards, DebrisDiscDroppedOntoAFloorDoesNotPassThroughIt) {
+    const Scenario s = one_disc("position = [0.0, 2.0]", "[contact]\nlaw = \"debris\"\n[rotation]\nmodel = 1\n");
+    ASSERT_EQ(s.world.debris.dt_max, 0.01);
+    ASSERT_EQ(s.world.lost_discs, LostDiscs::Remove);
+    const fs::path dir = temp_dir("debris-drop");
+    const RunSummary r = run_scenario(s, {dir.string(), false, {}});
+    EXPECT_EQ(r.lost_discs, 0) << "the disc went through the floor";
+    World w = world_of_scenario(s);
+    while (w.time() < 1.0) w.step();
+    ASSERT_EQ(w.disc_count(), 1u);
+    EXPECT_GT(w.positions()[0].y(), 0.5 * w.radii()[0]) << "the disc is below the floor's top";
+    fs::remove_all(dir);
+}
+
+// Row 8. A linear-law disc given 3,000 m/s towards the floor with the automatic step: each
+// step takes it at most a quarter radius, so the contact sees it, and a floor too soft to
+// stop it is an overlap named with the wall (not a disc that left the domain, exit 0).
+TEST(Guards, FastDiscIsSeenByTheFloorItHits) {
+    const Scenario s = one_disc("position = [0.0, 0.5]\nvelocity = [0.0, -3000.0]", "");
+    const fs::path dir = temp_dir("fast");
+    try {
+        const RunSummary r = run_scenario(s, {dir.string(), false, {}});
+        ADD_FAILURE() << "ran to the end with " << r.lost_discs << " lost disc(s)";
+    } catch (const RunError& e) {
+        const std::string msg = e.what();
+        EXPECT_NE(msg.find("overlap"), std::string::npos) << msg;
+        EXPECT_NE(msg.find("floor"), std::string::npos) << msg;
+    }
+    fs::remove_all(dir);
+}
+
+// Row 8. A fixed timestep.dt of 0.1 s: the falling disc moves 10 cm in a step, ten radii; the
+// run is refused naming the disc and the key instead of letting it through the floor.
+TEST(Guards, FixedStepThatCarriesADiscFartherThanHalfItsRadiusIsRefused) {
+    const Scenario s = one_disc("position = [0.0, 0.5]", "[timestep]\nautomatic = false\nfixed = 0.1\n");
+    const fs::path dir = temp_dir("fixed");
+    try {
+        const RunSummary r = run_scenario(s, {dir.string(), false, {}});
+        ADD_FAILURE() << "ran to the end with " << r.lost_discs << " lost disc(s)";
+    } catch (const RunError& e) {
+        const std::string msg = e.what();
+        EXPECT_NE(msg.find("disc 0 moved"), std::string::npos) << msg;
+        EXPECT_NE(msg.find("timestep.dt = 0.1"), std::string::npos) << msg;
+    }
+    fs::remove_all(dir);
+    // the same world at a sound step falls onto the floor and stays there
+    World w = world_of_scenario(one_disc("position = [0.0, 0.5]", "[timestep]\nautomatic = false\nfixed = 1e-5\n"));
+    for (int k = 0; k < 50000; ++k) w.step();
+    ASSERT_EQ(w.disc_count(), 1u);
+    EXPECT_GT(w.positions()[0].y(), 0.5 * w.radii()[0]);
+}
+
+// Row 10. Velocities, spins, forces and gravity beyond the bounds are refused with the key;
+// the bounds themselves are accepted.
+TEST(Guards, MagnitudesAreBoundedAtInput) {
+    auto disc = [](const std::string& extra) { one_disc("position = [0.0, 0.5]\n" + extra, ""); };
+    expect_refused([&] { disc("velocity = [1e300, 0.0]"); }, {"discs[0].velocity", "at most 10000 m/s"});
+    expect_refused([&] { disc("omega = 1e300"); }, {"discs[0].omega", "1e+06"});
+    expect_refused([&] { disc("omega = -2e6"); }, {"discs[0].omega"});
+    expect_refused([&] { disc("force = [0.0, 1e300]"); }, {"discs[0].force", "N/m"});
+    expect_refused([&] { parse_scenario("[[discs]]\nposition = [0.0, 0.5]\nradius = 1e300\n", "d.toml"); }, {"discs[0].radius"});
+    expect_refused([&] { one_disc("position = [0.0, 0.5]", "[world]\ngravity = [0.0, -1e300]\n"); }, {"world.gravity", "1000"});
+    expect_refused([&] { one_disc("position = [0.0, 0.5]", "[world]\ngravity = [800.0, -800.0]\n"); }, {"world.gravity"});
+    expect_refused([&] { parse_scenario("[[walls]]\nstart = [0.0, 0.0]\nend = [1.0, 0.0]\nvelocity = [2e4, 0.0]\n", "w.toml"); },
+                   {"walls[0].velocity"});
+    EXPECT_NO_THROW(one_disc("position = [0.0, 0.5]\nvelocity = [1e4, 0.0]\nomega = -1e6\nforce = [0.0, 1e12]", "[world]\ngravity = [0.0, -1e3]\n"));
+}
+
+// Row 10. A ledger that is not finite (a spin far beyond the input bound, put in behind the
+// scenario's back) ends the run with a RunError; no energy.csv row of inf or nan is written
+// and the run does not finish.
+TEST(Guards, NonFiniteLedgerEndsTheRun) {
+    Scenario s = one_disc("position = [0.0, 0.5]", "");
+    s.discs[0].omega = 1e300;  // 0.5 I omega^2 overflows
+    const fs::path dir = temp_dir("nonfinite");
+    try {
+        run_scenario(s, {dir.string(), false, {}});
+        ADD_FAILURE() << "ran to the end";
+    } catch (const RunError& e) {
+        EXPECT_NE(std::string(e.what()).find("energy ledger is not finite"), std::string::npos) << e.what();
+    }
+    EXPECT_FALSE(fs::exists(dir / "summary.json"));
+    fs::remove_all(dir);
+}
+
+// Row 11. A wall without one of its points is refused naming the wall and the key, as a disc
+// without its position is.
+TEST(Guards, WallWithoutItsPointsIsRefused) {
+    expect_refused([] { parse_scenario("[[walls]]\nend = [1.0, 0.0]\n", "w.toml"); }, {"walls[0]", "missing key 'start'"});
+    expect_refused([] { parse_scenario("[[walls]]\nstart = [1.0, 0.0]\n", "w.toml"); }, {"walls[0]", "missing key 'end'"});
+    expect_refused([] { parse_scenario("[[walls]]\ntype = \"arc\"\nradius = 1.0\nstart_deg = 0\nend_deg = 90\n", "w.toml"); },
+                   {"walls[0]", "missing key 'centre'"});
+    expect_refused([] { parse_scenario("[[walls]]\ntype = \"arc\"\ncentre = [0.0, 1.0]\nstart_deg = 0\nend_deg = 90\n", "w.toml"); },
+                   {"walls[0]", "missing key 'radius'"});
+    // an arc sweeps at most a full circle
+    expect_refused([] { parse_scenario("[[walls]]\ntype = \"arc\"\ncentre = [0.0, 1.0]\nradius = 1.0\nstart_deg = 0\nend_deg = 720\n", "w.toml"); },
+                   {"walls[0]", "sweeps 720 deg", "(0, 360]"});
+    EXPECT_NO_THROW(parse_scenario("[[walls]]\ntype = \"arc\"\ncentre = [0.0, 1.0]\nradius = 1.0\nstart_deg = 0\nend_deg = 360\n", "w.toml"));
+    EXPECT_NO_THROW(parse_scenario("[[walls]]\nstart = [0.0, 0.0]\nend = [1.0, 0.0]\n", "w.toml"));
+}
+
+// Row 12. A release mass file or bonds given where they do not apply are refused with the key.
+TEST(Guards, KeysThatDoNotApplyAreRefused) {
+    expect_refused([] {
+        Scenario s = parse_scenario("[release]\nfrom_file = \"mass.csv\"\n[[discs]]\nposition = [0.0, 0.5]\nradius = 0.01\n", "d.toml");
+        finish_scenario(s);
+    }, {"release.from_file", "does not apply"});
+    expect_refused([] {
+        Scenario s = parse_scenario("[cohesion]\nbonds = [[0, 1]]\n[[discs]]\nposition = [0.0, 0.5]\nradius = 0.01\n"
+                                    "[[discs]]\nposition = [0.02, 0.5]\nradius = 0.01\n", "d.toml");
+        finish_scenario(s);
+    }, {"cohesion.bonds", "cohesion.enabled"});
+}
+
+// Row 12. Command-line options that do not apply to the scenario, or that a --set of the
+// same key contradicts, are refused (exit 2) naming them.
+TEST(Guards, RunOptionsThatDoNotApplyOrDisagreeAreRefused) {
+    const fs::path dir = temp_dir("opts");
+    fs::create_directories(dir);
+    const fs::path sc = dir / "two.toml";
+    write_text(sc, "[[discs]]\nposition = [0.0, 0.5]\nradius = 0.01\n[[walls]]\nstart = [-1.0, 0.0]\nend = [1.0, 0.0]\n");
+    const std::string out = " --no-plots --out " + (dir / "run").string();
+    std::string err;
+    EXPECT_EQ(run_exe("run " + sc.string() + " --scale 4" + out, err), 2);
+    EXPECT_NE(err.find("--scale does not apply"), std::string::npos) << err;
+    EXPECT_EQ(run_exe("run " + sc.string() + " --variant II" + out, err), 2);
+    EXPECT_NE(err.find("--variant does not apply"), std::string::npos) << err;
+    EXPECT_EQ(run_exe("run " + sc.string() + " --release-from " + sc.string() + out, err), 2);
+    EXPECT_NE(err.find("release.from_file (--release-from)"), std::string::npos) << err;
+    const std::string geometry_a = std::string(DEMLAB_SOURCE_DIR) + "/scenarios/geometry-A.toml";
+    EXPECT_EQ(run_exe("run " + geometry_a + " --scale 20 --set release.scale=4" + out, err), 2);
+    EXPECT_NE(err.find("--scale and --set release.scale=4 both set release.scale"), std::string::npos) << err;
+    EXPECT_EQ(run_exe("run " + geometry_a + " --model 2 --set ' rotation.model = 3'" + out, err), 2);
+    EXPECT_NE(err.find("--model and --set"), std::string::npos) << err;
+    EXPECT_FALSE(fs::exists(dir / "run"));
+    fs::remove_all(dir);
+}
+
+// Row 14. A CSV whose last row is cut (a full disk, a killed writer) is an input error naming
+// the file and the line, not an out-of-range access in `demlab plot`.
+TEST(Guards, CutCsvIsAnInputErrorNamingFileAndLine) {
+    const fs::path dir = temp_dir("csv");
+    fs::create_directories(dir);
+    const fs::path f = dir / "forces.csv";
+    write_text(f, "t_s,fx_N_per_m,fy_N_per_m\n0,1,2\n0.1,1.5\n");
+    expect_refused([&] { read_csv_table(f.string()); }, {"forces.csv:3", "2 cells, the header has 3"});
+    write_text(f, "t_s,fx_N_per_m,fy_N_per_m\n0,1,2\n0.1,1.5,2.");
+    expect_refused([&] { read_csv_table(f.string()); }, {"forces.csv:3", "no line end"});
+    write_text(f, "t_s,fx_N_per_m,fy_N_per_m\n0,1,2\n0.1,1.5,2.5\n");
+    EXPECT_EQ(read_csv_table(f.string()).rows.size(), 2u);
+    // the executable: plot on a run folder with a cut series
+    fs::create_directories(dir / "run");
+    write_text(dir / "run" / "scenario.toml", "[[discs]]\nposition = [0.0, 0.5]\nradius = 0.01\n");
+    write_text(dir / "run" / "forces.csv", "t_s,fx_slope_N_per_m\n0,1\n0.1");
+    std::string err;
+    const int code = run_exe("plot " + (dir / "run").string(), err);
+    if (err.find("gnuplot") == std::string::npos) {  // (without gnuplot, plot stops before reading)
+        EXPECT_EQ(code, 2) << err;
+        EXPECT_EQ(err.find("_M_range_check"), std::string::npos) << err;
+    }
+    fs::remove_all(dir);
+}
+
+// Row 14. A release of micrometre discs is refused from the area and the radii before any
+// disc is allocated (it ended in std::bad_alloc), naming the keys; the lattice too.
+TEST(Guards, AbsurdDiscCountsAreRefusedBeforeAllocation) {
+    Scenario s = load_scenario(std::string(DEMLAB_SOURCE_DIR) + "/scenarios/geometry-A.toml");
+    apply_override(s, "release.r_min=1e-5");
+    apply_override(s, "release.r_max=2e-5");
+    apply_override(s, "rotation.u_rr=1e-6");
+    finish_scenario(s);
+    expect_refused([&] { generate_release(s); }, {"release.r_min", "release.r_max", "more than 2e+07"});
+    Scenario l = parse_scenario("[lattice_release]\nregion = [[0.0, 0.0], [100.0, 0.0], [100.0, 100.0], [0.0, 100.0]]\n"
+                                "origin = [0.0, 0.0]\nr_min = 1e-5\n", "lattice.toml");
+    finish_scenario(l);
+    expect_refused([&] { lattice_mass(l, {}); }, {"lattice_release", "spacing", "more than 2e+07"});
+}
+
+// Row 15 and the seed. `demo --t-end 1e300` is refused before its folder is made (it ran
+// until killed), and a negative seed is refused instead of wrapping to 2^64 - 1.
+TEST(Guards, DemoRefusesAbsurdRunsAndNegativeSeeds) {
+    const fs::path dir = temp_dir("demo");
+    std::string err;
+    EXPECT_EQ(run_exe("demo --t-end 1e300 --out " + dir.string(), err), 2);
+    EXPECT_NE(err.find("demo --t-end"), std::string::npos) << err;
+    EXPECT_FALSE(fs::exists(dir));
+    EXPECT_EQ(run_exe("demo --seed -1 --out " + dir.string(), err), 2);
+    EXPECT_NE(err.find("--seed -1"), std::string::npos) << err;
+    EXPECT_FALSE(fs::exists(dir));
+}
+
+// Discs of a --release-from file that overlap beyond world.max_overlap_ratio are named with
+// the file (exit 2) instead of stopping the first step as a blow-up (exit 3).
+TEST(Guards, OverlappingDiscsInAReleaseFileAreNamed) {
+    Scenario s = load_scenario(std::string(DEMLAB_SOURCE_DIR) + "/scenarios/geometry-A.toml");
+    apply_override(s, "release.scale=20");
+    apply_override(s, "stop.t_max=0.01");
+    apply_override(s, "stop.rest_duration=0.005");
+    apply_override(s, "output.snapshot_interval=0");
+    finish_scenario(s);
+    ReleaseMass m = generate_release(s);
+    for (const WallDef& wd : make_setup(s)->release_box().walls) m.box_walls.push_back({wd.p0, wd.p1});
+    ASSERT_GT(m.pos.size(), 10u);
+    m.pos[7] = m.pos[3] + Vec2(0.1 * m.radius[3], 0.0);  // almost on top of disc 3
+    const fs::path dir = temp_dir("overlap");
+    fs::create_directories(dir);
+    const fs::path file = dir / "release.csv";
+    save_release(m, file.string());
+    s.release.from_file = file.string();
+    expect_refused([&] { run_scenario(s, {(dir / "run").string(), false, {}}); }, {"release.csv", "discs 3 and 7", "overlap"});
+    EXPECT_FALSE(fs::exists(dir / "run"));
+    fs::remove_all(dir);
+}
