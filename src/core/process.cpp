@@ -11,22 +11,31 @@
 
 namespace demlab {
 
-bool program_available(const std::string& program) {
-    if (program.empty()) return false;
-    if (program.find('/') != std::string::npos) return ::access(program.c_str(), X_OK) == 0;
+namespace {
+
+// The executable `program` names: itself when it has a slash, else the first on PATH ("" if none).
+std::string find_program(const std::string& program) {
+    if (program.empty()) return "";
+    if (program.find('/') != std::string::npos) return ::access(program.c_str(), X_OK) == 0 ? program : "";
     const char* path = std::getenv("PATH");
     std::istringstream dirs(path ? path : "/usr/local/bin:/usr/bin:/bin");
     std::string d;
     while (std::getline(dirs, d, ':')) {
         const std::string f = (d.empty() ? "." : d) + "/" + program;
         struct stat st {};
-        if (::stat(f.c_str(), &st) == 0 && S_ISREG(st.st_mode) && ::access(f.c_str(), X_OK) == 0) return true;
+        if (::stat(f.c_str(), &st) == 0 && S_ISREG(st.st_mode) && ::access(f.c_str(), X_OK) == 0) return f;
     }
-    return false;
+    return "";
 }
 
+}  // namespace
+
+bool program_available(const std::string& program) { return !find_program(program).empty(); }
+
 int run_process(const ProcessDef& def) {
-    if (def.argv.empty() || !program_available(def.argv[0])) return -1;
+    // the program's file found before the fork: the child only opens, duplicates and executes
+    const std::string exe = def.argv.empty() ? std::string() : find_program(def.argv[0]);
+    if (exe.empty()) return -1;
     std::vector<char*> args;
     for (const std::string& a : def.argv) args.push_back(const_cast<char*>(a.c_str()));
     args.push_back(nullptr);
@@ -61,7 +70,7 @@ int run_process(const ProcessDef& def) {
             redirect(err, O_WRONLY | O_CREAT | O_TRUNC, 2);
         }
         if (cwd && ::chdir(cwd) != 0) ::_exit(127);
-        ::execvp(args[0], args.data());
+        ::execv(exe.c_str(), args.data());
         ::_exit(127);
     }
     if (pipe_fd[0] >= 0) {
