@@ -257,3 +257,23 @@ TEST(OutputPolicy, ProcessArgumentsArriveAsGiven) {
 }
 
 }  // namespace demlab
+
+namespace demlab {
+
+// render --strip without --out writes the strip alone: beside the frames a run already has,
+// which stay as they were (before, frames/ existing refused it, and --force would delete them).
+TEST(OutputPolicy, AStripIsMadeBesideExistingFrames) {
+    const fs::path work = test::temp_dir("strip-beside");
+    const fs::path run = finished_run(work, "r");
+    ASSERT_EQ(demlab({"render", "r", "--size", "64x48"}, work), 0) << read_file(work / "stderr.txt");
+    const auto frames = listing(run / "frames");
+    const std::string first = read_file(run / "frames/frame_00000.png");
+    EXPECT_EQ(demlab({"render", "r", "--size", "64x48", "--every", "0.04", "--strip", "strip.png"}, work), 0)
+        << read_file(work / "stderr.txt");
+    EXPECT_GT(fs::file_size(work / "strip.png"), 100u);
+    EXPECT_EQ(listing(run / "frames"), frames);
+    EXPECT_EQ(read_file(run / "frames/frame_00000.png"), first);
+    fs::remove_all(work);
+}
+
+}  // namespace demlab

@@ -37,7 +37,9 @@ Command add_render_command(CLI::App& app) {
     sub->add_option("--out", o->out, "Output folder (default RUN_DIR/frames); must not exist unless --force");
     sub->add_flag("--force", o->force, "Replace the files of an existing output folder");
     sub->add_flag("--last", o->last_only, "Render only the final snapshot (the deposit)");
-    sub->add_option("--strip", o->strip, "Also tile the frames into one PNG, three to a row");
+    sub->add_option("--strip", o->strip,
+                    "Tile the frames into one PNG, three to a row; without --out (and --video) only this file is "
+                    "written, so it can be made beside a run's existing frames");
     sub->add_flag("--video", o->video, "Also assemble the frames into video.mp4 with ffmpeg (when installed)");
     sub->add_option("--threads", o->threads, "Frames rendered at once (0: one per core, at most 8); the same files for any count")
         ->check(CLI::Range(0, 64))

@@ -98,7 +98,7 @@ std::vector<std::string> make_plots(const std::string& run_dir, int width, int h
                << "plot '../forces.csv' using " << ct + 1 << ":" << cols[o] + 1 << " with lines lc rgb '#d0b0e0' notitle, '' using "
                << ct + 1 << ":" << cols[o + 1] + 1 << " with lines lc rgb '#a0d8c8' notitle, '' using " << ct + 1 << ":"
                << cols[o + 2] + 1 << " with lines lc rgb '#b0d8f0' notitle, 'forces_smoothed.csv' using 1:" << o + 2
-               << " with lines lw 2 lc rgb '#8000c0' title 'path (total)', '' using 1:" << o + 3
+               << " with lines lw 2 dt 2 lc rgb '#8000c0' title 'path (total, dashed)', '' using 1:" << o + 3
                << " with lines lw 2 lc rgb '#009070' title 'arc W2', '' using 1:" << o + 4
                << " with lines lw 2 lc rgb '#3090d0' title 'barrier W3', '' using 1:" << o + 5
                << " with lines lw 1 lc rgb '#e0a000' title 'slope W1'\n";

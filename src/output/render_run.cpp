@@ -67,7 +67,7 @@ void check_strip_path(const RenderRunOptions& o, const std::string& out) {
     if (o.strip.empty()) return;
     std::error_code ec;
     if (std::filesystem::is_directory(o.strip, ec)) throw InputError("--strip " + o.strip + ": is a folder; give a PNG file");
-    if (path_within(o.strip, out))
+    if (!out.empty() && path_within(o.strip, out))
         throw InputError("--strip " + o.strip + ": lies inside the frames' folder " + out + "; give a file outside it");
     if (!std::filesystem::exists(o.strip, ec)) return;
     if (!o.force) throw InputError("--strip " + o.strip + ": the file exists; choose another name or pass --force to replace it");
@@ -118,10 +118,13 @@ int render_run(const RenderRunOptions& o) {
     }
     if (style.width < 16 || style.height < 16 || style.width > 8192 || style.height > 8192)
         throw InputError("--size " + o.size + ": width and height must be in [16, 8192] px");
-    const std::string out = o.out.empty() ? o.run_dir + "/frames" : o.out;
+    // --strip without --out (and no video): the strip alone, no frame files, so a strip can be
+    // made beside the frames a run already has (run --frames) without touching them
+    const bool strip_only = !o.strip.empty() && o.out.empty() && !o.video;
+    const std::string out = strip_only ? std::string() : o.out.empty() ? o.run_dir + "/frames" : o.out;
     // the frames' folder may lie inside the run folder, never be it or hold it
     const std::vector<std::string> inputs{o.run_dir};
-    check_output_dir(out, o.force, inputs);
+    if (!strip_only) check_output_dir(out, o.force, inputs);
     check_strip_path(o, out);
 
     // which snapshots: all, or one per frame time (never interpolated)
@@ -149,13 +152,13 @@ int render_run(const RenderRunOptions& o) {
     if (o.last_only && !chosen.empty()) chosen = {chosen.back()};
     // every check done: the folder is made now, and removed again (the old one put back) if
     // the rendering fails, so a failure never blocks the corrected retry
-    prepare_output_dir(out, o.force, inputs);
+    if (!strip_only) prepare_output_dir(out, o.force, inputs);
     try {
         const int frames = render_chosen(o, out, style, color, snaps, chosen, every, frame_at);
-        remove_replaced_output(out);
+        if (!out.empty()) remove_replaced_output(out);
         return frames;
     } catch (...) {
-        abandon_output(out);
+        if (!out.empty()) abandon_output(out);
         throw;
     }
 }
@@ -184,7 +187,7 @@ int render_chosen(const RenderRunOptions& o, const std::string& out, const Rende
                 char name[64];
                 std::snprintf(name, sizeof name, "/frame_%05zu.png", f);
                 Image img = renderer.render(frame_at(chosen[f]));
-                write_png(out + name, img);
+                if (!out.empty()) write_png(out + name, img);
                 if (!tiles.empty()) tiles[f] = std::move(img);
             }
         } catch (...) {
@@ -203,8 +206,9 @@ int render_chosen(const RenderRunOptions& o, const std::string& out, const Rende
     for (std::thread& th : pool) th.join();
     const size_t first_failed = size_t(std::min_element(failed_frame.begin(), failed_frame.end()) - failed_frame.begin());
     if (threads > 0 && failed[first_failed]) std::rethrow_exception(failed[first_failed]);
-    std::printf("rendered %zu frames (%dx%d, %s) into %s/\n", chosen.size(), style.width, style.height, color.c_str(),
-                out.c_str());
+    if (!out.empty())
+        std::printf("rendered %zu frames (%dx%d, %s) into %s/\n", chosen.size(), style.width, style.height, color.c_str(),
+                    out.c_str());
     const int frames = int(chosen.size());
     if (!o.strip.empty() && !tiles.empty()) {
         const int cols = std::min<int>(3, int(tiles.size())), rows = (int(tiles.size()) + cols - 1) / cols;

@@ -8,6 +8,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
+#include <vector>
 #include <cstdio>
 #include <fstream>
 #include <mutex>
@@ -328,7 +330,7 @@ std::vector<std::pair<Vec2, std::string>> Renderer::draw_flume_marks(const Frame
                 thick_segment(p, p + tick * solid, 0.6 * wall_half);
                 if (tenth % 5 == 0 && tenth > 0) {
                     char buf[16];
-                    std::snprintf(buf, sizeof buf, "%.1f", next);
+                    std::snprintf(buf, sizeof buf, "s = %.1f", next);  // distance along the bed, not x
                     labels.emplace_back(p + 0.05 * solid, buf);
                 }
                 next += 0.1;
@@ -398,6 +400,39 @@ void Renderer::annotate(Image& img, const Frame& f, const std::vector<std::pair<
         char buf[32];
         std::snprintf(buf, sizeof buf, "t = %.2f s", f.time);
         im.text(img, buf, font_px / 2, font_px + font_px / 2, font_px, {0, 0, 0});
+    }
+    // what the colours mean, top right (the speed mode has its bar below)
+    {
+        const int sw = std::max(6, font_px * 2 / 3), text_px = std::max(8, font_px * 2 / 3);
+        const auto swatch = [&](int x0, int y0, const Rgb& c) {
+            for (int y = y0; y < std::min(img.height, y0 + sw); ++y)
+                for (int x = x0; x < std::min(img.width, x0 + sw); ++x) {
+                    uint8_t* q = img.at(x, y);
+                    q[0] = uint8_t(std::lround(255 * c.r));
+                    q[1] = uint8_t(std::lround(255 * c.g));
+                    q[2] = uint8_t(std::lround(255 * c.b));
+                }
+        };
+        struct Entry {
+            Rgb colour;
+            const char* text;
+        };
+        std::vector<Entry> key;
+        switch (style_.color) {
+            case ColorMode::Layers: key = {{kLayerA, "release layers 1, 3, 5, ... (from the bottom)"}, {kLayerB, "layers 2, 4, 6, ..."}}; break;
+            case ColorMode::Grid: key = {{kLayerA, "release cells, alternating"}, {kLayerB, "their neighbours"}}; break;
+            case ColorMode::Bonds: key = {{kBondIntact, "all bonds intact (orange to red: share lost)"}, {kBondLine, "intact bond"}}; break;
+            case ColorMode::Rotation: key = {{kRotationLine, "a line per disc: its rotation"}}; break;
+            case ColorMode::Speed: break;
+        }
+        size_t longest = 0;  // (about 0.6 of the font size a character, DejaVu Sans)
+        for (const Entry& e : key) longest = std::max(longest, std::strlen(e.text));
+        const int x0 = img.width - sw - text_px - int(0.62 * double(text_px) * double(longest));
+        for (size_t k = 0; k < key.size() && x0 > 0; ++k) {
+            const int y = font_px / 2 + int(k) * (sw + text_px / 2);
+            swatch(x0, y, key[k].colour);
+            im.text(img, key[k].text, x0 + sw + text_px / 2, y + sw, text_px, {0, 0, 0});
+        }
     }
     if (style_.color == ColorMode::Speed) {
         // colour bar on the right: 0 at the bottom, speed_max at the top
