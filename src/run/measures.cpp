@@ -119,7 +119,7 @@ void RunSeries::sample(const World& w, const MeasureContext& m, RunState& st, Ru
                      << w.omegas()[i] << '\n';
     }
     // a write refused since the last sample (a full disk) ends the run here, not at its end
-    for (SeriesFile* f : {&forces_, &energy_, &front_, &track_}) f->check();
+    for (SeriesFile* file : {&forces_, &energy_, &front_, &track_}) file->check();
 }
 
 // Energy created by the numerics (an unstable step, a disc driven through a wall): the
