@@ -119,6 +119,10 @@ TEST(GeometryA20, GenerationToRestBalancesAndDeterminism) {
                               "summary.json", "snapshots/discs.pvd", "snapshots/walls.pvd"})
             EXPECT_TRUE(fs::exists(first.dir / f)) << f;
         EXPECT_LT(s.energy_balance_error, 0.01);
+        // nothing left the flume: the run-out is the deposit's
+        EXPECT_EQ(s.left_flume_discs, 0);
+        EXPECT_FALSE(s.runout_lower_bound);
+        EXPECT_NE(read_file(first.dir / "summary.json").find("\"left_flume\": false"), std::string::npos);
     }
     {
         SCOPED_TRACE("the summary reports the broad phase");
@@ -288,4 +292,26 @@ end = [1.0, 0.0]
         }
         fs::remove_all(dir);
     }
+}
+
+// Geometry B at scale 20: a disc goes over the 7-degree barrier's top and leaves the domain.
+// The run says so (count, mass, time) and marks its run-out and run-up as lower bounds, in
+// summary.json as a DAN run does (left_flume), instead of a run-out past the path's end with
+// no word.
+TEST(GeometryB20, MassThatLeavesTheFlumeMakesTheRunOutALowerBound) {
+    Scenario s = load_scenario(std::string(DEMLAB_SOURCE_DIR) + "/scenarios/geometry-B.toml");
+    apply_override(s, "release.scale=20");
+    apply_override(s, "output.snapshot_interval=0");
+    finish_scenario(s);
+    const fs::path dir = temp_dir("b20-left");
+    fs::remove_all(dir);
+    const RunSummary r = run_scenario(s, {dir.string(), false, {}});
+    EXPECT_GT(r.left_flume_discs, 0);
+    EXPECT_GT(r.left_flume_mass, 0.0);
+    EXPECT_GT(r.t_left_flume, 0.0);
+    EXPECT_TRUE(r.runout_lower_bound);
+    const std::string summary = read_file(dir / "summary.json");
+    EXPECT_NE(summary.find("\"left_flume\": true"), std::string::npos) << summary;
+    EXPECT_NE(summary.find("\"runout_lower_bound\": true"), std::string::npos);
+    fs::remove_all(dir);
 }

@@ -48,6 +48,7 @@ int report(const Scenario& s, const RunSummary& r, const std::string& dir, bool 
                     r.t_front_at_barrier, r.t_peak_fx_barrier, r.t_peak_fy_arc);
         std::printf("  run-out s = %.3f m; run-up %.3f m (max during run %.3f m)\n", r.runout_s, r.runup_height,
                     r.max_runup_height_during_run);
+        if (r.runout_lower_bound) std::printf("  the front passed the flume's end: the run-out and run-up are lower bounds\n");
     } else {
     std::printf("%s: %ld discs, model %d, variant %s, %ld steps to t = %.3f s (%s), dt %.3g-%.3g s\n", s.name.c_str(),
                 r.n_discs, s.world.rotation.model, s.release.variant.c_str(), r.steps, r.t_end, r.stop_reason.c_str(),
@@ -58,6 +59,11 @@ int report(const Scenario& s, const RunSummary& r, const std::string& dir, bool 
                     r.porosity_over_release_box, r.porosity_inside_mass, r.t_front_at_barrier, r.t_peak_fx_barrier, r.t_peak_fy_arc);
         std::printf("  run-out s = %.3f m; run-up %.3f m (max during run %.3f m)\n", r.runout_s, r.runup_height,
                     r.max_runup_height_during_run);
+        if (r.left_flume_discs > 0)
+            std::printf("  %ld disc%s (%.4g kg/m) left the flume from t = %.3f s: the run-out and run-up are lower bounds\n",
+                        r.left_flume_discs, r.left_flume_discs == 1 ? "" : "s", r.left_flume_mass, r.t_left_flume);
+        else if (r.runout_lower_bound)
+            std::printf("  the deposit reaches the end of the bed path: the run-out is a lower bound\n");
     }
     if (r.lost_discs > 0)
         std::printf("  %ld disc%s left the domain and %s taken out (lost.csv; world.lost_discs)\n", r.lost_discs,

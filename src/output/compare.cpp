@@ -219,7 +219,9 @@ std::vector<std::string> compare_into(const CompareOptions& o, const std::vector
         const double shift = s.number("sync_shift");
         const std::string arrival = cell(s.number("t_front_at_barrier")) +
                                     (std::isfinite(shift) ? " (" + cell(s.number("t_front_at_barrier") + shift) + " synchronised)" : "");
-        md << "| " << r.label << " | " << arrival << " | " << cell(s.number("runout_s")) << " | "
+        // mass that left the flume: the run-out and run-up are lower bounds (">=")
+        const std::string bound = s.number("runout_lower_bound") == 1.0 ? ">= " : "";
+        md << "| " << r.label << " | " << arrival << " | " << bound << cell(s.number("runout_s")) << " | " << bound
            << cell(s.number("runup_height")) << " | " << cell(s.number("max_runup_height_during_run")) << " | "
            << cell(s.number("peak_fx_barrier"), 1) << " | " << cell(s.number("t_peak_fx_barrier")) << " | "
            << cell(s.number("t_end")) << " | " << s.text("stop_reason") << " |\n";
@@ -229,7 +231,8 @@ std::vector<std::string> compare_into(const CompareOptions& o, const std::vector
             << cell(s.number("t_peak_fx_barrier"), 6) << ',' << cell(s.number("t_end"), 6) << ',' << s.text("stop_reason") << '\n';
     }
     md << "\nRun-out: s of the deposit's front along the bed path (DEM: the foremost connected disc; DAN: the front "
-          "block). Run-up: the deposit's highest point on the barrier above its foot.\n";
+          "block). Run-up: the deposit's highest point on the barrier above its foot. \">=\": mass left the flume "
+          "(summary.json's left_flume), so the figure is a lower bound.\n";
     write_file_atomic(o.out + "/comparison.md", md.str());
     write_file_atomic(o.out + "/comparison.csv", csv.str());
     made.push_back(o.out + "/comparison.md");

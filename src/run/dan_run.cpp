@@ -331,7 +331,9 @@ RunSummary run_dan(const Scenario& s, const RunOptions& o) {
     j.number("runout_s", sum.runout_s, "m");
     j.number("max_front_s", max_front, "m");
     put_landmarks(j, sum);  // the DEM's landmark keys, for `demlab compare`
+    sum.runout_lower_bound = left_flume;
     j.boolean("left_flume", left_flume);
+    j.boolean("runout_lower_bound", left_flume);  // (the front passed the flume's end: as a DEM run says it)
     j.number("sync_shift", sync_shift, "s");
     j.number("max_cfl", dan.max_cfl(), "-");
     j.number("momentum_corrected", dan.momentum_corrected(), "kg/s");  // momentum per metre of width

@@ -303,6 +303,11 @@ SummaryJson summary_json(const Scenario& s, const RunSummary& sum, const Release
     // the machine the timings above come from (a resumed run: the one that finished it)
     j.text("machine", machine_summary(machine_info()));
     j.number("runout_s", sum.runout_s, "m");
+    j.boolean("runout_lower_bound", sum.runout_lower_bound);
+    j.boolean("left_flume", sum.left_flume_discs > 0);
+    j.integer("left_flume_discs", sum.left_flume_discs);
+    j.number("left_flume_mass", sum.left_flume_mass, "kg/m");
+    j.number("t_left_flume", sum.t_left_flume >= 0 ? sum.t_left_flume : NAN, "s");
     j.number("deposit_max_height", sum.deposit_max_height, "m");
     j.number("deposit_length", sum.deposit_length, "m");
     put_landmarks(j, sum);

@@ -245,6 +245,17 @@ void write_results(const Scenario& s, const Setup& setup, const World& w, const 
     if (setup.measures_envelope()) angles = write_envelope(w, measure.front_gap, setup.envelope_length(), dir, sum);
     write_lost_discs(w, dir);
     sum.lost_discs = long(w.lost_discs().size());
+    if (measure.path) {
+        // a disc that left the domain of a run with a bed path went over the barrier or off an
+        // end: the deposit measured is what stayed, and its run-out and run-up are lower bounds;
+        // so are they when the deposit reaches the path's end
+        for (const LostDiscEvent& e : w.lost_discs()) {
+            ++sum.left_flume_discs;
+            sum.left_flume_mass += e.mass;
+            if (sum.t_left_flume < 0 || e.t < sum.t_left_flume) sum.t_left_flume = e.t;
+        }
+        sum.runout_lower_bound = sum.left_flume_discs > 0 || sum.runout_s >= measure.path->length() - 1e-9;
+    }
     if (w.bonds_at_start() > 0) {
         write_bond_breaks(w, dir);
         sum.bonds = long(w.bonds_at_start());

@@ -77,6 +77,12 @@ struct RunSummary {
     double wall_seconds = 0;            // of the run after the release mass was ready
     double particle_steps_per_second = 0;
     double runout_s = 0;                // m along the path: the deposit's front
+    // mass that left the flume (past the barrier's top or the path's ends: taken out as lost
+    // discs): then the run-out and run-up are lower bounds, not the deposit's
+    long left_flume_discs = 0;
+    double left_flume_mass = 0;         // kg/m
+    double t_left_flume = -1;           // s, the first to leave (-1: none)
+    bool runout_lower_bound = false;
     double deposit_max_height = 0;      // m, the deposit's thickest point normal to the bed (deposit.csv)
     double deposit_length = 0;          // m along the path, from its first bin with mass to its last
     double runup_height = 0;            // m: highest point of the deposit on the barrier above its foot
