@@ -254,17 +254,21 @@ static double ground_at(const std::vector<Vec2>& line, double x) {
 // of the ground inside it (a profile point inside, or a profile segment crossing an edge: a
 // ridge through the polygon). Otherwise discs would be made over no ground or inside it.
 // `tol` is "on the ground": a corner that far below it, or the ground that far inside, passes.
+// `margin`: the ground must reach that far beyond the corners in x (a disc's radius: a disc at
+// a corner reaches that far).
 static void require_above_ground(const std::vector<Vec2>& poly, const std::vector<Vec2>& ground, double tol,
-                                 const std::string& what) {
-    const double gx0 = ground.front().x(), gx1 = ground.back().x();
+                                 const std::string& what, double margin = 0.0) {
+    const double gx0 = ground.front().x() + margin, gx1 = ground.back().x() - margin;
     const size_t n = poly.size();
     for (size_t k = 0; k < n; ++k) {
         const Vec2 c = poly[k];
         const std::string corner = what + ": corner " + std::to_string(k) + " [" + format_number(c.x()) + ", " + format_number(c.y()) + "]";
         if (c.x() < gx0 || c.x() > gx1)
-            throw InputError(corner + " lies beyond the terrain's profile (x from " + format_number(gx0) + " to " +
-                             format_number(gx1) + " m): the polygon must lie above the ground, within the profile's x range");
-        const double g = ground_at(ground, std::clamp(c.x(), gx0, gx1));
+            throw InputError(corner + " lies beyond the terrain's profile (x from " + format_number(ground.front().x()) + " to " +
+                             format_number(ground.back().x()) + " m" +
+                             (margin > 0.0 ? ", less the largest disc's radius " + format_number(margin) + " m at each end" : "") +
+                             "): the polygon must lie above the ground, within the profile's x range");
+        const double g = ground_at(ground, std::clamp(c.x(), ground.front().x(), ground.back().x()));
         if (c.y() < g - tol)
             throw InputError(corner + " lies " + format_number(g - c.y()) + " m under the ground (the ground is at y = " +
                              format_number(g) + " m there): the polygon must lie on or above the ground");
@@ -365,7 +369,7 @@ void finish_terrain(Scenario& s) {
         x1 = std::max(x1, q.x());
     }
     // "on the ground": a millionth of the polygon's size (coordinates typed to a few digits)
-    require_above_ground(p, t.points, 1e-6 * std::max(x1 - x0, hi - lo), where + "terrain.release");
+    require_above_ground(p, t.points, 1e-6 * std::max(x1 - x0, hi - lo), where + "terrain.release", s.release.r_max);
     const ReleaseDef& r = s.release;
     if (s.world.rotation.model >= 2 && !(s.world.rotation.u_rr < 0.6 * r.r_min * (1.0 - r.radius_reduction)))
         throw InputError(where + "rotation.u_rr = " + format_number(s.world.rotation.u_rr) +
