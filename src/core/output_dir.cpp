@@ -47,6 +47,16 @@ std::string replaced_output_dir(const std::string& dir) {
 void check_output_dir(const std::string& dir, bool force, const std::vector<std::string>& inputs) {
     if (dir.empty()) throw InputError("--out '': an output folder needs a name");
     std::error_code ec;
+    // a `..` after a folder that does not exist: the system cannot resolve it (so the folder
+    // would seem new), while making the folders would resolve it and write into an existing one
+    fs::path prefix;
+    for (const fs::path& part : fs::path(dir)) {
+        if (part == ".." && !prefix.empty() && !fs::is_directory(prefix, ec))
+            throw InputError("--out '" + dir + "': its '..' follows '" + prefix.string() +
+                             "', which does not exist; give the folder without it ('" +
+                             fs::path(dir).lexically_normal().string() + "')");
+        prefix /= part;
+    }
     if (!fs::exists(fs::symlink_status(dir, ec))) return;
     if (!force)
         throw InputError("output folder '" + dir +
