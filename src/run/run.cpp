@@ -369,7 +369,9 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
     const long steps_start = solver.step_count();
     Progress progress(s.stop.t_max, "s", solver.time(), steps_start);
     const auto t0 = std::chrono::steady_clock::now();
-    auto last_checkpoint = t0, last_progress_call = t0;
+    // (the first progress call comes at once, at the first check: a script sees the run start,
+    // and a run shorter than the call interval still reports while it runs)
+    auto last_checkpoint = t0, last_progress_call = t0 - std::chrono::milliseconds(250);
     auto steps_per_second = [&] {
         const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
         return secs > 0 ? double(solver.step_count() - steps_start) / secs : 0.0;

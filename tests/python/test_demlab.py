@@ -201,7 +201,9 @@ def test_ctrl_c_in_python_writes_a_checkpoint_and_the_resumed_run_is_the_same(cl
     state = {"sent": False}
 
     def progress(t, t_max, rate):
-        if t > 0.1 and not state["sent"]:
+        # the first call comes at once, while the run runs: the interrupt lands mid-run on any
+        # machine (a condition on t raced the 0.25 s between calls on a fast one)
+        if not state["sent"]:
             state["sent"] = True
             os.kill(os.getpid(), signal.SIGINT)
 
