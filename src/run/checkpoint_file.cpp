@@ -7,6 +7,7 @@
 #include "core/crc32c.h"
 #include "core/error.h"
 #include "core/fileio.h"
+#include "scenario/fingerprint.h"
 #include "scenario/scenario.h"
 
 namespace demlab {
@@ -19,15 +20,6 @@ constexpr char kMagic[8] = {'D', 'E', 'M', 'L', 'A', 'B', 'C', 'K'};
 constexpr uint32_t kCheckpointVersion = 4;
 constexpr uint32_t kByteOrder = 0x01020304;
 
-// The scenario's settings: its text without the comment lines (the header names the file the
-// scenario was read from, which is the run folder's copy when resuming).
-std::string without_comments(const std::string& text) {
-    std::istringstream in(text);
-    std::string line, out;
-    while (std::getline(in, line))
-        if (line.empty() || line[0] != '#') out += line + '\n';
-    return out;
-}
 }  // namespace
 
 void put_checkpoint_header(BinaryWriter& out, const std::string& scenario_text, const std::vector<ScenarioInput>& inputs,
@@ -129,11 +121,11 @@ std::string read_checkpoint_file(const std::string& path) {
 std::string read_whole(const std::string& path) { return read_input_file(path, kMaxCheckpointBytes, "checkpoint or run file"); }
 
 bool same_scenario(const std::string& stored, const std::string& resolved_now) {
-    if (without_comments(stored) == without_comments(resolved_now)) return true;
+    if (scenario_settings(stored) == scenario_settings(resolved_now)) return true;
     try {
         Scenario then = parse_scenario(stored, "the checkpoint's scenario");
         finish_scenario(then);
-        return without_comments(resolved_toml(then)) == without_comments(resolved_now);
+        return scenario_settings(resolved_toml(then)) == scenario_settings(resolved_now);
     } catch (const InputError&) {
         return false;  // a key this build no longer reads: not the same scenario
     }

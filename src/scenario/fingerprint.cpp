@@ -54,15 +54,16 @@ private:
     uint64_t hi_ = 0x6c62272e07bb0142ULL, lo_ = 0x62b821756295c58dULL;
 };
 
-std::string without_comment_lines(const std::string& text) {
+
+}  // namespace
+
+std::string scenario_settings(const std::string& text) {
     std::istringstream in(text);
     std::string line, out;
     while (std::getline(in, line))
         if (line.empty() || line[0] != '#') out += line + '\n';
     return out;
 }
-
-}  // namespace
 
 const std::vector<std::string>& scenario_file_keys() {
     static const std::vector<std::string> keys = [] {
@@ -92,7 +93,7 @@ std::vector<ScenarioInput> scenario_inputs(const Scenario& s) {
 std::string scenario_fingerprint(const Scenario& s, const std::vector<ScenarioInput>& inputs) {
     Fnv1a128 h;
     h.add("demlab scenario fingerprint 1\n");
-    h.add(without_comment_lines(resolved_toml(s)));
+    h.add(scenario_settings(resolved_toml(s)));
     for (const ScenarioInput& in : inputs) {
         h.add("\n[input] " + in.key + " = " + in.path + "\n");
         h.add(in.hash);

@@ -24,6 +24,10 @@ struct ScenarioInput {
 // hashed (InputError naming the key and the file when one cannot be read).
 std::vector<ScenarioInput> scenario_inputs(const Scenario& s);
 
+// A resolved scenario's settings: its text without the comment lines (which name the file it
+// was read from: a resumed run's is the run folder's copy).
+std::string scenario_settings(const std::string& text);
+
 // 32 hex digits: 128-bit FNV-1a of the bytes (stable across builds and machines).
 std::string content_hash(const std::string& bytes);
 
