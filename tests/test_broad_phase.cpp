@@ -110,7 +110,7 @@ TEST(BroadPhase, ContactSetEqualsBruteForceOnRandomConfigurations) {
             EXPECT_EQ(engine_walls(w), brute_force_walls(w)) << "seed " << seed << " round " << round;
             touching_seen += long(expect_dd.size());
         }
-        EXPECT_GT(touching_seen, 100);
+        EXPECT_GT(touching_seen, 50);  // the case has contacts to compare
         EXPECT_GT(w.broad_phase_stats().disc_reinserts, 0);  // discs did leave their fat boxes
     }
 }

@@ -18,6 +18,7 @@
 #include <chrono>
 #include <cmath>
 #include <thread>
+#include <type_traits>
 
 #include "core/error.h"
 #include "core/validate.h"
@@ -155,11 +156,15 @@ void World::compute_forces_with(bool then_integrate) {
         clearances_stale_ = false;
     }
     if (cross_copies_stale_) copy_cross_contacts();
+    // centred dashpots (centred_dashpots.cpp): the pass sums the forces, the dashpots are
+    // moved to the step's centre, then the ranges integrate
+    const bool centred = then_integrate && centred_dashpots();
+    const bool fused = then_integrate && !centred;
     const PassContext<Law> ctx{DiscArrays{pos_.data(), vel_.data(), radius_.data(), omega_.data(), material_.data()},
                           PairPassParamsT<typename Law::Params>{tables<Law>().disc_disc.data(), materials_.size(),
                                                                 def_.damping.dp_mode, dt_, last_dt_, def_.max_overlap_ratio},
-                          then_integrate ? integrate_prepare() : IntegrateConsts{},
-                          then_integrate,
+                          fused ? integrate_prepare() : IntegrateConsts{},
+                          fused,
                           prefetching(),
                           ++cross_pass_,
                           // the clearance test's bound as floats, rounded outwards (PairSkip)
@@ -187,6 +192,11 @@ void World::compute_forces_with(bool then_integrate) {
             if (f.index != SIZE_MAX && (!first || f.index < first->index)) first = &f;
         if (first) throw RunError(first->message);
     }
+    if constexpr (std::is_same_v<Law, LinearLaw>)
+        if (centred) {
+            centre_dashpots(ctx.pp);
+            integrate_ranges(integrate_prepare());
+        }
     add_up_pass();
     if (!bonds_.empty()) {
         book_bond_dashpots();

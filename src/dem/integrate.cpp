@@ -16,9 +16,13 @@ namespace demlab {
 
 World::DtFactors World::dt_factors() const {
     const bool corr = def_.timestep.damping_correction;
+    // local damping (a force along the spring force, not a dashpot) keeps its factor in
+    // either scheme; the dashpots' factors belong to the lagged scheme alone: centred
+    // dashpots are stable at PFC's rule as printed (centred_dashpots.cpp)
     const double local = corr ? local_damping_factor(def_.damping.local_alpha) : 1.0;
-    const double phi = local * (corr ? rotational_damping_factor(def_.damping.beta_s) : 1.0);
-    const double phi_t = local * (corr ? translational_damping_factor(def_.damping.beta_n) : 1.0);
+    const bool lagged = corr && !centred_dashpots();
+    const double phi = local * (lagged ? rotational_damping_factor(def_.damping.beta_s) : 1.0);
+    const double phi_t = local * (lagged ? translational_damping_factor(def_.damping.beta_n) : 1.0);
     // DEBRIS: no dashpots, translation only
     if (def_.law == ContactLawKind::Debris) return {false, 1.0, 1.0};
     return {def_.rotation.model != 1, phi * phi, phi_t * phi_t};

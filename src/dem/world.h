@@ -34,11 +34,18 @@ struct DampingDef {
     double local_alpha = 0.0;              // -, PFC local damping (eq. 2.51) in [0, 1); the settling, and the flow if damping.local_alpha is set
 };
 
+// How the linear law's dashpots are integrated (docs/engine.md, "Dashpots"): at the step's
+// centre, from the velocities the step's other forces lead to (stable at PFC's step rule as
+// printed), or lagged, from the velocities half a step back (the scheme of earlier builds,
+// which needs the damping correction of timestep.h).
+enum class DashpotScheme { Centred, Lagged };
+
 struct TimeStepDef {
     bool automatic = true;                 // PFC rule (timestep.h); false: the fixed step below
     double safety = 0.8;                   // -, safety factor of the automatic step, (0, 1]
     double fixed = 1.0e-6;                 // s, used when automatic = false
-    bool damping_correction = true;        // shrink the rotational bound for the shear dashpot (timestep.h)
+    DashpotScheme dashpots = DashpotScheme::Centred;
+    bool damping_correction = true;        // shrink the bounds for local damping and lagged dashpots (timestep.h)
 };
 
 // What happens to a disc whose centre leaves the domain (WorldDef::domain_lo/hi): the run
@@ -323,6 +330,13 @@ private:
     template <typename Law>
     size_t wall_contacts(size_t& kw, size_t end, int t, const PassContext<Law>& ctx, WallSum* sums, size_t n);
     void block_ledger(size_t b0, size_t b1, size_t t);
+    // centred dashpots (centred_dashpots.cpp): after a pass without integration, each touching
+    // contact's dashpot force moved to the step's centre, then every range integrated
+    bool centred_dashpots() const;
+    void centre_dashpots(const PairPassParams& pp);
+    void integrate_ranges(const IntegrateConsts& ic);
+    std::vector<Vec2> vel_centre_;      // m/s, the discs' velocities at t from the other forces
+    std::vector<double> omega_centre_;  // rad/s
     void add_up_pass();
     void copy_cross_contacts();
     void note_disc_fault(size_t k, double overlap, int chunk);

@@ -177,8 +177,9 @@ void check_energy_growth(const Solver& w, double e0, double max_gain, double noi
     for (const Account& a :
          {Account{"dissipated_contacts", e.dissipated_contacts, dissipation.contacts,
                   "a time step too large for the damped contacts (the dashpots of an unstable step push instead of "
-                  "damping; timestep.damping_correction = false is PFC's rule as printed, unstable with free rotation "
-                  "and a shear dashpot: docs/engine.md): use the automatic step with the damping correction, or a "
+                  "damping; lagged dashpots, timestep.dashpots = \"lagged\", are unstable at PFC's rule as printed "
+                  "with free rotation and a shear dashpot unless timestep.damping_correction is on: docs/engine.md): "
+                  "use the centred dashpots (the default) or the damping correction with the automatic step, or a "
                   "smaller timestep.safety or timestep.fixed"},
           Account{"dissipated_local", e.dissipated_local, dissipation.local,
                   "a time step too large for the local damping (damping.local_alpha; the automatic step with "

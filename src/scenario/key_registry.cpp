@@ -227,7 +227,8 @@ void add_dynamics_keys(std::vector<Key>& k) {
     k.push_back(boolean("timestep.automatic", "PFC's automatic step (docs/engine.md) or the fixed one", [](Scenario& s) -> bool& { return s.world.timestep.automatic; }));
     k.push_back(real("timestep.safety", "-", "safety factor of the automatic step (PFC: 0.8)", [](Scenario& s) -> double& { return s.world.timestep.safety; }, 0, 1, true, false));
     k.push_back(real("timestep.fixed", "s", "the step when automatic = false", [](Scenario& s) -> double& { return s.world.timestep.fixed; }, 0, 1, true));
-    k.push_back(boolean("timestep.damping_correction", "shrink the rotational bound for the shear dashpot (stability, docs/engine.md)", [](Scenario& s) -> bool& { return s.world.timestep.damping_correction; }));
+    k.push_back(choice<DashpotScheme>("timestep.dashpots", "how the dashpots are integrated (docs/engine.md, \"Dashpots\"): centred (at the step's centre, implicit per contact: stable at PFC's rule as printed) or lagged (from the velocities half a step back, the scheme of earlier builds: with timestep.damping_correction it reproduces their results bit for bit)", [](Scenario& s) -> DashpotScheme& { return s.world.timestep.dashpots; }, {{"centred", DashpotScheme::Centred}, {"lagged", DashpotScheme::Lagged}}));
+    k.push_back(boolean("timestep.damping_correction", "shrink the step's bounds for local damping and, with lagged dashpots, for the dashpots (stability, docs/engine.md)", [](Scenario& s) -> bool& { return s.world.timestep.damping_correction; }));
     // world
     k.push_back(vec2("world.gravity", "m/s2", "gravity vector (its magnitude at most 1e3 m/s2, about a hundred g)", [](Scenario& s) -> Vec2& { return s.world.gravity; }, 1e3));
     k.push_back(real("world.broadphase_margin", "m", "smallest pad of the broad phase's fat boxes (moving discs get wider ones); 0 = half the smallest radius", [](Scenario& s) -> double& { return s.world.broadphase_margin; }, 0, 1));

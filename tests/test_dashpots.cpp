@@ -1,0 +1,137 @@
+// The dashpots at the step's centre (timestep.dashpots = "centred", centred_dashpots.cpp):
+// restitution against the closed form (eq. 2.56-2.62) at fine steps and at PFC's step,
+// second-order convergence, and stability at PFC's rule as printed where the lagged
+// dashpots blow up.
+#include <gtest/gtest.h>
+
+#include <cstdio>
+
+#include "dashpot_stability.h"
+#include "helpers.h"
+
+using namespace demlab;
+using namespace demlab::test;
+
+namespace {
+
+constexpr double kRho = 2672.0, kK = 1e8;
+
+WorldDef impact_def(double beta, DashpotScheme scheme) {
+    WorldDef def;
+    def.gravity = Vec2::Zero();
+    def.damping.beta_n = beta;
+    def.damping.beta_s = beta;
+    def.rotation.model = 2;
+    def.rotation.u_rr = 0.0;
+    def.timestep.dashpots = scheme;
+    def.timestep.damping_correction = false;
+    return def;
+}
+
+// A disc hits a wall head-on at 1 m/s; the rebound speed over the impact speed. steps_per_contact
+// > 0: a fixed step of that fraction of the contact's duration pi sqrt(m / k); 0: PFC's rule.
+double wall_restitution(double beta, DashpotScheme scheme, double steps_per_contact) {
+    World w(impact_def(beta, scheme));
+    const int m = w.add_material(material(0.3, kK, kRho));
+    const double r = 0.0015;
+    w.add_disc({Vec2(0.0, r + 1e-6), r, Vec2(0.0, -1.0), 0.0, 0.0, m});
+    w.add_wall(segment(Vec2(-0.1, 0.0), Vec2(0.1, 0.0)));
+    const double mass = kRho * kPi * r * r;
+    const double k = 0.5 * kK;  // disc and wall in series
+    if (steps_per_contact > 0) w.set_dt(kPi * std::sqrt(mass / k) / steps_per_contact);
+    w.finalize();
+    bool touched = false;
+    for (int s = 0; s < 200000; ++s) {
+        w.step();
+        if (w.touching_wall_pairs() > 0) touched = true;
+        if (touched && w.touching_wall_pairs() == 0) break;
+    }
+    EXPECT_TRUE(touched);
+    return w.velocities()[0].y();
+}
+
+// Two discs of radii 1 and 2 mm meet at 1 m/s each; the relative rebound ratio.
+double disc_restitution(double beta, DashpotScheme scheme, double steps_per_contact) {
+    World w(impact_def(beta, scheme));
+    const int m = w.add_material(material(0.3, kK, kRho));
+    const double r1 = 0.001, r2 = 0.002;
+    w.add_disc({Vec2(-r1 - 1e-6, 0.0), r1, Vec2(1.0, 0.0), 0.0, 0.0, m});
+    w.add_disc({Vec2(r2 + 1e-6, 0.0), r2, Vec2(-1.0, 0.0), 0.0, 0.0, m});
+    const double m1 = kRho * kPi * r1 * r1, m2 = kRho * kPi * r2 * r2;
+    if (steps_per_contact > 0) w.set_dt(kPi * std::sqrt(effective_mass(m1, m2) / (0.5 * kK)) / steps_per_contact);
+    w.finalize();
+    bool touched = false;
+    for (int s = 0; s < 200000; ++s) {
+        w.step();
+        if (w.touching_disc_pairs() > 0) touched = true;
+        if (touched && w.touching_disc_pairs() == 0) break;
+    }
+    EXPECT_TRUE(touched);
+    return (w.velocities()[1].x() - w.velocities()[0].x()) / 2.0;
+}
+
+}  // namespace
+
+class CentredRestitution : public ::testing::TestWithParam<double> {};
+
+// The limit is the closed form: at 4,000 steps per contact both impacts give it within 1e-4
+// of the impact speed, and within a fifth of their error at 62.5 steps per contact. (The
+// error falls in steps, not as a power of dt: a contact starts and ends between steps, and
+// that first-order error of the contact's duration outweighs the scheme's second-order one.)
+TEST_P(CentredRestitution, TendsToTheClosedForm) {
+    const double beta = GetParam();
+    const double e = restitution(beta);
+    for (auto* impact : {&wall_restitution, &disc_restitution}) {
+        const double coarse = std::abs(impact(beta, DashpotScheme::Centred, 62.5) - e);
+        const double fine = std::abs(impact(beta, DashpotScheme::Centred, 4000) - e);
+        EXPECT_LT(fine, 1e-4) << "beta " << beta;
+        EXPECT_LT(fine, 0.2 * coarse) << "beta " << beta;
+    }
+}
+
+INSTANTIATE_TEST_SUITE_P(Betas, CentredRestitution, ::testing::Values(0.2, 0.5, 0.85));
+
+// The restitution at PFC's step (a lone disc's rule: 0.8 sqrt(m / k_own), about 6 steps per
+// contact) beside the closed form and the lagged scheme's, as docs/engine.md states them.
+TEST(CentredRestitution, AtPfcStepStaysNearTheClosedForm) {
+    std::printf("beta  closed   centred(wall disc)  lagged(wall disc)\n");
+    for (double beta : {0.2, 0.5, 0.85}) {
+        const double e = restitution(beta);
+        const double cw = wall_restitution(beta, DashpotScheme::Centred, 0);
+        const double cd = disc_restitution(beta, DashpotScheme::Centred, 0);
+        const double lw = wall_restitution(beta, DashpotScheme::Lagged, 0);
+        const double ld = disc_restitution(beta, DashpotScheme::Lagged, 0);
+        std::printf("%.2f  %.4f   %.4f %.4f       %.4f %.4f\n", beta, e, cw, cd, lw, ld);
+        // a rebound, never more than the impact, within 0.06 of the closed form
+        for (double c : {cw, cd}) {
+            EXPECT_GE(c, 0.0);
+            EXPECT_LT(c, 1.0);
+            EXPECT_NEAR(c, e, 0.06) << "beta " << beta;
+        }
+    }
+}
+
+// The pressed pair with free rotation, 1e6 steps at PFC's rule as printed: the centred
+// dashpots never let its energy grow nor its dissipation go back (the spin ends as a
+// rolling of the pair along the walls, which nothing resists); the lagged ones blow up.
+TEST(CentredDashpots, PressedPairWithFreeRotationIsStableAtPfcRule) {
+    const DashpotWatch centred = pressed_pair(DashpotScheme::Centred, 1000000);
+    EXPECT_FALSE(centred.threw);
+    EXPECT_LE(centred.energy_rise, 1e-12 * centred.energy_start);
+    EXPECT_LE(centred.dissipation_drop, 1e-12 * centred.energy_start);
+    const DashpotWatch lagged = pressed_pair(DashpotScheme::Lagged, 1000000);
+    EXPECT_TRUE(lagged.threw || lagged.energy_rise > 1e-6 * lagged.energy_start);
+}
+
+// The pack of 2,000-odd discs settling for 50,000 steps (0.9 s) at PFC's rule as printed; the slow validation run
+// (tests/slow_dashpots.cpp) takes it to 1e6 steps.
+TEST(CentredDashpots, SettlingPackIsStableAtPfcRule) {
+    const DashpotWatch pack = settling_pack(DashpotScheme::Centred, 50000);
+    ASSERT_GE(pack.discs, 2000);
+    EXPECT_FALSE(pack.threw);
+    EXPECT_LE(pack.energy_rise, 1e-9 * std::abs(pack.energy_start));
+    EXPECT_LE(pack.dissipation_drop, 1e-9 * std::abs(pack.energy_start));
+    // the lagged dashpots at the same rule blow up within the first 5,000 steps
+    const DashpotWatch lagged = settling_pack(DashpotScheme::Lagged, 50000);
+    EXPECT_TRUE(lagged.threw || lagged.energy_rise > 1e-9 * std::abs(lagged.energy_start));
+}
