@@ -194,8 +194,7 @@ void World::compute_forces_with(bool then_integrate) {
     }
     if constexpr (std::is_same_v<Law, LinearLaw>)
         if (centred) {
-            centre_dashpots(ctx.pp);
-            integrate_ranges(integrate_prepare());
+            centre_dashpots(ctx.pp, integrate_prepare());
         }
     add_up_pass();
     if (!bonds_.empty()) {

@@ -333,10 +333,15 @@ private:
     // centred dashpots (centred_dashpots.cpp): after a pass without integration, each touching
     // contact's dashpot force moved to the step's centre, then every range integrated
     bool centred_dashpots() const;
-    void centre_dashpots(const PairPassParams& pp);
-    void integrate_ranges(const IntegrateConsts& ic);
-    std::vector<Vec2> vel_centre_;      // m/s, the discs' velocities at t from the other forces
-    std::vector<double> omega_centre_;  // rad/s
+    void centre_dashpots(const PairPassParams& pp, const IntegrateConsts& ic);
+    bool centre_range(size_t t, const PairPassParams& pp);  // false: a wall contact's record is missing
+    struct DashSum {  // a disc's shifts, added to its sums before it moves
+        Vec2 force{0.0, 0.0};    // N/m
+        double torque = 0.0;     // N m/m
+        double dissipated = 0.0; // J/m
+    };
+    std::vector<DashSum> dash_;
+    std::vector<uint8_t> dash_ok_;  // per range: centre_range's result
     void add_up_pass();
     void copy_cross_contacts();
     void note_disc_fault(size_t k, double overlap, int chunk);
