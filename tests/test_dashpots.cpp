@@ -5,6 +5,11 @@
 #include <gtest/gtest.h>
 
 #include <cstdio>
+#include <cstring>
+#include <random>
+
+#include "dem/centre_lanes.h"
+#include "dem/laws/pair_kernel.h"
 
 #include "dashpot_stability.h"
 #include "helpers.h"
@@ -134,4 +139,85 @@ TEST(CentredDashpots, SettlingPackIsStableAtPfcRule) {
     // the lagged dashpots at the same rule blow up within the first 5,000 steps
     const DashpotWatch lagged = settling_pack(DashpotScheme::Lagged, 50000);
     EXPECT_TRUE(lagged.threw || lagged.energy_rise > 1e-9 * std::abs(lagged.energy_start));
+}
+
+// The centred pass' lanes (centre_lanes.h) give the same bits in every width this CPU runs, on
+// a block whose count is not a multiple of any width, with sliding and tension-capped pairs, and
+// lane 0 is the header's formula.
+TEST(CentreLanes, EveryWidthGivesTheBaselineBits) {
+    std::mt19937_64 rng(7);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    CentreBlock in;
+    in.count = 61;
+    for (size_t l = 0; l < in.count; ++l) {
+        in.ri[l] = 1e-3 * (1.5 + u(rng));
+        in.rj[l] = 1e-3 * (1.5 + u(rng));
+        const double dist = (in.ri[l] + in.rj[l]) * (1.0 - 0.01 * (1.0 + u(rng)));
+        const double a = 3.14159 * u(rng);
+        in.dx[l] = dist * std::cos(a);
+        in.dy[l] = dist * std::sin(a);
+        in.dist2[l] = in.dx[l] * in.dx[l] + in.dy[l] * in.dy[l];
+        in.vrx[l] = u(rng);
+        in.vry[l] = u(rng);
+        in.wi[l] = 100.0 * u(rng);
+        in.wj[l] = 100.0 * u(rng);
+        in.prx[l] = u(rng);
+        in.pry[l] = u(rng);
+        in.pwi[l] = 100.0 * u(rng);
+        in.pwj[l] = 100.0 * u(rng);
+        in.inv_mn[l] = 2.0 / (1e-2 * (1.5 + u(rng)));
+        in.inv_ii[l] = 1.0 / (1e-8 * (1.5 + u(rng)));
+        in.inv_ij[l] = 1.0 / (1e-8 * (1.5 + u(rng)));
+        in.cn[l] = 50.0 * (1.5 + u(rng));
+        in.cs[l] = 50.0 * (1.5 + u(rng));
+        in.kn[l] = 1e8;
+        in.mu[l] = 0.28;
+        // a third of the pairs slide: |F_s| = mu F_n
+        const double fn = in.kn[l] * (in.ri[l] + in.rj[l] - dist);
+        in.fs[l] = l % 3 == 0 ? in.mu[l] * fn : 0.5 * in.mu[l] * fn * u(rng);
+    }
+    struct Width {
+        const char* name;
+        bool avx2, avx512;
+    };
+    std::vector<Width> widths{{"baseline", false, false}};
+    if (cpu_has_avx2()) widths.push_back({"AVX2", true, false});
+    if (cpu_has_avx512()) widths.push_back({"AVX-512", true, true});
+    for (const bool rotation_free : {false, true})
+        for (const int mode : {0, 1, 2, 3}) {
+            const CentreConsts k{2e-6, 1e-6, rotation_free, mode == 1 || mode == 3, mode == 2 || mode == 3};
+            CentreBlock ref = in;
+            centre_block(ref, k, false, false);
+            for (const Width& w : widths) {
+                SCOPED_TRACE(std::string(w.name) + " mode " + std::to_string(mode) + (rotation_free ? " free" : " locked"));
+                CentreBlock b = in;
+                centre_block(b, k, w.avx2, w.avx512);
+                for (size_t l = 0; l < in.count; ++l) {
+                    ASSERT_EQ(std::memcmp(&b.fx[l], &ref.fx[l], 8), 0) << l;
+                    ASSERT_EQ(std::memcmp(&b.fy[l], &ref.fy[l], 8), 0) << l;
+                    ASSERT_EQ(std::memcmp(&b.torque_i[l], &ref.torque_i[l], 8), 0) << l;
+                    ASSERT_EQ(std::memcmp(&b.torque_j[l], &ref.torque_j[l], 8), 0) << l;
+                    ASSERT_EQ(std::memcmp(&b.dissipated[l], &ref.dissipated[l], 8), 0) << l;
+                    ASSERT_EQ(std::memcmp(&b.damp_n[l], &ref.damp_n[l], 8), 0) << l;
+                    ASSERT_EQ(std::memcmp(&b.damp_s[l], &ref.damp_s[l], 8), 0) << l;
+                }
+            }
+            // lane 0 against the formula: u(t) = (u* + (g/2) u-) / (1 + g/2) along the normal
+            const double dist = std::sqrt(in.dist2[0]);
+            const double nx = in.dx[0] / dist, ny = in.dy[0] / dist;
+            const double vn = in.vrx[0] * nx + in.vry[0] * ny, pn = in.prx[0] * nx + in.pry[0] * ny;
+            const double gn = in.cn[0] * k.dt * in.inv_mn[0];
+            double d_new = -in.cn[0] * (pn + 0.5 * gn * vn) / (1.0 + 0.5 * gn);
+            double d_old = -in.cn[0] * vn;
+            if (k.no_tension) {
+                const double fn = in.kn[0] * (in.ri[0] + in.rj[0] - dist);
+                d_new = std::max(d_new, -fn);
+                d_old = std::max(d_old, -fn);
+            }
+            EXPECT_NEAR(ref.damp_n[0], d_new, 1e-12 * std::abs(d_new));
+            // the shift's normal component is d_new - d_old (lane 0 slides: no shear shift in modes 2, 3)
+            if (k.no_shear_sliding) {
+                EXPECT_NEAR(ref.fx[0] * nx + ref.fy[0] * ny, d_new - d_old, 1e-9 * std::abs(d_new - d_old) + 1e-15);
+            }
+        }
 }

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "dem/broad_phase.h"
+#include "dem/centre_lanes.h"
 #include "dem/integrate_kernel.h"
 #include "dem/laws/contact_law.h"
 #include "dem/material.h"
@@ -342,6 +343,14 @@ private:
     };
     std::vector<DashSum> dash_;
     std::vector<uint8_t> dash_ok_;  // per range: centre_range's result
+    std::vector<std::unique_ptr<CentreBlock>> centre_blocks_;
+    struct alignas(64) CentreDisc {
+        double vx, vy, w;         // m/s, rad/s at t - dt/2
+        double pvx, pvy, pw;      // m/s, rad/s at t from the pass' sums (v*)
+        double inv_mass, inv_inertia;
+    };
+    std::vector<CentreDisc> centre_discs_;
+    void pack_centre_discs(size_t d0, size_t d1);  // per range: its pairs' lanes (centre_lanes.h)
     void add_up_pass();
     void copy_cross_contacts();
     void note_disc_fault(size_t k, double overlap, int chunk);
