@@ -41,7 +41,7 @@ FlumeRun run_geometry_a(const std::string& tag) {
 // release.space_order: "on" numbers the placed discs in space order before they settle (so
 // that large masses settle on all threads); the mass is the same bits on 1 and 2 threads
 // either way. "off" and "on" settle the same discs into different masses, both settled and of
-// the same porosity; "auto" is "off" at this size (364 discs), as at scale 4.
+// the same porosity; "auto" is "off" at this size (364 discs), "on" from 1,000 discs (scale 4).
 TEST(ReleaseMass, SpaceOrderSettlesTheSameBitsOnAnyThreadCount) {
     auto generate = [](const std::string& order, int threads) {
         Scenario s = load_scenario(std::string(DEMLAB_SOURCE_DIR) + "/scenarios/geometry-A.toml");

@@ -131,8 +131,9 @@ TEST(BlowUp, SameDiagnosisOnOneAndTwoThreads) {
     for (int threads : {1, 2}) {
         WorldDef def = db9k_world_def();
         def.threads = threads;
-        def.timestep.fixed = 2e-5;  // 4 times DB-9k's step: disc 1471 (the sixth block of 256) thrown
-                                     // more than half its radius in step 8
+        def.timestep.fixed = 2e-5;  // 4 times DB-9k's step: disc 560 (the third block of 256) thrown
+                                     // more than half its radius in step 2 (an overlap beyond half a
+                                     // radius with disc 559 would stop step 3)
         World w(def);
         build_db9k(w, discs);
         w.finalize();
@@ -142,7 +143,7 @@ TEST(BlowUp, SameDiagnosisOnOneAndTwoThreads) {
             msg[threads - 1] = e.what();
         }
     }
-    EXPECT_NE(msg[0].find("blow-up: disc 1471 moved"), std::string::npos) << msg[0];
+    EXPECT_NE(msg[0].find("blow-up: disc 560 moved"), std::string::npos) << msg[0];
     EXPECT_EQ(msg[0], msg[1]);
 }
 

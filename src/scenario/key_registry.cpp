@@ -389,7 +389,7 @@ void add_run_keys(std::vector<Key>& k) {
     k.push_back(boolean("release.accept_unsettled", "run a release mass that did not reach settle_ratio within settle_max_time (its ratio is in summary.json); false: such a mass is refused (exit 3)", [](Scenario& s) -> bool& { return s.release.accept_unsettled; }));
     k.push_back(real("release.layer_height", "m", "height of the horizontal colour bands (layers)", [](Scenario& s) -> double& { return s.release.layer_height; }, 0, 10, true));
     k.push_back(real("release.grid_cell", "m", "size of the colour grid's cells", [](Scenario& s) -> double& { return s.release.grid_cell; }, 0, 10, true));
-    k.push_back(text("release.space_order", "number the generated discs in space order before they settle, so that the settling runs on all threads: on, off, or auto (on above 20,000 discs). A different numbering settles into a different, equally valid mass", [](Scenario& s) -> std::string& { return s.release.space_order; }, {"auto", "on", "off"}));
+    k.push_back(text("release.space_order", "number the generated discs in space order before they settle, so that the settling runs on all threads: on, off, or auto (on above 1,000 discs). A different numbering settles into a different, equally valid mass", [](Scenario& s) -> std::string& { return s.release.space_order; }, {"auto", "on", "off"}));
     k.push_back(text("release.from_file", "a settled mass (release.csv of an earlier run) to start from instead of generating one", [](Scenario& s) -> std::string& { return s.release.from_file; }));
     // stop
     k.push_back(real("stop.t_max", "s", "simulated time after the release at most", [](Scenario& s) -> double& { return s.stop.t_max; }, 0, 1e4, true));

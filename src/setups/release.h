@@ -40,7 +40,7 @@ ReleaseMass generate_release(const Scenario& s);
 
 // release.space_order = auto numbers the discs in space order before they settle above this
 // many discs (generate_release).
-constexpr long kSpaceOrderDiscs = 20000;
+constexpr long kSpaceOrderDiscs = 1000;
 
 // Renumbers the discs in space order: strips across x, `strip` metres wide, from left to
 // right, and up each strip. The engine gives each thread a range of disc numbers and works
