@@ -207,7 +207,11 @@ bool World::centre_range(size_t tr, const PairPassParams& pp) {
         }
         if (b.count > 0) add_cross_in();
     }
-    for (size_t k = contact_split_[tr]; k < contact_split_[tr + 1]; ++k) {
+    // the pass listed its touching pairs (its own and its cross ones, in list order): the
+    // others add nothing, and testing every candidate here cost more than the shifts
+    const uint32_t* const touching = touching_list_[tr].data();
+    for (size_t e = 0, n = touching_count_[tr]; e < n; ++e) {
+        const size_t k = touching[e];
         gather(dd[k], k);
         if (b.count == CentreBlock::kSize) add_own();
     }

@@ -169,7 +169,13 @@ void World::compute_forces_with(bool then_integrate) {
                           ++cross_pass_,
                           // the clearance test's bound as floats, rounded outwards (PairSkip)
                           round_down_float(approach_),
-                          round_up_float(approach_)};
+                          round_up_float(approach_),
+                          centred};
+    if (centred) {
+        touching_list_.resize(size_t(force_ranges_));
+        touching_count_.assign(size_t(force_ranges_), 0);
+        for (size_t r = 0; r < size_t(force_ranges_); ++r) touching_list_[r].resize(contact_split_[r + 1] - contact_split_[r]);
+    }
     if (!bonds_.empty()) compute_bond_forces();
     if (force_ranges_ == 1) {
         range_pass<Law>(0, ctx);
@@ -330,6 +336,8 @@ void World::range_pass(int t, const PassContext<Law>& ctx) {
     PairBatch* const batch = Law::kWideKernels && avx2_ ? &pair_batch_[tr] : nullptr;
     PairSkip skip_base{nullptr, ctx.approach_lo, ctx.approach_hi};
     range_clock_[tr].touching_dd = 0;
+    uint32_t* const touching_list = ctx.list_touching ? touching_list_[tr].data() : nullptr;
+    size_t n_touching = 0;
     WallSum* const wall_sums = wall_sums_[tr].data();
     size_t n_wall_sums = 0;
     size_t k = contact_split_[tr], kw = wall_split_[tr], b0 = d0;
@@ -371,6 +379,7 @@ void World::range_pass(int t, const PassContext<Law>& ctx) {
             if (k == next_k) {  // computed by the range that owns c.j
                 if (next == cross_start_[tr]) waited += wait_for_cross(tr, ctx.pass);
                 if (cross_todo_[next]) {
+                    if (touching_list && cross_out_[next].touching) touching_list[n_touching++] = uint32_t(k);
                     add_to_i(load, size_t(c.i), cross_out_[next]);
                     const DiscContact& h = cross_dd_[size_t(cross_pos_[next])];
                     Law::for_each_history_field([](const auto& from, auto& to) { to = from; }, h, c);
@@ -388,6 +397,11 @@ void World::range_pass(int t, const PassContext<Law>& ctx) {
                 const size_t done = avx512_ ? disc_pairs_avx512(ctx.discs, ctx.pp, &c, n, *batch, &skip_base)
                                             : disc_pairs_avx2(ctx.discs, ctx.pp, &c, n, *batch, &skip_base);
                 add_pair_batch_avx2(*batch, &c, load);
+                if (touching_list)
+                    for (size_t b = 0; b < batch->count; ++b) {
+                        touching_list[n_touching] = uint32_t(k + batch->index[b]);
+                        n_touching += size_t(batch->touching[b] != 0);
+                    }
                 if (done > 0) {
                     k += done - 1;
                     continue;
@@ -399,6 +413,7 @@ void World::range_pass(int t, const PassContext<Law>& ctx) {
                 note_disc_fault(k, overlap, t);
                 continue;
             }
+            if (touching_list && o.touching) touching_list[n_touching++] = uint32_t(k);
             add_to_i(load, size_t(c.i), o);
             add_to_j(load, size_t(c.j), o);
         }
@@ -418,6 +433,7 @@ void World::range_pass(int t, const PassContext<Law>& ctx) {
         b0 = b1;
     }
     range_clock_[tr].wall_sums = n_wall_sums;
+    if (touching_list) touching_count_[tr] = n_touching;
     const double busy = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count() - waited;
     range_clock_[tr].seconds += busy;
     range_clock_[tr].last = busy;

@@ -321,6 +321,7 @@ private:
         bool prefetch;
         uint64_t pass;                    // this pass' number (the cross contacts' flags)
         float approach_lo, approach_hi;   // the clearance test's bound (PairSkip)
+        bool list_touching;               // list each range's touching pairs (centred dashpots)
     };
     struct WallSum;
     template <typename Law>
@@ -350,6 +351,10 @@ private:
         double inv_mass, inv_inertia;
     };
     std::vector<CentreDisc> centre_discs_;
+    // per range: the pass' touching pairs among its contacts (its own and its cross ones), in
+    // list order, so that the centre pass reads only those
+    std::vector<std::vector<uint32_t>> touching_list_;
+    std::vector<size_t> touching_count_;
     void pack_centre_discs(size_t d0, size_t d1);  // per range: its pairs' lanes (centre_lanes.h)
     void add_up_pass();
     void copy_cross_contacts();
