@@ -59,7 +59,9 @@ void centre_block(CentreBlock& b, const CentreConsts& k, bool avx2, bool avx512)
 template <bool kRotationFree, bool kNoTension, bool kNoShearSliding>
 [[gnu::always_inline]] inline void centre_lanes(CentreBlock& b, double dt, double h) {
     const size_t n = b.count;
+#if defined(__GNUC__) && !defined(__clang__)
 #pragma GCC ivdep
+#endif
     for (size_t l = 0; l < n; ++l) {
         const double dist = __builtin_sqrt(b.dist2[l]);
         const double overlap = (b.ri[l] + b.rj[l]) - dist;
