@@ -4,6 +4,7 @@
 
 #include <sys/wait.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -22,6 +23,7 @@
 #include "run/run.h"
 #include "scenario/scenario.h"
 #include "setups/db9k.h"
+#include "setups/flume.h"
 #include "setups/release.h"
 #include "setups/setup.h"
 #include "dem/world.h"
@@ -161,6 +163,55 @@ TEST(TerrainProfile, ReleaseMustLieAboveTheGround) {
     EXPECT_EQ(WEXITSTATUS(status), 2);
     EXPECT_FALSE(fs::exists(out));
     fs::remove_all(out);
+}
+
+// A terrain release polygon's lid, which the mass settles last without, is its top: the edge
+// facing most upwards, not the edge whose middle is highest (in a polygon whose top slopes
+// that is a vertical side, and the mass poured out over it before t = 0).
+TEST(TerrainRelease, TheLidIsTheTopEdge) {
+    const test::TempFile prof = write_temp("profile-lid.csv", "x,y\n0,0.5\n2,0.4\n");
+    for (const bool clockwise : {false, true}) {
+        std::vector<Vec2> poly{{0.06, 1.17}, {0.45, 0.95}, {0.45, 1.0}, {0.06, 1.6}};
+        if (clockwise) std::reverse(poly.begin(), poly.end());
+        Scenario s = parse_scenario("[terrain]\nprofile = \"" + prof.path() + "\"\n", "t.toml");
+        s.terrain.release = poly;
+        finish_scenario(s);
+        const ReleaseBox box = make_setup(s)->release_box();
+        ASSERT_GE(box.lid, 0);
+        const WallDef& lid = box.walls[size_t(box.lid)];
+        const double top_y = std::max(lid.p0.y(), lid.p1.y()), low_y = std::min(lid.p0.y(), lid.p1.y());
+        EXPECT_DOUBLE_EQ(top_y, 1.6) << (clockwise ? "clockwise" : "counter-clockwise");
+        EXPECT_DOUBLE_EQ(low_y, 1.0) << (clockwise ? "clockwise" : "counter-clockwise");
+    }
+}
+
+// Settling a release stops at release.settle_max_time, whatever the step (the fuzzer's find):
+// soft contacts (kn = 1.2e5 N/m, discs of 6-7 cm) give steps of about 6e-3 s, and chunks of
+// 200 of them settled for 2.2 s where 0.0075 s was asked; the mass poured out of its triangle,
+// whose top was open, and one disc started the run under the ground. Now the settling takes
+// at most the time asked (one step over at each of its two phases) and the mass stays in
+// its polygon.
+TEST(TerrainRelease, SettlingStopsAtItsMaximumTime) {
+    const test::TempFile prof = write_temp("profile-soft.csv",
+                                           "x_m,y_m\n-0.8687,1.2436\n-0.1162,0.3881\n0.1640,-0.2751\n0.3460,0.2018\n"
+                                           "0.4714,0.8245\n1.3956,0.5735\n1.5832,-0.2328\n");
+    Scenario s = parse_scenario("[terrain]\nprofile = \"" + prof.path() +
+                                    "\"\nrelease = [[0.6242, 1.5154], [1.4448, 1.5154], [0.6242, 2.2667]]\n"
+                                    "[material]\nkn = 123736.6\nks = 3699.0\n[rotation]\nmodel = 3\nu_rr = 0\n"
+                                    "[release]\nr_max = 0.07079\nr_min = 0.05875\nsettle_max_time = 0.0074862\n"
+                                    "accept_unsettled = true\n",
+                                "soft.toml");
+    finish_scenario(s);
+    const ReleaseMass m = generate_release(s);
+    ASSERT_GT(m.pos.size(), 10u);
+    const double dt_bound = 2.0 * 6e-3;  // one step over at each phase (steps of about 5.7e-3 s)
+    EXPECT_LE(m.settle_time, s.release.settle_max_time + dt_bound);
+    for (size_t i = 0; i < m.pos.size(); ++i) {
+        EXPECT_GT(m.pos[i].y(), 1.5154 - m.radius[i]) << "disc " << i;
+        EXPECT_GT(m.pos[i].x(), 0.6242 - m.radius[i]) << "disc " << i;
+    }
+    const World w = world_of_scenario(s);
+    for (size_t i = 0; i < w.disc_count(); ++i) EXPECT_GT(w.positions()[i].y(), 1.0) << "disc " << i;
 }
 
 // A file saved with a UTF-8 byte-order mark (spreadsheet programs' "CSV UTF-8") reads as the

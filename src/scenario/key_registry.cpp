@@ -337,7 +337,7 @@ void add_setups_keys(std::vector<Key>& k) {
     k.push_back(polygon("terrain.section", "2 points [x, y] in the grid's coordinates", "the section line through terrain.grid, from its first point (x = 0 of the profile) to its second", [](Scenario& s) -> std::vector<Vec2>& { return s.terrain.section; }));
     k.push_back(real("terrain.spacing", "m", "distance between the section's samples of terrain.grid; 0 = the grid's cell size", [](Scenario& s) -> double& { return s.terrain.spacing; }, 0, 1e4));
     k.push_back(polygon("terrain.barrier", "array of >= 2 points [x, y], the first on the profile (within 1 mm)", "a barrier (a dam) on the profile: a polyline from its foot, the flow on its left (up the upstream face first), a wall per segment as the profile's; its load goes to forces.csv's barrier columns, the bed path runs up its face (run-up, arrival); [] = none", [](Scenario& s) -> std::vector<Vec2>& { return s.terrain.barrier; }));
-    k.push_back(polygon("terrain.release", "array of >= 3 points [x, y] of a convex polygon", "the polygon the release mass fills (generated as for the flume, then dropped onto the profile); [] = the [[discs]] given", [](Scenario& s) -> std::vector<Vec2>& { return s.terrain.release; }));
+    k.push_back(polygon("terrain.release", "array of >= 3 points [x, y] of a convex polygon", "the polygon the release mass fills (generated as for the flume, then dropped onto the profile); its top (the edge facing most upwards) is taken away for the last settling phase, so the mass must not pour out over a lower side; [] = the [[discs]] given", [](Scenario& s) -> std::vector<Vec2>& { return s.terrain.release; }));
 }
 
 // The continuum model (docs/spec/DAN.md section 3; its equations D1-D15 in brackets)

@@ -10,6 +10,7 @@
 #include "core/progress.h"
 #include "core/validate.h"
 #include "dem/world.h"
+#include "setups/settle_chunk.h"
 #include "setups/release.h"
 
 namespace demlab {
@@ -109,7 +110,7 @@ void settle_lattice(const Scenario& s, const std::vector<WallDef>& walls, Releas
     Progress progress(rd.settle_max_time, "s of settling");
     bool done = false;
     while (w.time() < rd.settle_max_time) {
-        w.run(200);
+        w.run(settle_chunk(w, rd.settle_max_time));
         if (pending_interrupt()) throw Interrupted("stopped while the lattice settled, which is not checkpointed");
         m.settle_ratio = w.unbalanced_force_ratio();
         progress.update(w.time(), w.step_count());

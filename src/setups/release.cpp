@@ -15,6 +15,7 @@
 #include "core/progress.h"
 #include "core/validate.h"
 #include "dem/world.h"
+#include "setups/settle_chunk.h"
 
 namespace demlab {
 
@@ -107,6 +108,42 @@ namespace {
 // here, and `demlab resume` starts the run again (the seed gives the same mass).
 // Settling steps at most: the real sand size (145,615 discs) settles in about 3e6.
 constexpr double kMaxSettleSteps = 1e8;
+
+// A settled mass lies in its box. The second settling phase goes without the lid (the box's
+// top), so the mass in a polygon whose top slopes towards a low side pours out over that side
+// before t = 0, and the run would start from discs anywhere, under the ground too. A disc whose
+// centre lies more than its radius beyond an edge that stays (the lid's side is open: the mass
+// may heave above it once it is gone) is refused, naming the lid.
+void refuse_mass_outside_box(const Scenario& s, const ReleaseBox& box, const Polygon& poly, const std::vector<Vec2>& pos,
+                             const std::vector<double>& radius) {
+    Vec2 centroid = Vec2::Zero();
+    for (const Vec2& q : poly.v) centroid += q;
+    centroid /= double(poly.v.size());
+    size_t out = 0, first = 0;
+    for (size_t i = 0; i < pos.size(); ++i) {
+        bool beyond = false;
+        for (size_t k = 0; k < box.walls.size() && !beyond; ++k) {
+            if (int(k) == box.lid) continue;
+            const Vec2 a = box.walls[k].p0, n = perp((box.walls[k].p1 - a).normalized());
+            const double inward = (centroid - a).dot(n) > 0.0 ? 1.0 : -1.0;
+            beyond = !(inward * (pos[i] - a).dot(n) >= -radius[i]);
+        }
+        if (beyond && out++ == 0) first = i;
+    }
+    if (out == 0) return;
+    const std::string what = s.terrain.enabled ? "terrain.release's polygon" : "the release box";
+    std::string lid;
+    if (box.lid >= 0) {
+        const Vec2 a = box.walls[size_t(box.lid)].p0, b = box.walls[size_t(box.lid)].p1;
+        lid = "; the mass settles last without its top, the edge from [" + format_number(a.x()) + ", " + format_number(a.y()) +
+              "] to [" + format_number(b.x()) + ", " + format_number(b.y()) +
+              "], and must not pour out over the sides below it: give the polygon a level top, or sides that rise above "
+              "the top's lower end";
+    }
+    throw InputError(s.source + ": " + std::to_string(out) + " of the " + std::to_string(pos.size()) +
+                     " discs of the release mass left " + what + " while it settled (disc " + std::to_string(first) +
+                     " at [" + format_number(pos[first].x()) + ", " + format_number(pos[first].y()) + "])" + lid);
+}
 
 void throw_if_interrupted_in_generation() {
     if (pending_interrupt())
@@ -235,11 +272,11 @@ ReleaseMass generate_release(const Scenario& s) {
         const double t_phase = 0.5 * rd.settle_max_time;
         bool done = false;
         while (w.time() < t_phase) {
-            w.run(200);
+            w.run(settle_chunk(w, t_phase));
             throw_if_interrupted_in_generation();
             // a step so small that settling would not end in any time (an absurd stiffness or
             // density) is refused at once instead of running for ever
-            if (w.step_count() == 200 && (t_phase - w.time()) / w.dt() > kMaxSettleSteps)
+            if (w.step_count() <= 200 && (t_phase - w.time()) / w.dt() > kMaxSettleSteps)
                 throw RunError(s.source + ": settling the release would take " + format_number((t_phase - w.time()) / w.dt()) +
                                " steps of " + format_number(w.dt()) + " s (more than " + format_number(kMaxSettleSteps) +
                                "): material.kn / ks and material.density give an absurdly small time step");
@@ -262,6 +299,7 @@ ReleaseMass generate_release(const Scenario& s) {
         if (phase == 1) m.settled = done;
     }
     progress.finish();
+    refuse_mass_outside_box(s, box, tri, positions, radius);
     m.settle_time = settled_time;
     m.settle_steps = settled_steps;
     m.pos = positions;

@@ -76,12 +76,18 @@ public:
     }
     bool has_release() const override { return !s_.terrain.release.empty(); }
     // The release polygon's edges hold the mass while it is generated and settles; the run
-    // starts without them, so the mass drops onto the profile. The lid is the highest edge.
+    // starts without them, so the mass drops onto the profile. The lid, which the mass settles
+    // last without, is the edge that faces most upwards (its outward normal's y the largest; of
+    // equals the higher): the top. The highest edge by its middle was once taken, and in a
+    // polygon whose top slopes that is a vertical side, over which the mass poured out.
     ReleaseBox release_box() const override {
         ReleaseBox b;
         b.polygon = s_.terrain.release;
         const size_t n = b.polygon.size();
-        double top = -INFINITY;
+        double signed_area = 0.0;  // > 0: counter-clockwise, the outward normal of an edge d is (d.y, -d.x)
+        for (size_t k = 0; k < n; ++k) signed_area += cross(b.polygon[k], b.polygon[(k + 1) % n]);
+        const double orient = signed_area > 0.0 ? 1.0 : -1.0;
+        double best_up = -INFINITY, best_mid = -INFINITY;
         for (size_t k = 0; k < n; ++k) {
             WallDef d;
             d.name = "release[" + std::to_string(k) + "]";
@@ -91,9 +97,12 @@ public:
             d.ks = s_.wall_ks;
             d.friction = std::tan(deg_to_rad(s_.wall_friction_deg));
             d.cap_start = d.cap_end = EndCap::Capped;
+            const Vec2 along = d.p1 - d.p0;
+            const double up = -orient * along.x() / along.norm();  // the outward unit normal's y
             const double mid = 0.5 * (d.p0.y() + d.p1.y());
-            if (mid > top) {
-                top = mid;
+            if (up > best_up + 1e-12 || (up > best_up - 1e-12 && mid > best_mid)) {
+                best_up = up;
+                best_mid = mid;
                 b.lid = int(k);
             }
             b.walls.push_back(d);
