@@ -4,12 +4,15 @@
 #include <gtest/gtest.h>
 
 #include <filesystem>
+#include <cmath>
 #include <fstream>
 #include <set>
 
 #include "core/csv.h"
+#include "run/measures.h"
 #include "core/error.h"
 #include "files.h"
+#include "output/compare.h"
 #include "output/plot.h"
 #include "run/run.h"
 #include "run/summary_file.h"
@@ -118,5 +121,66 @@ TEST(Units, PlotsReadTheColumnsByName) {
         EXPECT_NE(std::string(e.what()).find("s_front_m"), std::string::npos) << e.what();
         EXPECT_NE(std::string(e.what()).find("front.csv"), std::string::npos) << e.what();
     }
+    fs::remove_all(dir);
+}
+
+// A landmark that did not happen, or that the set-up lacks, is null in summary.json with its
+// reason in "not_measured", "-" in compare's table with the reason below it, and an empty
+// cell in its CSV: never the -1 or 0 a sweep or a calibration would average (issue 55, row 3).
+// Geometry A to 0.3 s: the front is still on the slope (it reaches the barrier at about 0.8 s).
+TEST(Units, ALandmarkNotMeasuredIsNullWithItsReason) {
+    const fs::path dem = run_flume("units-null-dem", "dem"), dan = run_flume("units-null-dan", "dan");
+    for (const fs::path& dir : {dem, dan}) {
+        SCOPED_TRACE(dir.string());
+        const SummaryFile sum = read_summary_file((dir / "summary.json").string());
+        for (const char* key : {"t_front_at_barrier", "peak_fx_barrier", "t_peak_fx_barrier"}) {
+            ASSERT_TRUE(sum.numbers.count(key)) << key;
+            EXPECT_TRUE(std::isnan(sum.number(key))) << key << " = " << sum.number(key);
+            ASSERT_TRUE(sum.not_measured.count(key)) << key;
+        }
+        EXPECT_NE(sum.not_measured.at("t_front_at_barrier").find("did not reach the barrier"), std::string::npos);
+        EXPECT_NE(sum.not_measured.at("peak_fx_barrier").find("no load"), std::string::npos);
+        // what was measured stays a number, and is not listed
+        EXPECT_TRUE(std::isfinite(sum.number("runout_s")));
+        EXPECT_FALSE(sum.not_measured.count("runout_s"));
+        // the units object and the strings are read as before
+        EXPECT_EQ(sum.unit("t_front_at_barrier"), "s");
+        EXPECT_FALSE(sum.text("scenario").empty());
+    }
+    CompareOptions c;
+    c.runs = {dem.string(), dan.string()};
+    c.out = temp_dir("units-null-compare").string();
+    ASSERT_NO_THROW(compare_runs(c));
+    const std::string md = read_file(fs::path(c.out) / "comparison.md");
+    EXPECT_NE(md.find("t_front_at_barrier: the front did not reach the barrier"), std::string::npos) << md;
+    // run,model,t_front_at_barrier_s,...: the arrival's cell empty after each model
+    const std::string csv = read_file(fs::path(c.out) / "comparison.csv");
+    EXPECT_NE(csv.find(",dem,,"), std::string::npos) << csv;
+    EXPECT_NE(csv.find(",dan,,"), std::string::npos) << csv;
+    EXPECT_EQ(csv.find("nan"), std::string::npos) << csv;
+    for (const fs::path& d : {dem, dan, fs::path(c.out)}) fs::remove_all(d);
+}
+
+// The dam break has no barrier and no arc: those landmarks are null with that reason, and its
+// deposit's height and length come from its envelope over the floor (issue 55, row 4).
+TEST(Units, TheDamBreakReportsItsOwnDeposit) {
+    Scenario s = load_scenario(std::string(DEMLAB_SOURCE_DIR) + "/scenarios/dam-break.toml");
+    for (const char* a : {"release.scale=20", "stop.t_max=0.3", "output.snapshot_interval=0"}) apply_override(s, a);
+    finish_scenario(s);
+    const fs::path dir = temp_dir("units-dam-break");
+    const RunSummary r = run_scenario(s, {dir.string(), false, {}});
+    const SummaryFile sum = read_summary_file((dir / "summary.json").string());
+    for (const char* key : {"t_front_at_barrier", "runup_height", "peak_fx_barrier", "peak_fy_arc"}) {
+        EXPECT_TRUE(std::isnan(sum.number(key))) << key;
+        ASSERT_TRUE(sum.not_measured.count(key)) << key;
+        EXPECT_NE(sum.not_measured.at(key).find("the set-up has no"), std::string::npos) << key;
+    }
+    EXPECT_EQ(not_measured_reason(r, "t_front_at_barrier"), sum.not_measured.at("t_front_at_barrier"));
+    // the column (0.40 m) has begun to collapse: the deposit is lower than the column and longer
+    // than its 0.20 m base, and ends at the run-out
+    EXPECT_GT(sum.number("deposit_max_height"), 0.2);
+    EXPECT_LE(sum.number("deposit_max_height"), 0.41);
+    EXPECT_GT(sum.number("deposit_length"), 0.2);
+    EXPECT_LE(sum.number("deposit_length"), sum.number("runout_s") + 1e-9);
     fs::remove_all(dir);
 }

@@ -9,6 +9,7 @@
 #include "app/commands.h"
 #include "core/error.h"
 #include "core/interrupt.h"
+#include "run/measures.h"
 #include "run/run.h"
 #include "output/frame.h"
 #include "output/image.h"
@@ -39,32 +40,53 @@ struct RunCliOptions {
     bool out_given = false;
 };
 
+// A landmark for the console: its value, or none with the reason (measures.h, not_measured).
+std::string landmark(const RunSummary& r, const char* key, double v, const char* unit) {
+    const std::string why = not_measured_reason(r, key);
+    if (!why.empty()) return "none (" + why + ")";
+    char b[64];
+    std::snprintf(b, sizeof b, "%.3f %s", v, unit);
+    return b;
+}
+
+// The landmarks' lines: arrival and peak times where the set-up has a barrier or an arc, then
+// run-out and run-up.
+void print_landmarks(const RunSummary& r) {
+    if (r.has_barrier || r.has_barrier_forces || r.has_arc)
+        std::printf("  front at the barrier %s; peak x-force on the barrier %s; peak y-force on the arc %s\n",
+                    landmark(r, "t_front_at_barrier", r.t_front_at_barrier, "s").c_str(),
+                    landmark(r, "t_peak_fx_barrier", r.t_peak_fx_barrier, "s").c_str(),
+                    landmark(r, "t_peak_fy_arc", r.t_peak_fy_arc, "s").c_str());
+    if (r.has_path || r.has_envelope)
+        std::printf("  run-out %s; deposit %s high, %s long\n", landmark(r, "runout_s", r.runout_s, "m").c_str(),
+                    landmark(r, "deposit_max_height", r.deposit_max_height, "m").c_str(),
+                    landmark(r, "deposit_length", r.deposit_length, "m").c_str());
+    if (r.has_barrier)
+        std::printf("  run-up %s (max during run %s)\n", landmark(r, "runup_height", r.runup_height, "m").c_str(),
+                    landmark(r, "max_runup_height_during_run", r.max_runup_height_during_run, "m").c_str());
+}
+
 // The lines a finished run prints, and its plots.
 int report(const Scenario& s, const RunSummary& r, const std::string& dir, bool plots) {
     if (s.solver == "dan") {
         std::printf("%s (DAN): %d blocks, %ld steps to t = %.3f s (%s), dt %.3g s, wall time %.2f s\n", s.name.c_str(),
                     s.dan.blocks, r.steps, r.t_end, r.stop_reason.c_str(), r.dt, r.wall_seconds);
-        std::printf("  front at the barrier %.3f s; peak x-force on the barrier %.3f s; peak y-force on the arc %.3f s\n",
-                    r.t_front_at_barrier, r.t_peak_fx_barrier, r.t_peak_fy_arc);
-        std::printf("  run-out s = %.3f m; run-up %.3f m (max during run %.3f m)\n", r.runout_s, r.runup_height,
-                    r.max_runup_height_during_run);
+        print_landmarks(r);
         if (r.runout_lower_bound) std::printf("  the front passed the flume's end: the run-out and run-up are lower bounds\n");
     } else {
     std::printf("%s: %ld discs, model %d, variant %s, %ld steps to t = %.3f s (%s), dt %.3g-%.3g s\n", s.name.c_str(),
                 r.n_discs, s.world.rotation.model, s.release.variant.c_str(), r.steps, r.t_end, r.stop_reason.c_str(),
                 r.dt_min, r.dt_max);
     std::printf("  wall time %.1f s, %.3e particle-steps/s\n", r.wall_seconds, r.particle_steps_per_second);
-    if (make_setup(s)->kind() == "flume") {
-        std::printf("  porosity %.3f over the release box, %.3f inside the mass; front at the barrier %.3f s; peak x-force on the barrier %.3f s; peak y-force on the arc %.3f s\n",
-                    r.porosity_over_release_box, r.porosity_inside_mass, r.t_front_at_barrier, r.t_peak_fx_barrier, r.t_peak_fy_arc);
-        std::printf("  run-out s = %.3f m; run-up %.3f m (max during run %.3f m)\n", r.runout_s, r.runup_height,
-                    r.max_runup_height_during_run);
-        if (r.left_flume_discs > 0)
-            std::printf("  %ld disc%s (%.4g kg/m) left the flume from t = %.3f s: the run-out and run-up are lower bounds\n",
-                        r.left_flume_discs, r.left_flume_discs == 1 ? "" : "s", r.left_flume_mass, r.t_left_flume);
-        else if (r.runout_lower_bound)
-            std::printf("  the deposit reaches the end of the bed path: the run-out is a lower bound\n");
-    }
+    if (make_setup(s)->kind() == "flume")
+        std::printf("  porosity %.3f over the release box, %.3f inside the mass\n", r.porosity_over_release_box,
+                    r.porosity_inside_mass);
+    print_landmarks(r);
+    if (r.left_flume_discs > 0)
+        std::printf("  %ld disc%s (%.4g kg/m) left the bed path from t = %.3f s: the run-out and run-up are lower bounds\n",
+                    r.left_flume_discs, r.left_flume_discs == 1 ? "" : "s", r.left_flume_mass, r.t_left_flume);
+    else if (r.runout_lower_bound)
+        std::printf("  the deposit reaches the end of the bed path: the run-out is a lower bound\n");
     if (r.lost_discs > 0)
         std::printf("  %ld disc%s left the domain and %s taken out (lost.csv; world.lost_discs)\n", r.lost_discs,
                     r.lost_discs == 1 ? "" : "s", r.lost_discs == 1 ? "was" : "were");

@@ -302,7 +302,8 @@ SweepResult run_sweep(const SweepConfig& c, const SweepOptions& o) {
             const auto it = sums[n].numbers.find(k);
             if (it == sums[n].numbers.end())
                 throw InputError(o.out + ": column '" + k + "' is not a number of " + dir_of(j) + "/summary.json");
-            csv << ',' << it->second;
+            csv << ',';  // a figure the run did not measure (null in its summary): an empty cell
+            if (std::isfinite(it->second)) csv << it->second;
         }
         csv << '\n';
         auto num = [&](const char* k) {

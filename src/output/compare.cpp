@@ -77,8 +77,8 @@ std::string copy_series(const std::string& src, const std::string& out, size_t k
     return name;
 }
 
-std::string cell(double v, int digits = 3) {
-    if (!std::isfinite(v)) return "-";
+std::string cell(double v, int digits = 3, const char* none = "-") {
+    if (!std::isfinite(v)) return none;
     char b[32];
     std::snprintf(b, sizeof b, "%.*f", digits, v);
     return b;
@@ -225,14 +225,22 @@ std::vector<std::string> compare_into(const CompareOptions& o, const std::vector
            << cell(s.number("runup_height")) << " | " << cell(s.number("max_runup_height_during_run")) << " | "
            << cell(s.number("peak_fx_barrier"), 1) << " | " << cell(s.number("t_peak_fx_barrier")) << " | "
            << cell(s.number("t_end")) << " | " << s.text("stop_reason") << " |\n";
-        csv << '"' << r.label << "\"," << (r.dan ? "dan" : "dem") << ',' << cell(s.number("t_front_at_barrier"), 6) << ','
-            << cell(s.number("runout_s"), 6) << ',' << cell(s.number("runup_height"), 6) << ','
-            << cell(s.number("max_runup_height_during_run"), 6) << ',' << cell(s.number("peak_fx_barrier"), 3) << ','
-            << cell(s.number("t_peak_fx_barrier"), 6) << ',' << cell(s.number("t_end"), 6) << ',' << s.text("stop_reason") << '\n';
+        csv << '"' << r.label << "\"," << (r.dan ? "dan" : "dem") << ',' << cell(s.number("t_front_at_barrier"), 6, "") << ','
+            << cell(s.number("runout_s"), 6, "") << ',' << cell(s.number("runup_height"), 6, "") << ','
+            << cell(s.number("max_runup_height_during_run"), 6, "") << ',' << cell(s.number("peak_fx_barrier"), 3, "") << ','
+            << cell(s.number("t_peak_fx_barrier"), 6, "") << ',' << cell(s.number("t_end"), 6, "") << ',' << s.text("stop_reason") << '\n';
     }
     md << "\nRun-out: s of the deposit's front along the bed path (DEM: the foremost connected disc; DAN: the front "
           "block). Run-up: the deposit's highest point on the barrier above its foot. \">=\": mass left the flume "
           "(summary.json's left_flume), so the figure is a lower bound.\n";
+    // "-": a landmark the run did not measure; why, from its summary
+    bool heading = false;
+    for (const RunInfo& r : runs)
+        for (const auto& [key, why] : r.summary.not_measured) {
+            if (!heading) md << "\n\"-\": not measured:\n\n";
+            heading = true;
+            md << "- " << r.label << ", " << key << ": " << why << "\n";
+        }
     write_file_atomic(o.out + "/comparison.md", md.str());
     write_file_atomic(o.out + "/comparison.csv", csv.str());
     made.push_back(o.out + "/comparison.md");

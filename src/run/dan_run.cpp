@@ -158,6 +158,8 @@ RunSummary run_dan(const Scenario& s, const RunOptions& o) {
     sum.n_discs = 0;
     sum.total_mass = total_mass;
     sum.porosity_over_release_box = -1.0;
+    // DAN runs on a flume: its path, W3 the barrier, W2 the arc
+    sum.has_path = sum.has_barrier = sum.has_barrier_forces = sum.has_arc = true;
     sum.dt = sum.dt_min = sum.dt_max = dan.dt();
     double peak_fx = -1.0, peak_fy = -1.0, peak_ke = 0.0, rest_since = -1.0, max_front = s_front0;
     bool left_flume = false;

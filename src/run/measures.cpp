@@ -244,6 +244,15 @@ SlopeAngles write_envelope(const World& w, double gap, double length, const std:
     const Envelope env = upper_envelope(w.positions(), w.radii(), conn, 0.0, length, 0.001);
     const SlopeAngles angles = slope_angles(env);
     sum.runout_s = angles.toe_x;
+    // the deposit over the floor: its thickest point and its length from the first sample
+    // with mass to the toe
+    double first = NAN;
+    for (size_t k = 0; k < env.y.size(); ++k)
+        if (!std::isnan(env.y[k]) && env.y[k] > 0.0) {
+            if (std::isnan(first)) first = env.x(k);
+            sum.deposit_max_height = std::max(sum.deposit_max_height, env.y[k]);
+        }
+    sum.deposit_length = std::isnan(first) ? 0.0 : std::max(0.0, angles.toe_x - first);
     std::ostringstream d;
     d << "x_m,surface_m\n";
     for (size_t k = 0; k < env.y.size(); ++k)
@@ -259,14 +268,46 @@ void write_bond_breaks(const World& w, const std::string& dir) {
     write_file_atomic(dir + "/bonds_broken.csv", o.str());
 }
 
+std::vector<NotMeasured> not_measured(const RunSummary& sum) {
+    std::vector<NotMeasured> out;
+    auto add = [&](std::initializer_list<const char*> keys, const std::string& reason) {
+        for (const char* k : keys) out.push_back({k, reason});
+    };
+    if (!sum.has_path && !sum.has_envelope)
+        add({"runout_s", "deposit_max_height", "deposit_length"}, "the set-up has no bed path or floor to measure a deposit along");
+    else if (!sum.has_deposit)
+        add({"deposit_max_height", "deposit_length"}, "DAN gives the deposit as deposit.csv's depths along the path");
+    if (!sum.has_barrier)
+        add({"t_front_at_barrier", "runup_height", "max_runup_height_during_run"}, "the set-up has no barrier");
+    else if (sum.t_front_at_barrier < 0)
+        add({"t_front_at_barrier"}, "the front did not reach the barrier by the end of the run");
+    if (!sum.has_barrier_forces) add({"peak_fx_barrier", "t_peak_fx_barrier"}, "the set-up has no barrier");
+    else if (!(sum.peak_fx_barrier > 0)) add({"peak_fx_barrier", "t_peak_fx_barrier"}, "the barrier carried no load in any sample");
+    if (!sum.has_arc) add({"peak_fy_arc", "t_peak_fy_arc"}, "the set-up has no arc");
+    else if (!(sum.peak_fy_arc > 0)) add({"peak_fy_arc", "t_peak_fy_arc"}, "the arc carried no load in any sample");
+    return out;
+}
+
+std::string not_measured_reason(const RunSummary& sum, const std::string& key) {
+    for (const NotMeasured& m : not_measured(sum))
+        if (m.key == key) return m.reason;
+    return "";
+}
+
 void put_landmarks(SummaryJson& j, const RunSummary& sum) {
-    j.number("runup_height", sum.runup_height, "m");
-    j.number("max_runup_height_during_run", sum.max_runup_height_during_run, "m");
-    j.number("t_front_at_barrier", sum.t_front_at_barrier, "s");
-    j.number("t_peak_fx_barrier", sum.t_peak_fx_barrier, "s");
-    j.number("t_peak_fy_arc", sum.t_peak_fy_arc, "s");
-    j.number("peak_fx_barrier", sum.peak_fx_barrier, "N/m");
-    j.number("peak_fy_arc", sum.peak_fy_arc, "N/m");
+    auto put = [&](const char* key, double v, const char* unit) {
+        j.number(key, not_measured_reason(sum, key).empty() ? v : NAN, unit);
+    };
+    put("runup_height", sum.runup_height, "m");
+    put("max_runup_height_during_run", sum.max_runup_height_during_run, "m");
+    put("t_front_at_barrier", sum.t_front_at_barrier, "s");
+    put("t_peak_fx_barrier", sum.t_peak_fx_barrier, "s");
+    put("t_peak_fy_arc", sum.t_peak_fy_arc, "s");
+    put("peak_fx_barrier", sum.peak_fx_barrier, "N/m");
+    put("peak_fy_arc", sum.peak_fy_arc, "N/m");
+    std::vector<std::pair<std::string, std::string>> reasons;
+    for (const NotMeasured& m : not_measured(sum)) reasons.emplace_back(m.key, m.reason);
+    j.reasons("not_measured", reasons);
 }
 
 void write_lost_discs(const World& w, const std::string& dir) {
@@ -303,14 +344,15 @@ SummaryJson summary_json(const Scenario& s, const RunSummary& sum, const Release
     j.number("particle_steps_per_second", sum.particle_steps_per_second, "1/s");
     // the machine the timings above come from (a resumed run: the one that finished it)
     j.text("machine", machine_summary(machine_info()));
-    j.number("runout_s", sum.runout_s, "m");
+    auto measured = [&](const char* key, double v) { return not_measured_reason(sum, key).empty() ? v : NAN; };
+    j.number("runout_s", measured("runout_s", sum.runout_s), "m");
     j.boolean("runout_lower_bound", sum.runout_lower_bound);
     j.boolean("left_flume", sum.left_flume_discs > 0);
     j.integer("left_flume_discs", sum.left_flume_discs);
     j.number("left_flume_mass", sum.left_flume_mass, "kg/m");
     j.number("t_left_flume", sum.t_left_flume >= 0 ? sum.t_left_flume : NAN, "s");
-    j.number("deposit_max_height", sum.deposit_max_height, "m");
-    j.number("deposit_length", sum.deposit_length, "m");
+    j.number("deposit_max_height", measured("deposit_max_height", sum.deposit_max_height), "m");
+    j.number("deposit_length", measured("deposit_length", sum.deposit_length), "m");
     put_landmarks(j, sum);
     if (sum.s_peak_barrier_pressure >= 0) {  // a barrier (barrier_pressure.csv)
         j.number("peak_barrier_pressure", sum.peak_barrier_pressure, "Pa");

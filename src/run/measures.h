@@ -97,6 +97,18 @@ SlopeAngles write_envelope(const World& w, double gap, double length, const std:
 // summary.json's landmarks of a flow, the same keys for DEM and DAN runs (`demlab compare`):
 // run-up, arrival at the barrier, the force peaks and their times
 class SummaryJson;
+// The landmarks a run did not measure, each with its reason: the set-up has no such thing
+// (a dam break has no barrier, a terrain no arc), or it did not happen (the front never reached
+// the barrier, the barrier carried no load). Their values are null in summary.json (never the
+// -1 or 0 a sweep would average), and the console says the reason.
+struct NotMeasured {
+    std::string key, reason;
+};
+std::vector<NotMeasured> not_measured(const RunSummary& sum);
+// The reason `key` was not measured, or "" when it was.
+std::string not_measured_reason(const RunSummary& sum, const std::string& key);
+// The landmarks into summary.json: null for those not measured, and their reasons in its
+// "not_measured" object.
 void put_landmarks(SummaryJson& j, const RunSummary& sum);
 // lost.csv: each disc taken out when it left the domain (world.lost_discs): when, its id,
 // where, its velocity and spin, mass and kinetic energy then.

@@ -347,6 +347,12 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
     sum.scenario_fingerprint = scenario_fingerprint(s, inputs);
     sum.n_discs = long(n);
     sum.total_mass = total_mass;
+    sum.has_path = path != nullptr;
+    sum.has_envelope = setup->measures_envelope();
+    sum.has_deposit = sum.has_path || sum.has_envelope;
+    sum.has_barrier = path != nullptr && std::isfinite(measure.barrier.s_barrier);
+    sum.has_barrier_forces = !measure.force_walls.barrier.empty();
+    sum.has_arc = !measure.force_walls.arc.empty();
     sum.porosity_over_release_box = setup->has_release() ? mass.porosity_settled : -1.0;
     if (setup->has_release()) {
         std::vector<std::array<Vec2, 2>> box;

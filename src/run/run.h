@@ -108,6 +108,12 @@ struct RunSummary {
     long force_pass_one_range_cuts = 0;       // list updates whose force pass ran as one range (discs out of space order)
     double force_pass_busy_share = 1;         // of the threads' time in the shared force passes, the share the ranges worked (World)
     long force_pass_busy_fallbacks = 0;       // times the pass fell back to one range for a busy machine (World)
+    // Which landmarks the set-up has (measures.h, not_measured): a bed path (run-out, deposit
+    // along it), a deposit envelope over a floor (the dam break: run-out and deposit from it), a
+    // barrier on the path (arrival, run-up), walls whose forces are the barrier's and the arc's.
+    // A landmark the set-up lacks, or that did not happen, is null in summary.json with its reason.
+    bool has_path = false, has_envelope = false, has_barrier = false, has_barrier_forces = false, has_arc = false;
+    bool has_deposit = false;  // deposit_max_height and deposit_length (the DEM's, along its path or floor)
     long bonds = -1;                    // cohesive bonds at the start (-1: none)
     long bonds_broken = 0;              // of which broken by the end
     long bonds_lost_with_discs = 0;     // intact ones that went with a lost disc

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <map>
 
 #include "core/fileio.h"
 
@@ -28,9 +29,20 @@ std::vector<std::string> SummaryJson::number_keys() const {
 
 void SummaryJson::boolean(const std::string& key, bool v) { entries_.emplace_back(key, v ? "true" : "false"); }
 
+void SummaryJson::reasons(const std::string& key, const std::vector<std::pair<std::string, std::string>>& texts) {
+    reasons_key_ = key;
+    reasons_ = texts;
+}
+
 std::string SummaryJson::str() const {
     std::string o = "{\n";
     for (const auto& [key, value] : entries_) o += "  " + json_string(key) + ": " + value + ",\n";
+    if (!reasons_key_.empty()) {
+        o += "  " + json_string(reasons_key_) + ": {\n";
+        for (size_t k = 0; k < reasons_.size(); ++k)
+            o += "    " + json_string(reasons_[k].first) + ": " + json_string(reasons_[k].second) + (k + 1 < reasons_.size() ? ",\n" : "\n");
+        o += "  },\n";
+    }
     o += "  \"units\": {\n";
     for (size_t k = 0; k < units_.size(); ++k)
         o += "    " + json_string(units_[k].first) + ": " + json_string(units_[k].second) + (k + 1 < units_.size() ? ",\n" : "\n");
@@ -57,14 +69,20 @@ SummaryFile read_summary_file(const std::string& path) {
     std::ifstream in(path);
     SummaryFile out;
     std::string line;
-    bool in_units = false;
+    // the nested objects: "units" (key: unit) and "not_measured" (key: reason), one entry a line
+    std::map<std::string, std::string>* block = nullptr;
     while (std::getline(in, line)) {
-        if (line.find("\"units\": {") != std::string::npos) {
-            in_units = true;
+        const size_t text_start = line.find_first_not_of(" \t");
+        if (block && text_start != std::string::npos && line[text_start] == '}') {
+            block = nullptr;
             continue;
         }
-        if (in_units && line.find('}') != std::string::npos) {
-            in_units = false;
+        if (line.find("\"units\": {") != std::string::npos) {
+            block = &out.units;
+            continue;
+        }
+        if (line.find("\"not_measured\": {") != std::string::npos) {
+            block = &out.not_measured;
             continue;
         }
         const size_t q1 = line.find('"'), q2 = line.find('"', q1 + 1), colon = line.find(':', q2);
@@ -72,9 +90,9 @@ SummaryFile read_summary_file(const std::string& path) {
         const std::string key = line.substr(q1 + 1, q2 - q1 - 1);
         std::string value = line.substr(colon + 1);
         const size_t v1 = value.find('"');
-        if (in_units) {
+        if (block) {
             const size_t v2 = value.rfind('"');
-            if (v1 != std::string::npos && v2 > v1) out.units[key] = value.substr(v1 + 1, v2 - v1 - 1);
+            if (v1 != std::string::npos && v2 > v1) (*block)[key] = value.substr(v1 + 1, v2 - v1 - 1);
             continue;
         }
         if (v1 != std::string::npos) {
