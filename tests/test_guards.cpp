@@ -280,3 +280,21 @@ TEST(Guards, OverlappingDiscsInAReleaseFileAreNamed) {
     EXPECT_FALSE(fs::exists(dir / "run"));
     fs::remove_all(dir);
 }
+
+// A mistyped option or command gets a "did you mean", as a mistyped key does (issue 55, row
+// 10), and the usage exit code; no folder is made.
+TEST(Guards, MistypedOptionsAndCommandsAreNamedWithTheNearest) {
+    const std::string scenario = std::string(DEMLAB_SOURCE_DIR) + "/scenarios/geometry-A.toml";
+    const fs::path out = temp_dir("mistyped");
+    std::string err;
+    EXPECT_EQ(run_exe("run " + scenario + " --scal 20 --out " + out.string(), err), 1);
+    EXPECT_NE(err.find("no option '--scal'; did you mean '--scale'?"), std::string::npos) << err;
+    EXPECT_EQ(run_exe("run " + scenario + " --thread=2 --out " + out.string(), err), 1);
+    EXPECT_NE(err.find("no option '--thread'; did you mean '--threads'?"), std::string::npos) << err;
+    EXPECT_EQ(run_exe("rnu " + scenario, err), 1);
+    EXPECT_NE(err.find("no command 'rnu'; did you mean 'run'?"), std::string::npos) << err;
+    // an option spelt right is not named
+    EXPECT_EQ(run_exe("run " + scenario + " --scale 20 --bogus-flag-xyz --out " + out.string(), err), 1);
+    EXPECT_EQ(err.find("'--scale'"), std::string::npos) << err;
+    EXPECT_FALSE(fs::exists(out));
+}

@@ -1,11 +1,50 @@
 // demlab: a discrete-element laboratory for rapid granular flows.
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <cstdio>
 #include <exception>
 
 #include "app/commands.h"
 #include "core/error.h"
 #include "core/interrupt.h"
+#include "scenario/key_registry.h"
+
+namespace {
+
+// "Did you mean" for a mistyped subcommand or option, as for a mistyped key: the arguments
+// that are neither a subcommand, nor an option of the subcommand given (with or without its
+// "=value"), matched to the nearest name. Positional values (a scenario file) are not options.
+void suggest_names(const CLI::App& app, int argc, char** argv) {
+    std::vector<std::string> commands;
+    const CLI::App* sub = nullptr;
+    for (const CLI::App* c : app.get_subcommands([](const CLI::App*) { return true; })) {
+        commands.push_back(c->get_name());
+        if (c->parsed()) sub = c;
+    }
+    if (!sub) {
+        if (argc > 1 && argv[1][0] != '-') {
+            const std::string near = demlab::keys::nearest(argv[1], commands);
+            if (!near.empty()) std::fprintf(stderr, "demlab: no command '%s'; did you mean '%s'?\n", argv[1], near.c_str());
+        }
+        return;
+    }
+    std::vector<std::string> options;
+    for (const CLI::Option* o : sub->get_options()) {
+        for (const std::string& n : o->get_lnames()) options.push_back("--" + n);
+        for (const std::string& n : o->get_snames()) options.push_back("-" + n);
+    }
+    for (int k = 2; k < argc; ++k) {
+        std::string a = argv[k];
+        if (a.size() < 2 || a[0] != '-' || a == "--") continue;
+        a = a.substr(0, a.find('='));
+        if (std::find(options.begin(), options.end(), a) != options.end()) continue;
+        const std::string near = demlab::keys::nearest(a, options);
+        if (!near.empty())
+            std::fprintf(stderr, "demlab %s: no option '%s'; did you mean '%s'?\n", sub->get_name().c_str(), a.c_str(), near.c_str());
+    }
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
     using namespace demlab;
@@ -30,6 +69,7 @@ int main(int argc, char** argv) {
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {
+        if (e.get_exit_code() != 0) suggest_names(app, argc, argv);
         const int rc = app.exit(e);
         return rc == 0 ? kExitOk : kExitUsage;
     }
