@@ -9,6 +9,7 @@
 
 #include <cstdio>
 #include <memory>
+#include <regex>
 #include <string>
 
 #include "core/error.h"
@@ -42,6 +43,18 @@ std::string key_in_message(const std::string& message) {
     for (const keys::Key& k : keys::registry())
         if (k.name.size() > best.size() && message.find(k.name) != std::string::npos) best = k.name;
     return best;
+}
+
+// The executable's words in a message, as this module's: --set 'key=value' is load_scenario's
+// overrides['key'], --out and --force are run()'s out= and force=True, --release-from and
+// --threads the arguments of the same names.
+std::string python_terms(std::string m) {
+    static const std::regex set_override("--set '([^'=]+)=[^']*'");
+    m = std::regex_replace(m, set_override, "overrides['$1']");
+    for (const auto& [cli, py] : {std::pair<std::string, std::string>{"--release-from", "release_from="},
+                                  {"--out", "out="}, {"--force", "force=True"}, {"--threads", "threads="}})
+        for (size_t at = m.find(cli); at != std::string::npos; at = m.find(cli, at + py.size())) m.replace(at, cli.size(), py);
+    return m;
 }
 
 // A Python value as a TOML literal for apply_override: bools, numbers, strings, lists of them.
@@ -202,16 +215,16 @@ PYBIND11_MODULE(_demlab, m) {
             if (p) std::rethrow_exception(p);
         } catch (const KeyedInputError& e) {
             py::object type = py::reinterpret_borrow<py::object>(input_error);
-            py::object err = type(py::str(e.what()));
+            py::object err = type(py::str(python_terms(e.what())));
             err.attr("key") = e.key;
             PyErr_SetObject(input_error.ptr(), err.ptr());
         } catch (const InputError& e) {
             py::object type = py::reinterpret_borrow<py::object>(input_error);
-            py::object err = type(py::str(e.what()));
+            py::object err = type(py::str(python_terms(e.what())));
             err.attr("key") = key_in_message(e.what());
             PyErr_SetObject(input_error.ptr(), err.ptr());
         } catch (const RunError& e) {
-            run_error(e.what());
+            run_error(python_terms(e.what()).c_str());
         } catch (const Interrupted& e) {
             interrupted(e.what());
         }
@@ -222,7 +235,12 @@ PYBIND11_MODULE(_demlab, m) {
              "The resolved scenario as TOML: every key with its value (what a run writes as scenario.toml).")
         .def("get", [](const PyScenario& p, const std::string& key) {
                  const keys::Key* k = keys::find_key(key);
-                 if (!k) keys::unknown_key("Scenario.get", key, keys::key_names());
+                 // the error names the key asked for, as Python wrote it, and carries it as `key`
+                 if (!k) try {
+                         keys::unknown_key("scenario['" + key + "']", key, keys::key_names());
+                     } catch (const InputError& e) {
+                         throw KeyedInputError(e.what(), key);
+                     }
                  return k->get(p.s);
              }, py::arg("key"), "The value of one key as a TOML literal (demlab.Scenario.__getitem__ parses it).")
         .def_property_readonly("name", [](const PyScenario& p) { return p.s.name; }, "scenario.name")

@@ -80,6 +80,14 @@ class Scenario:
         """every key name, in the order of `demlab keys`"""
         return _demlab.key_names()
 
+    def __contains__(self, key):
+        """whether `key` is a scenario key: "release.scale" in scenario"""
+        return isinstance(key, str) and key in _demlab.key_names()
+
+    def __iter__(self):
+        """the key names, as keys()"""
+        return iter(_demlab.key_names())
+
     def with_overrides(self, overrides):
         """a copy with more overrides {key: value}, checked as load_scenario checks"""
         merged = dict(self._overrides)
@@ -198,7 +206,12 @@ class World:
 def _read_csv(path):
     with open(path, newline="") as f:
         text = f.read()
-    rows = list(_csv.reader(text.splitlines()))
+    # release.csv opens with its generation figures as "# name value" lines
+    lines = text.splitlines()
+    skipped = 0
+    while skipped < len(lines) and lines[skipped].startswith("#"):
+        skipped += 1
+    rows = list(_csv.reader(lines[skipped:]))
     if not rows:
         raise InputError("%s: an empty CSV file" % path)
     # a run writes whole lines: a last line without its line end, or a row whose cells do not
@@ -206,7 +219,7 @@ def _read_csv(path):
     if not text.endswith("\n"):
         raise InputError("%s:%d: the last line has no line end: the file is cut short" % (path, len(rows)))
     head, body = rows[0], []
-    for line, r in enumerate(rows[1:], start=2):
+    for line, r in enumerate(rows[1:], start=2 + skipped):
         if not r:
             continue
         if len(r) != len(head):
@@ -301,11 +314,14 @@ def read_vtp(path):
 class RunFolder:
     """A run folder written by `demlab run` or demlab.run: its summary, series and snapshots.
 
-    summary: summary.json as a dict. forces, front, energy, deposit, track, lost: the CSV files
-    as dicts of numpy arrays keyed by column name (the names carry the units, e.g. t_s,
-    fx_barrier_N_per_m); a file the run did not write raises FileNotFoundError.
+    summary: summary.json as a dict (a landmark the run did not measure is None, and
+    summary["not_measured"] says why). Every CSV file a run writes, as a dict of numpy arrays
+    keyed by column name (the names carry the units, e.g. t_s, fx_barrier_N_per_m): forces,
+    front, energy, deposit, peaks, barrier_pressure, envelope, release, lost, bonds_broken,
+    track; DAN's blocks and front_synced. A file the run did not write raises
+    FileNotFoundError, except track, which is {} for a run without tracers (output.track = []).
     snapshot_times: the instants of the snapshots, s; snapshot(i) reads one (negative i counts
-    from the end) as a Snapshot.
+    from the end), snapshot(t=...) the one nearest to a time, as a Snapshot.
     """
 
     def __init__(self, path):
@@ -332,8 +348,24 @@ class RunFolder:
     front = property(lambda self: self._csv("front.csv"), doc="front.csv: the front along the path, m")
     energy = property(lambda self: self._csv("energy.csv"), doc="energy.csv: the energy ledger, J/m")
     deposit = property(lambda self: self._csv("deposit.csv"), doc="deposit.csv: the deposit along the path, m")
-    track = property(lambda self: self._csv("track.csv"), doc="track.csv: the tracer discs (output.track)")
     lost = property(lambda self: self._csv("lost.csv"), doc="lost.csv: the discs that left the domain")
+    peaks = property(lambda self: self._csv("peaks.csv"), doc="peaks.csv: along the path, the largest height, mean speed and bed pressure over the run")
+    barrier_pressure = property(lambda self: self._csv("barrier_pressure.csv"),
+                                doc="barrier_pressure.csv: the normal pressure along the barrier over time, Pa")
+    envelope = property(lambda self: self._csv("envelope.csv"), doc="envelope.csv: the dam break's deposit surface, m")
+    release = property(lambda self: self._csv("release.csv"), doc="release.csv: the settled release mass the run started from")
+    bonds_broken = property(lambda self: self._csv("bonds_broken.csv"), doc="bonds_broken.csv: the cohesive bonds that broke")
+    blocks = property(lambda self: self._csv("blocks.csv"), doc="blocks.csv: DAN's blocks at each snapshot")
+    front_synced = property(lambda self: self._csv("front_synced.csv"),
+                            doc="front_synced.csv: DAN's front shifted to the reference's arrival")
+
+    @property
+    def track(self):
+        """track.csv: the tracer discs (output.track); {} for a run without tracers"""
+        path = _os.path.join(self.path, "track.csv")
+        if not _os.path.isfile(path) and not self.scenario_toml.get("output", {}).get("track"):
+            return {}
+        return self._csv("track.csv")
 
     def _snapshot_files(self):
         pvd = _os.path.join(self.path, "snapshots", "discs.pvd")
@@ -348,11 +380,16 @@ class RunFolder:
         """the snapshots' instants, s (numpy array)"""
         return _np.array([t for t, _ in self._snapshot_files()])
 
-    def snapshot(self, i):
-        """snapshot i (0 the first, -1 the last) as a Snapshot of numpy arrays"""
+    def snapshot(self, i=None, t=None):
+        """snapshot i (0 the first, -1 the last), or the one nearest to time t (s), as a Snapshot
+        of numpy arrays"""
         files = self._snapshot_files()
         if not files:
             raise InputError("%s: no snapshots (output.snapshot_interval = 0?)" % self.path)
+        if (i is None) == (t is None):
+            raise InputError("snapshot(i=%r, t=%r): give the index i or the time t, one of them" % (i, t))
+        if t is not None:
+            i = int(_np.argmin(_np.abs(_np.array([tk for tk, _ in files]) - float(t))))
         t, f = files[i]
         a = read_vtp(f)
         time = float(a["TIME"][0]) if "TIME" in a else t

@@ -39,12 +39,13 @@ def test_input_error_carries_the_key_and_the_cli_message(tmp_path, key, value, f
     assert err.value.key == key
     assert fragment in str(err.value)
     assert isinstance(err.value, ValueError)
-    # the executable refuses the same value with the same message and exit code 2
+    # the executable refuses the same value with the same message (in its own terms: --set
+    # 'key=value' where Python says overrides['key']) and exit code 2
     literal = '"%s"' % value if isinstance(value, str) else str(value)
     p = subprocess.run([EXE, "run", SCENARIO, "--out", str(tmp_path / "x"), "--set", "%s=%s" % (key, literal)],
                        capture_output=True, text=True)
     assert p.returncode == 2
-    assert str(err.value) in p.stderr
+    assert str(err.value).split(": ", 1)[1] in p.stderr
     assert not (tmp_path / "x").exists()
 
 
@@ -100,8 +101,62 @@ def test_run_folder_series_are_numpy_arrays_keyed_by_column(cli_run):
     assert len(f.front["t_s"]) == n
     assert "s_m" in f.deposit or len(f.deposit) > 1
     assert f.scenario_toml["release"]["scale"] == 20
+    assert f.track == {}  # no tracers were asked for
     with pytest.raises(FileNotFoundError):
-        f.track  # no tracers were asked for
+        f.bonds_broken  # no bonds: no such file
+
+
+def test_every_file_a_run_writes_has_an_accessor(cli_run):
+    """issue 55, row 7: peaks, barrier pressure and the release mass too; release.csv's
+    generation figures (# lines) do not hide its table"""
+    f = demlab.RunFolder(cli_run)
+    accessors = {"forces.csv": "forces", "front.csv": "front", "energy.csv": "energy", "deposit.csv": "deposit",
+                 "peaks.csv": "peaks", "barrier_pressure.csv": "barrier_pressure", "release.csv": "release",
+                 "lost.csv": "lost", "envelope.csv": "envelope", "track.csv": "track",
+                 "bonds_broken.csv": "bonds_broken", "blocks.csv": "blocks", "front_synced.csv": "front_synced"}
+    written = [n for n in os.listdir(cli_run) if n.endswith(".csv")]
+    assert {"peaks.csv", "barrier_pressure.csv", "release.csv"} <= set(written)
+    for name in written:
+        assert name in accessors, name
+        table = getattr(f, accessors[name])
+        assert isinstance(table, dict) and table, name
+    assert len(f.release["r_m"]) == f.summary["n_discs"]
+    assert "max_bed_pressure_Pa" in f.peaks
+
+
+def test_a_landmark_not_measured_is_none_with_its_reason(cli_run):
+    """issue 55, row 3: at 0.3 s the front is on the slope"""
+    s = demlab.RunFolder(cli_run).summary
+    assert s["t_front_at_barrier"] is None and s["peak_fx_barrier"] is None
+    assert "did not reach the barrier" in s["not_measured"]["t_front_at_barrier"]
+    assert s["runout_s"] is not None
+
+
+def test_snapshot_by_time_is_the_nearest(cli_run):
+    f = demlab.RunFolder(cli_run)
+    times = f.snapshot_times
+    assert f.snapshot(t=times[2] + 0.004).time == pytest.approx(times[2])
+    assert f.snapshot(t=1e9).time == pytest.approx(times[-1])
+    with pytest.raises(demlab.InputError, match="one of them"):
+        f.snapshot(1, t=0.1)
+
+
+def test_scenario_keys_answer_in_and_errors_speak_python(tmp_path):
+    sc = demlab.load_scenario(SCENARIO, SMALL)
+    assert "release.scale" in sc and "release.scal" not in sc and 3 not in sc
+    assert list(sc) == demlab.key_names()
+    with pytest.raises(demlab.InputError, match=r"scenario\['material.frction_disc_deg'\].*did you mean 'material.friction_disc_deg'") as e:
+        sc["material.frction_disc_deg"]
+    assert e.value.key == "material.frction_disc_deg"
+    with pytest.raises(demlab.InputError, match=r"overrides\['release.scal'\]") as e:
+        demlab.load_scenario(SCENARIO, {"release.scal": 3})
+    assert "--set" not in str(e.value) and e.value.key == "release.scal"
+    out = tmp_path / "taken"
+    out.mkdir()
+    (out / "mine.txt").write_text("a user's file")
+    with pytest.raises(demlab.InputError) as e:
+        demlab.run(sc, str(out))
+    assert "--out" not in str(e.value) and "--force" not in str(e.value)
 
 
 def test_snapshots_have_the_right_shapes_and_units(cli_run):
