@@ -45,7 +45,12 @@ TEST(BarrierOutputs, PressuresIntegrateToTheBarriersNormalForceAtEveryRow) {
     const CsvTable f = table(dir / "forces.csv"), p = table(dir / "barrier_pressure.csv");
     ASSERT_EQ(f.rows.size(), p.rows.size());
     const size_t bins = p.names.size() - 1;
-    EXPECT_EQ(bins, size_t(std::lround(length / 0.01)));
+    // bins of output.pressure_bin (0.01 m), but no shorter than the largest disc (scale 20: 2 cm)
+    double r_max = 0;
+    for (double ri : w.radii()) r_max = std::max(r_max, ri);
+    EXPECT_GT(2.0 * r_max, 0.01);
+    EXPECT_EQ(bins, size_t(std::lround(length / (2.0 * r_max))));
+    EXPECT_GE(length / double(bins), 2.0 * r_max * (1.0 - 0.5 / double(bins)));
     const size_t fx = column(f, "fx_barrier_N_per_m"), fy = column(f, "fy_barrier_N_per_m");
     double largest = 0;
     for (size_t k = 0; k < f.rows.size(); ++k) {
@@ -108,8 +113,8 @@ rest_duration = 0.5
     run_scenario(s, {out.string(), false, {}});
     const CsvTable p = table(out / "barrier_pressure.csv");
     const size_t bins = p.names.size() - 1;
-    ASSERT_EQ(bins, 70u);  // 0.7 m in bins of 0.01 m
-    const double bin = 0.7 / 70.0;
+    ASSERT_EQ(bins, 35u);  // 0.7 m in bins of the disc's diameter, 0.02 m (output.pressure_bin: 0.01 m)
+    const double bin = 0.7 / 35.0;
     // the disc's foot on the top: 0.2 m up the face, then 0.2525 m along the top
     const size_t expected = size_t((0.2 + 0.2525) / bin);
     const std::vector<double>& last = p.rows.back();

@@ -1,5 +1,6 @@
 #include "output/plot.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -166,14 +167,33 @@ std::vector<std::string> make_plots(const std::string& run_dir, int width, int h
             }
             write_file_atomic(dir + "/barrier_pressure_peak.csv", "s_m,p_Pa\n" + at.str());
             write_file_atomic(dir + "/barrier_pressure_map.dat", map.str());
+            // The colour range: up to the 99th percentile of the loaded bins, so the field shows
+            // (one impact's bin would otherwise set the scale and leave the rest near zero); the
+            // peak, above it, is marked and named.
+            std::vector<double> loaded;
+            for (const std::vector<double>& row : p.rows)
+                for (size_t c = 1; c < row.size(); ++c)
+                    if (row[c] > 0.0) loaded.push_back(row[c]);
+            double top = peak;
+            if (!loaded.empty()) {
+                const size_t q = std::min(loaded.size() - 1, size_t(0.99 * double(loaded.size())));
+                std::nth_element(loaded.begin(), loaded.begin() + long(q), loaded.end());
+                top = loaded[q];
+            }
+            size_t peak_col = 1;
+            for (size_t c = 1; c < p.rows[peak_row].size(); ++c)
+                if (p.rows[peak_row][c] == peak) peak_col = c;
             gp << "set output 'barrier_pressure_peak.png'\nset title 'Normal pressure on the barrier at t = "
                << p.rows[peak_row][0] << " s (its largest bin)'\nset xlabel 's along the barrier from its foot (m)'\n"
                << "set ylabel 'p (Pa)'\nplot 'barrier_pressure_peak.csv' using 1:2 with steps lw 2 title 'pressure'\n"
                << "set output 'barrier_pressure_map.png'\nset title 'Normal pressure on the barrier (kPa)'\n"
                << "set xlabel 's along the barrier from its foot (m)'\nset ylabel 't (s)'\nset datafile separator whitespace\n"
-               << "set palette rgbformulae 33,13,10\nset cblabel 'p (kPa)'\nset autoscale fix\n"
+               << "set palette rgbformulae 33,13,10\nset cblabel 'p (kPa), to the 99th percentile of the loaded bins'\n"
+               << "set autoscale fix\nset format x '%.2f'\nset cbrange [0:" << std::max(top, 1e-9) / 1000.0 << "]\n"
+               << "set label 1 sprintf('peak %.1f kPa', " << peak / 1000.0 << ") at " << s[peak_col - 1] << ','
+               << p.rows[peak_row][0] << " point pt 6 ps 2 lc rgb 'black' offset 1,1 front\n"
                << "plot 'barrier_pressure_map.dat' nonuniform matrix using 1:2:3 with image notitle\n"
-               << "set datafile separator ','\nunset cblabel\nset autoscale\nset xlabel 't (s)'\n";
+               << "unset label 1\nset format x '% h'\nset datafile separator ','\nunset cblabel\nset cbrange [*:*]\nset autoscale\nset xlabel 't (s)'\n";
             made.push_back(dir + "/barrier_pressure_peak.png");
             made.push_back(dir + "/barrier_pressure_map.png");
         }

@@ -358,6 +358,7 @@ SummaryJson summary_json(const Scenario& s, const RunSummary& sum, const Release
         j.number("peak_barrier_pressure", sum.peak_barrier_pressure, "Pa");
         j.number("s_peak_barrier_pressure", sum.s_peak_barrier_pressure, "m");
         j.number("t_peak_barrier_pressure", sum.t_peak_barrier_pressure, "s");
+        j.number("barrier_pressure_bin", sum.barrier_pressure_bin, "m");
     }
     j.number("energy_balance_error", sum.energy_balance_error, "-");
     j.number("broadphase_margin", sum.broadphase_margin, "m");

@@ -95,6 +95,7 @@ struct RunSummary {
     // Pa, the largest normal pressure in a bin of the barrier (barrier_pressure.csv), where
     // along it from its lower end (m) and when (s); -1: no barrier
     double peak_barrier_pressure = 0, s_peak_barrier_pressure = -1, t_peak_barrier_pressure = -1;
+    double barrier_pressure_bin = 0;    // m, the bins' length (output.pressure_bin, at least the largest disc's diameter)
     double energy_balance_error = 0;    // |balance drift| / the largest energy put in (measures.h, energy_put_in)
     // The broad phase, of this process like wall_seconds (a resumed run counts from the resume,
     // and rebuilds its candidate lists there), sampled every 10 steps: the force pass tests

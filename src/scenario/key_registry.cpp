@@ -401,7 +401,7 @@ void add_run_keys(std::vector<Key>& k) {
     k.push_back(real("output.series_interval", "s", "time between rows of forces.csv, front.csv, energy.csv, track.csv", [](Scenario& s) -> double& { return s.output.series_interval; }, 0, 100, true));
     k.push_back(text("output.snapshot_format", "the snapshots' arrays: binary (appended raw, zlib-compressed; ParaView and demlab render read both) or ascii (text)", [](Scenario& s) -> std::string& { return s.output.snapshot_format; }, {"binary", "ascii"}));
     k.push_back(real("output.snapshot_interval", "s", "time between snapshots (VTK .vtp with a .pvd series); 0 = none", [](Scenario& s) -> double& { return s.output.snapshot_interval; }, 0, 100));
-    k.push_back(real("output.pressure_bin", "m", "bin length of barrier_pressure.csv along the barrier from its lower end (the count is round(length / this))", [](Scenario& s) -> double& { return s.output.pressure_bin; }, 0, 10, true));
+    k.push_back(real("output.pressure_bin", "m", "bin length of barrier_pressure.csv along the barrier from its lower end, at least the largest disc's diameter (the count is round(length / bin); summary.json's barrier_pressure_bin)", [](Scenario& s) -> double& { return s.output.pressure_bin; }, 0, 10, true));
     k.push_back(real("output.deposit_bin", "m", "spacing of deposit.csv along the flume path", [](Scenario& s) -> double& { return s.output.deposit_bin; }, 0, 10, true));
     k.push_back(real("output.front_neighbour_gap", "m", "a disc counts for the front only with a neighbour within this gap; 0 = r_max", [](Scenario& s) -> double& { return s.output.front_neighbour_gap; }, 0, 10));
     {
