@@ -16,6 +16,7 @@
 #include "core/csv.h"
 #include "core/error.h"
 #include "dem/world.h"
+#include "files.h"
 #include "helpers.h"
 #include "run/run.h"
 #include "scenario/scenario.h"
@@ -26,6 +27,7 @@
 namespace fs = std::filesystem;
 using namespace demlab;
 using demlab::test::expect_refused;
+using demlab::test::read_file;
 
 namespace {
 
@@ -256,6 +258,23 @@ TEST(Guards, DemoRefusesAbsurdRunsAndNegativeSeeds) {
     EXPECT_EQ(run_exe("demo --seed -1 --out " + dir.string(), err), 2);
     EXPECT_NE(err.find("--seed -1"), std::string::npos) << err;
     EXPECT_FALSE(fs::exists(dir));
+}
+
+// The demo writes a run folder like any run (issue 55, row 8): its resolved scenario, series,
+// snapshots and summary, which `render` takes (it was refused: "was output.snapshot_interval
+// 0?"), and `run` of its scenario.toml gives the same series.
+TEST(Guards, DemoWritesARunFolder) {
+    const fs::path dir = temp_dir("demo-folder"), again = temp_dir("demo-again"), frames = temp_dir("demo-frames");
+    std::string err;
+    ASSERT_EQ(run_exe("demo --t-end 0.04 --no-plots --out " + dir.string(), err), 0) << err;
+    for (const char* f : {"scenario.toml", "summary.json", "forces.csv", "energy.csv", "envelope.csv", "release.csv",
+                          "snapshots/discs.pvd"})
+        EXPECT_TRUE(fs::exists(dir / f)) << f;
+    EXPECT_EQ(run_exe("render " + dir.string() + " --out " + frames.string(), err), 0) << err;
+    EXPECT_TRUE(fs::exists(frames / "frame_00000.png"));
+    ASSERT_EQ(run_exe("run " + (dir / "scenario.toml").string() + " --no-plots --out " + again.string(), err), 0) << err;
+    for (const char* f : {"forces.csv", "energy.csv", "envelope.csv"}) EXPECT_EQ(read_file(dir / f), read_file(again / f)) << f;
+    for (const fs::path& d : {dir, again, frames}) fs::remove_all(d);
 }
 
 // Discs of a --release-from file that overlap beyond world.max_overlap_ratio are named with

@@ -66,8 +66,10 @@ void print_landmarks(const RunSummary& r) {
                     landmark(r, "max_runup_height_during_run", r.max_runup_height_during_run, "m").c_str());
 }
 
+}  // namespace
+
 // The lines a finished run prints, and its plots.
-int report(const Scenario& s, const RunSummary& r, const std::string& dir, bool plots) {
+int report_run(const Scenario& s, const RunSummary& r, const std::string& dir, bool plots) {
     if (s.solver == "dan") {
         std::printf("%s (DAN): %d blocks, %ld steps to t = %.3f s (%s), dt %.3g s, wall time %.2f s\n", s.name.c_str(),
                     s.dan.blocks, r.steps, r.t_end, r.stop_reason.c_str(), r.dt, r.wall_seconds);
@@ -103,6 +105,8 @@ int report(const Scenario& s, const RunSummary& r, const std::string& dir, bool 
     }
     return kExitOk;
 }
+
+namespace {
 
 int run_command(const RunCliOptions& o) {
     // (CLI11's range checks let NaN through: every comparison with it is false)
@@ -163,7 +167,7 @@ int run_command(const RunCliOptions& o) {
         frames.force = o.force;
         render_run(frames);
     }
-    return report(s, r, ro.out_dir, ro.plots);
+    return report_run(s, r, ro.out_dir, ro.plots);
 }
 }  // namespace
 
@@ -243,7 +247,7 @@ int resume_command(const ResumeCliOptions& o) {
     }
     if (ro.frames) attach_frame_hook(ro, make_setup(s)->kind() == "flume");
     const RunSummary r = run_scenario(s, ro);
-    return report(s, r, dir, ro.plots);
+    return report_run(s, r, dir, ro.plots);
 }
 }  // namespace
 

@@ -3,10 +3,17 @@
 #pragma once
 #include <CLI/CLI.hpp>
 #include <functional>
+#include <string>
 
 namespace demlab {
 
 using Command = std::function<int()>;
+
+struct Scenario;
+struct RunSummary;
+// The lines a finished run prints (its landmarks, or why one was not measured), and its plots
+// (cmd_run.cpp; `demlab run`, `resume` and `demo`).
+int report_run(const Scenario& s, const RunSummary& r, const std::string& dir, bool plots);
 
 Command add_bench_command(CLI::App& app);
 Command add_demo_command(CLI::App& app);
