@@ -166,6 +166,57 @@ TEST(Calibration, ApplyWritesACopyAndNeverOverwrites) {
     fs::remove_all(dir);
 }
 
+// A calibration states its answer's confidence (issue 55, row 6): with one seed it is not
+// established; with several, an angle whose mean objective lies within twice the standard
+// error of the difference from the best's is named as not told apart; --apply writes where
+// the value came from.
+TEST(Calibration, ConfidenceWeighsTheBestAgainstTheSpreadOverSeeds) {
+    auto angle = [](double a, double mean, double se) {
+        AngleResult r;
+        r.angle = a;
+        r.objective_mean = mean;
+        r.objective_se = se;
+        return r;
+    };
+    CalibrationResult res;
+    res.grid = {angle(14.0, 9.0, 0.5), angle(15.0, 6.0, 0.5), angle(16.0, 6.8, 0.5)};
+    res.best_angle = 15.0;
+    res.best_objective = 6.0;
+    res.best_se = 0.5;
+    // 16 deg is 0.8 above, under 2 sqrt(0.5^2 + 0.5^2) = 1.41; 14 deg is 3.0 above
+    CalibrationConfidence c = calibration_confidence(res, 3);
+    EXPECT_FALSE(c.established);
+    EXPECT_EQ(c.not_separated, std::vector<double>{16.0});
+    EXPECT_NE(c.text.find("16 deg"), std::string::npos) << c.text;
+    // a refined angle counts too
+    res.refined = {angle(15.5, 6.5, 0.5)};
+    EXPECT_EQ(calibration_confidence(res, 3).not_separated, (std::vector<double>{15.5, 16.0}));
+    // a smaller spread tells them apart
+    res.refined.clear();
+    for (AngleResult& a : res.grid) a.objective_se = 0.1;
+    res.best_se = 0.1;
+    c = calibration_confidence(res, 3);
+    EXPECT_TRUE(c.established) << c.text;
+    EXPECT_TRUE(c.not_separated.empty());
+    // one seed: never established, whatever the differences
+    c = calibration_confidence(res, 1);
+    EXPECT_FALSE(c.established);
+    EXPECT_NE(c.text.find("one seed"), std::string::npos);
+
+    const fs::path dir = fs::temp_directory_path() / ("demlab-apply-provenance-" + std::to_string(::getpid()));
+    fs::create_directories(dir);
+    fs::copy_file(std::string(DEMLAB_SOURCE_DIR) + "/scenarios/geometry-A.toml", dir / "geometry-A.toml");
+    const std::string out = apply_calibration((dir / "geometry-A.toml").string(), 15.0, false,
+                                              {"calibration: dam-break.toml, scale 4, 3 seed(s)", "confidence: " + c.text});
+    std::ifstream in(out);
+    std::stringstream text;
+    text << in.rdbuf();
+    EXPECT_NE(text.str().find("# calibration: dam-break.toml, scale 4, 3 seed(s)\n"), std::string::npos);
+    EXPECT_NE(text.str().find("# confidence: not established"), std::string::npos);
+    EXPECT_DOUBLE_EQ(load_scenario(out).disc_friction_deg, 15.0);
+    fs::remove_all(dir);
+}
+
 // demlab sweep: a grid of two keys over two values each, one seed; sweep.csv holds a row per
 // run with the varied values and the run's own summary numbers; a rerun computes nothing.
 TEST(Sweep, GridRowsSummariesAndResume) {

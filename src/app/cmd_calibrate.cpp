@@ -44,9 +44,23 @@ int calibrate_command(const CalibrateCli& o) {
     if (!Ranks::world().root()) return kExitOk;  // rank 0 reports (and applies)
     std::printf("best friction angle %.2f deg (objective %.3f deg); %d new run(s), %d reused, %.0f s\n", r.best_angle,
                 r.best_objective, r.runs_done, r.runs_reused, r.wall_seconds);
+    const CalibrationConfidence confidence = calibration_confidence(r, c.seeds);
+    std::printf("  confidence: %s\n", confidence.text.c_str());
+    if (!confidence.established)
+        std::fprintf(stderr, "demlab: warning: the best friction angle %.2f deg is not established against the noise over "
+                             "seeds (table.md says why)\n", r.best_angle);
     std::printf("  table: %s/table.md, %s/table.csv; envelopes: %s/envelopes.png\n", opt.out.c_str(), opt.out.c_str(),
                 opt.out.c_str());
-    if (!o.apply.empty()) std::printf("  applied: %s\n", apply_calibration(o.apply, r.best_angle, o.force).c_str());
+    if (!o.apply.empty()) {
+        char objective[160];
+        std::snprintf(objective, sizeof objective, "objective %.3f deg (sum of |gamma_i - lab| over sections 3-5, mean over seeds)",
+                      r.best_objective);
+        const std::vector<std::string> provenance = {
+            "calibration: " + o.config + ", scale " + (c.scale ? std::to_string(c.scale) : std::string("of its scenario")) + ", " +
+                std::to_string(c.seeds) + " seed(s) per angle, run folder " + opt.out,
+            objective, "confidence: " + confidence.text};
+        std::printf("  applied: %s\n", apply_calibration(o.apply, r.best_angle, o.force, provenance).c_str());
+    }
     return kExitOk;
 }
 }  // namespace

@@ -312,6 +312,14 @@ std::vector<AngleResult> evaluate_angles(const CalibrationConfig& c, const Calib
         r.objective_mean = sum / double(obj.size());
         r.objective_min = *std::min_element(obj.begin(), obj.end());
         r.objective_max = *std::max_element(obj.begin(), obj.end());
+        if (obj.size() > 1) {
+            double ss = 0;
+            for (double v : obj) ss += (v - r.objective_mean) * (v - r.objective_mean);
+            r.objective_sd = std::sqrt(ss / double(obj.size() - 1));
+            r.objective_se = r.objective_sd / std::sqrt(double(obj.size()));
+        } else {
+            r.objective_sd = r.objective_se = NAN;
+        }
         out.push_back(r);
     }
     return out;
@@ -335,6 +343,7 @@ void refine_best_angle(const CalibrationConfig& c, const CalibrationOptions& o, 
         if (r.objective_mean < res.best_objective) {
             res.best_objective = r.objective_mean;
             res.best_angle = r.angle;
+            res.best_se = r.objective_se;
         }
         return r.objective_mean;
     };
@@ -400,8 +409,9 @@ void write_calibration_table(const CalibrationConfig& c, const CalibrationOption
     }
     csv << "\n";
     md << "\n\nBest: " << format_number(res.best_angle) << " deg (objective " << format_number(std::round(res.best_objective * 1000) / 1000)
-       << " deg). The thesis (PFC2D): best 15.5 deg, objective 3.17 deg.\n\nDeposits with their envelope, sections and fitted "
-          "angles: `runs/<angle>-seed<k>/deposit.png`; all envelopes: `envelopes.png`.\n";
+       << " deg). The thesis (PFC2D): best 15.5 deg, objective 3.17 deg.\n\nConfidence: "
+       << calibration_confidence(res, c.seeds).text << "\n\nDeposits with their envelope, sections and fitted "
+          "angles: `runs/phi<angle>-seed<k>/deposit.png`; all envelopes: `envelopes.png`.\n";
     write_file_atomic(o.out + "/table.csv", csv.str());
     write_file_atomic(o.out + "/table.md", md.str());
 
@@ -455,6 +465,7 @@ CalibrationResult calibrate(const CalibrationConfig& c, const CalibrationOptions
         if (res.grid[k].objective_mean < res.grid[best].objective_mean) best = k;
     res.best_angle = res.grid[best].angle;
     res.best_objective = res.grid[best].objective_mean;
+    res.best_se = res.grid[best].objective_se;
     if (c.refine && res.grid.size() >= 2) refine_best_angle(c, o, jobs, res, best);
     g_progress_muted = false;
     res.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -480,7 +491,39 @@ CalibrationResult calibrate(const CalibrationConfig& c, const CalibrationOptions
     return res;
 }
 
-std::string apply_calibration(const std::string& scenario, double angle, bool force) {
+CalibrationConfidence calibration_confidence(const CalibrationResult& res, int seeds) {
+    CalibrationConfidence out;
+    char b[256];
+    if (seeds < 2) {
+        out.text = "not established: one seed per angle, so the objective's spread over seeds is not known, and differences "
+                   "between angles may be noise (at scale 20 it jumps by several degrees between angles 0.03 deg apart); "
+                   "run --seeds 3 or more";
+        return out;
+    }
+    std::vector<AngleResult> all = res.grid;
+    all.insert(all.end(), res.refined.begin(), res.refined.end());
+    for (const AngleResult& a : all) {
+        if (a.angle == res.best_angle) continue;
+        const double se = std::sqrt(a.objective_se * a.objective_se + res.best_se * res.best_se);
+        if (!(a.objective_mean - res.best_objective > 2.0 * se)) out.not_separated.push_back(a.angle);
+    }
+    std::sort(out.not_separated.begin(), out.not_separated.end());
+    out.not_separated.erase(std::unique(out.not_separated.begin(), out.not_separated.end()), out.not_separated.end());
+    out.established = out.not_separated.empty();
+    std::snprintf(b, sizeof b, "the best angle's objective is %.2f +- %.2f deg (standard error over %d seeds); ", res.best_objective,
+                  res.best_se, seeds);
+    out.text = b;
+    if (out.established) {
+        out.text += "every other angle tried is more than twice the standard error of the difference above it";
+    } else {
+        out.text += "within the noise (less than twice the standard error of the difference) of the best: ";
+        for (size_t k = 0; k < out.not_separated.size(); ++k) out.text += (k ? ", " : "") + format_number(out.not_separated[k]);
+        out.text += " deg; more seeds would tell them apart (the standard error falls as 1 / sqrt(seeds))";
+    }
+    return out;
+}
+
+std::string apply_calibration(const std::string& scenario, double angle, bool force, const std::vector<std::string>& provenance) {
     std::ifstream in(scenario);
     if (!in) throw InputError(scenario + ": cannot open the scenario to apply the calibration to");
     std::vector<std::string> lines;
@@ -511,6 +554,7 @@ std::string apply_calibration(const std::string& scenario, double angle, bool fo
         throw InputError(out + " exists already: pass --force to replace it (the original " + scenario + " is never changed)");
     std::ostringstream text;
     text << "# " << out << ": " << scenario << " with the disc-disc friction angle from demlab calibrate\n";
+    for (const std::string& note : provenance) text << "# " << note << "\n";
     for (const auto& l : lines) text << l << "\n";
     parse_scenario(text.str(), out);  // still a valid scenario
     write_file_atomic(out, text.str());

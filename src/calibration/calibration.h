@@ -36,13 +36,31 @@ struct AngleResult {
     std::vector<std::map<std::string, double>> runs;  // per seed: gamma_ges, gamma_1..5, wall_seconds
     double mean(const std::string& key) const;
     double objective_mean = 0, objective_min = 0, objective_max = 0;
+    // over the seeds: the sample standard deviation and the mean's standard error (deg); NaN
+    // with one seed (the spread is not known)
+    double objective_sd = 0, objective_se = 0;
 };
+
+// How far the best angle stands from the others, against the noise of the objective over
+// seeds. With several seeds an angle is told apart from the best when their means differ by
+// more than twice the standard error of the difference (about 95 % for normal scatter); the
+// best is established when every other evaluated angle is told apart. With one seed the
+// spread is not known and the best is not established: at scale 20 the objective jumps by
+// several degrees between angles 0.03 deg apart.
+struct CalibrationConfidence {
+    bool established = false;
+    std::vector<double> not_separated;  // the angles whose objective is within that noise of the best's
+    std::string text;                   // the sentence the console, table.md and --apply write
+};
+struct CalibrationResult;
+CalibrationConfidence calibration_confidence(const CalibrationResult& res, int seeds);
 
 struct CalibrationResult {
     std::vector<AngleResult> grid, refined;
     double best_angle = 0, best_objective = 0;
     int runs_done = 0, runs_reused = 0;
     std::set<std::string> reused_runs;  // "phi15.00-seed1": taken from an earlier invocation (all ranks')
+    double best_se = 0;                 // the best angle's standard error over seeds (NaN: one seed)
     double wall_seconds = 0;
 };
 
@@ -54,6 +72,9 @@ std::string calibration_run_name(double angle, int seed);
 
 // Writes a copy of a scenario with material.friction_disc_deg set (never over an existing file
 // unless force). Returns the path written.
-std::string apply_calibration(const std::string& scenario, double angle, bool force);
+// `provenance`: comment lines written above the value (where it came from: scale, seeds,
+// objective, run folder, confidence).
+std::string apply_calibration(const std::string& scenario, double angle, bool force,
+                              const std::vector<std::string>& provenance = {});
 
 }  // namespace demlab
