@@ -182,5 +182,16 @@ TEST(Units, TheDamBreakReportsItsOwnDeposit) {
     EXPECT_LE(sum.number("deposit_max_height"), 0.41);
     EXPECT_GT(sum.number("deposit_length"), 0.2);
     EXPECT_LE(sum.number("deposit_length"), sum.number("runout_s") + 1e-9);
+    // compare says why it does not take it (it did: "not a finished run folder")
+    CompareOptions c;
+    c.runs = {dir.string()};
+    c.out = temp_dir("units-dam-break-compare").string();
+    try {
+        compare_runs(c);
+        ADD_FAILURE() << "compare took a dam break";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("a run without a bed path"), std::string::npos) << e.what();
+    }
+    EXPECT_FALSE(fs::exists(c.out));
     fs::remove_all(dir);
 }
