@@ -17,6 +17,8 @@
 #include "run/run.h"
 #include "run/summary_file.h"
 #include "scenario/scenario.h"
+#include "setups/setup.h"
+#include "run/series_columns.h"
 
 using namespace demlab;
 using demlab::test::read_file;
@@ -76,6 +78,24 @@ TEST(Units, EveryColumnAndSummaryNumberNamesItsUnit) {
         EXPECT_FALSE(sum.text("scenario").empty());  // the units object leaves the strings alone
         fs::remove_all(dir);
     }
+}
+
+// The flume's forces.csv columns are the ones DAN writes and earlier runs have (compare and the
+// plots read both alike); a terrain without a barrier has no barrier or arc columns.
+TEST(Units, ForcesColumnsFollowTheSetUpsWalls) {
+    Scenario a = load_scenario(std::string(DEMLAB_SOURCE_DIR) + "/scenarios/geometry-A.toml");
+    finish_scenario(a);
+    EXPECT_EQ(forces_header(make_setup(a)->force_walls()), kForcesColumns);
+    Scenario d = load_scenario(std::string(DEMLAB_SOURCE_DIR) + "/scenarios/dam-break.toml");
+    finish_scenario(d);
+    EXPECT_EQ(forces_header(make_setup(d)->force_walls()),
+              "t_s,fx_floor_N_per_m,fy_floor_N_per_m,fx_back_wall_N_per_m,fy_back_wall_N_per_m,fx_total_N_per_m,"
+              "fy_total_N_per_m,ix_floor_Ns_per_m,iy_floor_Ns_per_m,ix_back_wall_Ns_per_m,iy_back_wall_Ns_per_m,"
+              "ix_total_Ns_per_m,iy_total_Ns_per_m,fx_gate_N_per_m,fy_gate_N_per_m,ix_gate_Ns_per_m,iy_gate_Ns_per_m");
+    ForceWalls terrain;
+    terrain.slope = {0, 1};
+    EXPECT_EQ(forces_header(terrain), "t_s,fx_slope_N_per_m,fy_slope_N_per_m,fx_total_N_per_m,fy_total_N_per_m,"
+                                      "ix_slope_Ns_per_m,iy_slope_Ns_per_m,ix_total_Ns_per_m,iy_total_Ns_per_m");
 }
 
 // The plots read forces.csv, front.csv and energy.csv by name: with the columns in another
@@ -182,6 +202,25 @@ TEST(Units, TheDamBreakReportsItsOwnDeposit) {
     EXPECT_LE(sum.number("deposit_max_height"), 0.41);
     EXPECT_GT(sum.number("deposit_length"), 0.2);
     EXPECT_LE(sum.number("deposit_length"), sum.number("runout_s") + 1e-9);
+    // forces.csv holds the dam break's own walls (it held the flume's slope, arc and barrier,
+    // all zeros): the floor and the back wall carry the column, whose weight they share
+    const CsvTable f = read_csv_table((dir / "forces.csv").string());
+    auto col = [&](const std::string& name) {
+        for (size_t c = 0; c < f.names.size(); ++c)
+            if (f.names[c] == name) return c;
+        ADD_FAILURE() << "no column " << name;
+        return size_t(0);
+    };
+    for (const std::string& n : f.names)
+        for (const char* absent : {"slope", "arc", "barrier"}) EXPECT_EQ(n.find(absent), std::string::npos) << n;
+    const double weight = sum.number("total_mass") * 9.81;
+    const std::vector<double>& first = f.rows.front();
+    // at t = 0 the column stands on the floor (1,561 of its 1,722 N/m at scale 20; the back wall
+    // takes friction only, and the rest of the weight is still in the contacts' springs)
+    EXPECT_GT(-first[col("fy_floor_N_per_m")], 0.8 * weight);
+    EXPECT_LT(-(first[col("fy_floor_N_per_m")] + first[col("fy_back_wall_N_per_m")]), 1.05 * weight);
+    EXPECT_LT(first[col("fx_back_wall_N_per_m")], 0.0);  // the column pushes the back wall back
+    EXPECT_EQ(first[col("fy_total_N_per_m")], first[col("fy_floor_N_per_m")] + first[col("fy_back_wall_N_per_m")]);
     // compare says why it does not take it (it did: "not a finished run folder")
     CompareOptions c;
     c.runs = {dir.string()};

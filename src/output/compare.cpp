@@ -59,6 +59,13 @@ RunInfo read_run(const std::string& dir) {
     return r;
 }
 
+// whether a run's CSV series has the column `name`
+bool has_column(const std::string& path, const std::string& name) {
+    std::string line;
+    std::getline(std::ifstream(path) >> std::ws, line);
+    return CsvHeader(line, path).has(name);
+}
+
 // gnuplot's "using a:b" for two columns of a run's CSV series, found by name (a run folder
 // of an earlier build has the names without their units)
 std::string columns(const std::string& path, const std::string& x, const std::string& y) {
@@ -196,13 +203,18 @@ std::vector<std::string> compare_into(const CompareOptions& o, const std::vector
     }
     gp << "\n";
     made.push_back(o.out + "/front.png");
-    // the barrier's force histories
-    for (const char* axis : {"x", "y"}) {
+    // the barrier's force histories, of the runs that have a barrier (a terrain without one has
+    // no barrier columns)
+    std::vector<size_t> with_barrier;
+    for (size_t k = 0; k < runs.size(); ++k)
+        if (has_column(runs[k].dir + "/forces.csv", "fx_barrier_N_per_m") || has_column(runs[k].dir + "/forces.csv", "fx_barrier"))
+            with_barrier.push_back(k);
+    for (const char* axis : with_barrier.empty() ? std::vector<const char*>{} : std::vector<const char*>{"x", "y"}) {
         const std::string column = std::string("f") + axis + "_barrier_N_per_m";
         gp << "set output 'barrier_f" << axis << ".png'\nset title 'Force on the barrier, " << axis
            << " (per metre of width)'\nset ylabel 'f" << axis << " (N/m)'\nplot ";
-        for (size_t k = 0; k < runs.size(); ++k)
-            gp << (k ? ", " : "") << "'" << (axis[0] == 'x' ? copy_series(runs[k].dir + "/forces.csv", o.out, k, "forces") : "run" + std::to_string(k) + "_forces.csv") << "' every ::1 using " << columns(runs[k].dir + "/forces.csv", "t_s", column) << " with lines lw 1.5 title "
+        for (const size_t k : with_barrier)
+            gp << (k != with_barrier.front() ? ", " : "") << "'" << (axis[0] == 'x' ? copy_series(runs[k].dir + "/forces.csv", o.out, k, "forces") : "run" + std::to_string(k) + "_forces.csv") << "' every ::1 using " << columns(runs[k].dir + "/forces.csv", "t_s", column) << " with lines lw 1.5 title "
                << quoted(runs[k].label);
         gp << "\n";
         made.push_back(o.out + "/barrier_f" + axis + ".png");

@@ -76,33 +76,63 @@ std::vector<std::string> make_plots(const std::string& run_dir, int width, int h
     const std::string forces = run_dir + "/forces.csv";
     if (fs::exists(forces)) {
         // forces.csv, by name: the samples are instantaneous (single impacts show); a 50 ms
-        // centred moving average is drawn on top of the faint raw curves
+        // centred moving average is drawn on top of the faint raw curves. The groups are the
+        // set-up's (the flume's slope, arc and barrier; a terrain's slope and barrier; the dam
+        // break's floor and back wall), read from the header, the total first.
         const CsvHeader h = header_of(forces);
         const size_t ct = h.column("t_s", "t");
         const std::string smooth = dir + "/forces_smoothed.csv";
-        // total, arc, barrier, slope of x, then of y: raw columns of forces.csv, smoothed
-        // columns 2-5 (x) and 6-9 (y) of forces_smoothed.csv
+        std::vector<std::string> parts{"total"};
+        for (const std::string& n : h.names()) {
+            std::string g;
+            if (n.rfind("fx_", 0) == 0 && n.size() > 9 && n.compare(n.size() - 8, 8, "_N_per_m") == 0) g = n.substr(3, n.size() - 11);
+            else if (n.rfind("fx_", 0) == 0 && n.find('_', 3) == std::string::npos) g = n.substr(3);  // an earlier build's name
+            if (!g.empty() && g != "total" && g != "gate") parts.push_back(g);
+        }
+        // in one order whatever the file's column order: the flume's roles, then by name
+        auto rank = [](const std::string& g) {
+            for (int k = 0; const char* known : {"total", "slope", "arc", "barrier", "floor", "back_wall"}) {
+                if (g == known) return k;
+                ++k;
+            }
+            return 6;
+        };
+        std::stable_sort(parts.begin(), parts.end(), [&](const std::string& a, const std::string& b) {
+            return rank(a) != rank(b) ? rank(a) < rank(b) : (rank(a) == 6 && a < b);
+        });
+        // x then y: raw columns of forces.csv, smoothed columns 2.. of forces_smoothed.csv
         std::vector<size_t> cols;
         std::vector<std::string> names;
         for (const char* f : {"fx_", "fy_"})
-            for (const char* part : {"total", "arc", "barrier", "slope"}) {
+            for (const std::string& part : parts) {
                 names.push_back(std::string(f) + part + "_N_per_m");
                 cols.push_back(h.column(names.back(), std::string(f) + part));
             }
         write_file_atomic(smooth, moving_average_csv(forces, cols, names, ct, 0.05));
+        auto label = [](const std::string& part) -> std::string {
+            if (part == "total") return "all walls (total, dashed)";
+            if (part == "slope") return "slope W1";
+            if (part == "arc") return "arc W2";
+            if (part == "barrier") return "barrier W3";
+            if (part == "back_wall") return "back wall";
+            return part;
+        };
+        const char* colour[] = {"#8000c0", "#e0a000", "#009070", "#3090d0", "#c03030", "#606060"};
+        const char* faint[] = {"#d0b0e0", "#f0d8a0", "#a0d8c8", "#b0d8f0", "#f0b0b0", "#c0c0c0"};
+        const size_t n_parts = parts.size();
         for (const char axis : {'x', 'y'}) {
-            const size_t o = axis == 'x' ? 0 : 4;
+            const size_t o = axis == 'x' ? 0 : n_parts;
             gp << "set output 'forces_" << axis << ".png'\n"
-               << "set title 'Force of the mass on the flume, " << axis
+               << "set title 'Force of the mass on the walls, " << axis
                << " (per metre of width; lines: 50 ms moving average, faint: 5 ms samples)'\n"
-               << "set ylabel 'F_" << axis << " (N/m)'\n"
-               << "plot '../forces.csv' using " << ct + 1 << ":" << cols[o] + 1 << " with lines lc rgb '#d0b0e0' notitle, '' using "
-               << ct + 1 << ":" << cols[o + 1] + 1 << " with lines lc rgb '#a0d8c8' notitle, '' using " << ct + 1 << ":"
-               << cols[o + 2] + 1 << " with lines lc rgb '#b0d8f0' notitle, 'forces_smoothed.csv' using 1:" << o + 2
-               << " with lines lw 2 dt 2 lc rgb '#8000c0' title 'path (total, dashed)', '' using 1:" << o + 3
-               << " with lines lw 2 lc rgb '#009070' title 'arc W2', '' using 1:" << o + 4
-               << " with lines lw 2 lc rgb '#3090d0' title 'barrier W3', '' using 1:" << o + 5
-               << " with lines lw 1 lc rgb '#e0a000' title 'slope W1'\n";
+               << "set ylabel 'F_" << axis << " (N/m)'\nplot ";
+            for (size_t k = 0; k < n_parts; ++k)
+                gp << (k ? ", " : "") << "'../forces.csv' using " << ct + 1 << ":" << cols[o + k] + 1 << " with lines lc rgb '"
+                   << faint[std::min<size_t>(k, 5)] << "' notitle";
+            for (size_t k = 0; k < n_parts; ++k)
+                gp << ", 'forces_smoothed.csv' using 1:" << o + k + 2 << " with lines lw " << (k == 0 ? 3 : 2)
+                   << (k == 0 ? " dt 2" : "") << " lc rgb '" << colour[std::min<size_t>(k, 5)] << "' title '" << label(parts[k]) << "'";
+            gp << "\n";
         }
         made.push_back(dir + "/forces_x.png");
         made.push_back(dir + "/forces_y.png");

@@ -26,9 +26,21 @@ Vec2 group_sum(const std::vector<int>& walls, Get get) {
 }
 }  // namespace
 
+std::string forces_header(const ForceWalls& walls) {
+    const std::vector<ForceGroup> groups = walls.written();
+    std::string h = "t_s";
+    for (const char* q : {"f", "i"}) {
+        const std::string unit = q[0] == 'f' ? "_N_per_m" : "_Ns_per_m";
+        for (const ForceGroup& g : groups) h += std::string(",") + q + "x_" + g.name + unit + "," + q + "y_" + g.name + unit;
+        h += std::string(",") + q + "x_total" + unit + "," + q + "y_total" + unit;
+    }
+    if (walls.gate >= 0) h += ",fx_gate_N_per_m,fy_gate_N_per_m,ix_gate_Ns_per_m,iy_gate_Ns_per_m";
+    return h;
+}
+
 void RunSeries::open() {
     forces_.open(dir_ + "/forces.csv");
-    forces_.out() << kForcesColumns << '\n';
+    forces_.out() << forces_header_ << '\n';
     energy_.open(dir_ + "/energy.csv");
     energy_.out() << kEnergyColumns << (has_bonds_ ? kEnergyBondColumns : "") << '\n';
     if (has_front_) {
@@ -62,15 +74,26 @@ void RunSeries::sample(const World& w, const MeasureContext& m, RunState& st, Ru
     const ForceWalls& fw = m.force_walls;
     auto force = [&](int k) { return w.wall_force(k); };
     auto impulse = [&](int k) { return w.wall_impulse(k); };
+    // the roles the landmarks read (zero where the set-up has none: never written then)
     const Vec2 f[3] = {group_sum(fw.slope, force), group_sum(fw.arc, force), group_sum(fw.barrier, force)};
-    const Vec2 imp[3] = {group_sum(fw.slope, impulse), group_sum(fw.arc, impulse), group_sum(fw.barrier, impulse)};
-    const Vec2 ft = f[0] + f[1] + f[2], it = imp[0] + imp[1] + imp[2];
     std::ostream& fo = forces_.out();
     fo << t;
-    for (const Vec2& v : {f[0], f[1], f[2], ft, imp[0], imp[1], imp[2], it}) fo << ',' << v.x() << ',' << v.y();
-    const Vec2 fg = fw.gate >= 0 ? w.wall_force(fw.gate) : Vec2::Zero();
-    const Vec2 ig = fw.gate >= 0 ? w.wall_impulse(fw.gate) : Vec2::Zero();
-    fo << ',' << fg.x() << ',' << fg.y() << ',' << ig.x() << ',' << ig.y() << '\n';
+    for (const bool forces : {true, false}) {
+        // the groups in forces_header's order, then their total (summed in that order: the
+        // flume's slope + arc + barrier as before)
+        Vec2 total = Vec2::Zero();
+        for (size_t k = 0; k < groups_.size(); ++k) {
+            const Vec2 v = forces ? group_sum(groups_[k].walls, force) : group_sum(groups_[k].walls, impulse);
+            total = k == 0 ? v : Vec2(total + v);
+            fo << ',' << v.x() << ',' << v.y();
+        }
+        fo << ',' << total.x() << ',' << total.y();
+    }
+    if (has_gate_) {
+        const Vec2 fg = w.wall_force(fw.gate), ig = w.wall_impulse(fw.gate);
+        fo << ',' << fg.x() << ',' << fg.y() << ',' << ig.x() << ',' << ig.y();
+    }
+    fo << '\n';
     if (std::abs(f[2].x()) > st.peak_fx_barrier) {
         st.peak_fx_barrier = std::abs(f[2].x());
         sum.t_peak_fx_barrier = t;

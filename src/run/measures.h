@@ -43,11 +43,18 @@ struct RunState {
     }
 };
 
-// forces.csv, energy.csv, front.csv (with a bed path), track.csv (with tracers).
+// forces.csv's header for a set-up's wall groups: t_s, the groups' forces and the total, their
+// impulses and the total, then the gate's force and impulse where there is a gate. The flume's
+// is series_columns.h's kForcesColumns.
+std::string forces_header(const ForceWalls& walls);
+
+// forces.csv (the set-up's wall groups: ForceWalls), energy.csv, front.csv (with a bed path),
+// track.csv (with tracers).
 class RunSeries {
 public:
-    RunSeries(std::string dir, bool front, bool track, bool bonds)
-        : dir_(std::move(dir)), has_front_(front), has_track_(track), has_bonds_(bonds) {}
+    RunSeries(std::string dir, const ForceWalls& walls, bool front, bool track, bool bonds)
+        : dir_(std::move(dir)), groups_(walls.written()), has_gate_(walls.gate >= 0), has_front_(front), has_track_(track),
+          has_bonds_(bonds), forces_header_(forces_header(walls)) {}
     void open();                                        // new files with their headers
     void reopen(const std::array<uint64_t, 4>& sizes);  // a resumed run's, cut back to these sizes
     std::array<uint64_t, 4> flush();                    // their sizes now
@@ -56,7 +63,9 @@ public:
 
 private:
     std::string dir_;
-    bool has_front_, has_track_, has_bonds_;
+    std::vector<ForceGroup> groups_;
+    bool has_gate_, has_front_, has_track_, has_bonds_;
+    std::string forces_header_;
     SeriesFile forces_, energy_, front_, track_;
 };
 

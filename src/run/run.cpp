@@ -339,7 +339,7 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
     const MeasureContext measure{s, path.get(), path ? setup->barrier(*path) : BarrierMarks{}, setup->force_walls(),
                                  s.output.front_neighbour_gap > 0 ? s.output.front_neighbour_gap : r_max, start_pos};
 
-    RunSeries series(dir, path != nullptr, !s.output.track.empty(), !w.bonds().empty());
+    RunSeries series(dir, measure.force_walls, path != nullptr, !s.output.track.empty(), !w.bonds().empty());
     BarrierOutputs barrier(dir, w, measure);
     std::unique_ptr<SnapshotWriter> snaps;
     if (s.output.snapshot_interval > 0) snaps = std::make_unique<SnapshotWriter>(dir + "/snapshots", layer, grid, s.output.snapshot_format == "binary");

@@ -24,7 +24,14 @@ public:
         return std::make_unique<BedPath>(std::vector<WallGeom>{w.wall_geom(kW1), w.wall_geom(kW2), w.wall_geom(kW3)});
     }
     BarrierMarks barrier(const BedPath& path) const override { return {path.part_start(2), path.part(2).p0}; }
-    ForceWalls force_walls() const override { return {{kW1}, {kW2}, {kW3}, kGate}; }
+    ForceWalls force_walls() const override {
+        ForceWalls f;
+        f.slope = {kW1};
+        f.arc = {kW2};
+        f.barrier = {kW3};
+        f.gate = kGate;
+        return f;
+    }
     std::vector<Vec2> extent() const override {
         const FlumeDef& f = s_.flume;
         return {f.w1_p0, f.w1_p1, f.w3_p0, f.w3_p1};
@@ -42,6 +49,13 @@ public:
     bool has_release() const override { return true; }
     ReleaseBox release_box() const override { return demlab::release_box(s_); }
     bool measures_envelope() const override { return true; }
+    // the floor carries the column's weight, the back wall holds it; the gate as the flume's
+    ForceWalls force_walls() const override {
+        ForceWalls f;
+        f.others = {{"floor", {kFloor}}, {"back_wall", {kBack}}};
+        f.gate = kDamGate;
+        return f;
+    }
     double envelope_length() const override { return s_.dam_break.floor_length; }
 
 private:

@@ -25,10 +25,30 @@ namespace demlab {
 
 class World;
 
-// Which walls' loads fill forces.csv's columns (wall indices of the run's world).
+// A named group of walls (indices of the run's world) whose summed load forms forces.csv's
+// columns fx_<name>, fy_<name> (N/m) and ix_<name>, iy_<name> (N s/m).
+struct ForceGroup {
+    std::string name;
+    std::vector<int> walls;
+};
+
+// Which walls' loads fill forces.csv. The slope, arc and barrier are roles the landmarks read
+// (the peak x-force on the barrier, the peak y-force on the arc); a set-up without one leaves
+// it empty and forces.csv has no such columns. `others` are a set-up's own groups (the dam
+// break's floor and back wall). The gate's columns come last, where the set-up has a gate.
 struct ForceWalls {
     std::vector<int> slope, arc, barrier;
+    std::vector<ForceGroup> others;
     int gate = -1;
+    // the groups forces.csv holds, in its column order: slope, arc and barrier where present, then the others
+    std::vector<ForceGroup> written() const {
+        std::vector<ForceGroup> g;
+        if (!slope.empty()) g.push_back({"slope", slope});
+        if (!arc.empty()) g.push_back({"arc", arc});
+        if (!barrier.empty()) g.push_back({"barrier", barrier});
+        g.insert(g.end(), others.begin(), others.end());
+        return g;
+    }
 };
 
 // Where the run-up is measured along a bed path: beyond s_barrier, above the barrier's foot.
