@@ -33,13 +33,12 @@ RunInfo read_run(const std::string& dir) {
     RunInfo r;
     r.dir = dir;
     if (!fs::is_directory(dir)) throw InputError(dir + ": no such run folder");
-    // a finished run without a bed path (a dam break, explicit discs) has no front to set beside
+    // a finished run without a bed path (explicit discs and walls) has no front to set beside
     // the others: said as such, not as an unfinished folder
     if (fs::is_regular_file(dir + "/summary.json") && fs::is_regular_file(dir + "/scenario.toml") &&
         !fs::is_regular_file(dir + "/front.csv"))
-        throw InputError(dir + ": a run without a bed path (a dam break, or discs and walls of its own) has no front, run-out "
-                         "along a path or barrier forces to compare; compare takes flume and terrain runs (a dam break's "
-                         "deposit angles: demlab calibrate)");
+        throw InputError(dir + ": a run without a bed path (discs and walls of its own) has no front, run-out "
+                         "along a path or barrier forces to compare; compare takes flume, terrain and dam-break runs");
     for (const char* f : {"scenario.toml", "summary.json", "front.csv", "forces.csv"})
         if (!fs::is_regular_file(dir + "/" + f))
             throw InputError(dir + ": not a finished run folder (no " + f + "); compare takes folders written by demlab run");

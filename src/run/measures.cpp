@@ -268,8 +268,9 @@ SlopeAngles write_envelope(const World& w, double gap, double length, const std:
     const SlopeAngles angles = slope_angles(env);
     sum.runout_s = angles.toe_x;
     // the deposit over the floor: its thickest point and its length from the first sample
-    // with mass to the toe
+    // with mass to the toe (the envelope's, in place of deposit.csv's bins along the floor)
     double first = NAN;
+    sum.deposit_max_height = 0.0;
     for (size_t k = 0; k < env.y.size(); ++k)
         if (!std::isnan(env.y[k]) && env.y[k] > 0.0) {
             if (std::isnan(first)) first = env.x(k);

@@ -49,6 +49,11 @@ public:
     bool has_release() const override { return true; }
     ReleaseBox release_box() const override { return demlab::release_box(s_); }
     bool measures_envelope() const override { return true; }
+    // the floor as the bed path (s from the back wall): the front's run-out over time
+    // (front.csv), the deposit's depth along it (deposit.csv) and the flow's peaks (peaks.csv)
+    std::unique_ptr<BedPath> bed_path(const World& w) const override {
+        return std::make_unique<BedPath>(std::vector<WallGeom>{w.wall_geom(kFloor)});
+    }
     // the floor carries the column's weight, the back wall holds it; the gate as the flume's
     ForceWalls force_walls() const override {
         ForceWalls f;
