@@ -202,7 +202,7 @@ def main():
         f.write("| variant | front at barrier (s) | peak fx barrier raw / 50 ms (s) | peak fy arc raw / 50 ms (s) "
                 "| impact / static fx | steady from (s) | rest (s) | run-up (m) | run-out s (m) | what |\n")
         f.write("|---|---|---|---|---|---|---|---|---|---|\n")
-        f.write("| thesis | 0.8 | 0.8 | 0.7 | > 1 | 1.4 | | M1 about 0.08 above M3 | | |\n")
+        f.write("| thesis | 0.8 | 0.8 | 0.7 | > 1 | 1.4 | | M1 about 0.08 beyond the lab; M3 not above M1 | | |\n")
         for r in rows:
             f.write("| %s | %.3f | %.3f / %.3f | %.3f / %.3f | %.2f | %.2f | %.2f%s | %.3f | %.3f | %s |\n" % (
                 r["variant"], r["t_front_at_barrier"], r["t_peak_fx_barrier"], r["t_peak_fx_barrier_smoothed"],
