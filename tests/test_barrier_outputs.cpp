@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <filesystem>
+#include <algorithm>
 #include <fstream>
 #include <string>
 #include <vector>
@@ -156,4 +157,56 @@ rest_duration = 0.5
     EXPECT_NEAR(h_peak, h_track, 1e-9);
     EXPECT_EQ(bins_with_disc, 1);
     fs::remove_all(dir);
+}
+
+// Every step's extremes (issue 51): each forces.csv row's max and min of every group and
+// component bound the row's own sample; the summary's peaks are of every step, at least the
+// largest sample (kept as *_sampled), and the same bits for two series intervals and for 1
+// and 2 threads.
+TEST(BarrierOutputs, EveryStepExtremesBoundTheSamplesAndDoNotDependOnSampling) {
+    auto run = [](const std::string& name, const std::string& interval, int threads) {
+        Scenario s = load_scenario(std::string(DEMLAB_SOURCE_DIR) + "/scenarios/geometry-A.toml");
+        for (const std::string& a : {std::string("release.scale=20"), std::string("stop.t_max=1.2"),
+                                     std::string("output.snapshot_interval=0"), "output.series_interval=" + interval})
+            apply_override(s, a);
+        finish_scenario(s);
+        s.world.threads = threads;
+        const fs::path dir = temp_dir(name);
+        fs::remove_all(dir);
+        RunSummary r = run_scenario(s, {dir.string(), false, {}});
+        return std::make_pair(dir, r);
+    };
+    const auto [dir, r] = run("extremes-5ms", "0.005", 1);
+    const CsvTable f = table(dir / "forces.csv");
+    size_t checked = 0;
+    for (const std::string g : {"slope", "arc", "barrier", "total"})
+        for (const char* c : {"x", "y"}) {
+            const size_t v = column(f, std::string("f") + c + "_" + g + "_N_per_m");
+            const size_t hi = column(f, std::string("f") + c + "_" + g + "_max_N_per_m");
+            const size_t lo = column(f, std::string("f") + c + "_" + g + "_min_N_per_m");
+            for (const auto& row : f.rows) {
+                EXPECT_GE(row[hi], row[v]) << g << c << " t = " << row[0];
+                EXPECT_LE(row[lo], row[v]) << g << c << " t = " << row[0];
+                ++checked;
+            }
+        }
+    EXPECT_GT(checked, 1000u);
+    EXPECT_GE(r.peak_fx_barrier, r.peak_fx_barrier_sampled);
+    EXPECT_GE(r.peak_fy_arc, r.peak_fy_arc_sampled);
+    EXPECT_GT(r.peak_fx_barrier, 0.0);
+    // the largest of the rows' maxima of |fx| on the barrier is the summary's peak
+    double largest = 0;
+    for (const auto& row : f.rows)
+        largest = std::max({largest, row[column(f, "fx_barrier_max_N_per_m")], -row[column(f, "fx_barrier_min_N_per_m")]});
+    EXPECT_NEAR(largest, r.peak_fx_barrier, 1e-9 * r.peak_fx_barrier);  // forces.csv keeps 10 digits
+    const auto [dir2, r2] = run("extremes-2ms", "0.002", 1);
+    const auto [dir3, r3] = run("extremes-2-threads", "0.005", 2);
+    for (const RunSummary* o : {&r2, &r3}) {
+        EXPECT_EQ(o->peak_fx_barrier, r.peak_fx_barrier);
+        EXPECT_EQ(o->t_peak_fx_barrier, r.t_peak_fx_barrier);
+        EXPECT_EQ(o->peak_fy_arc, r.peak_fy_arc);
+        EXPECT_EQ(o->t_peak_fy_arc, r.t_peak_fy_arc);
+    }
+    EXPECT_EQ(demlab::test::read_file(dir / "forces.csv"), demlab::test::read_file(dir3 / "forces.csv"));
+    for (const fs::path& d : {dir, dir2, dir3}) fs::remove_all(d);
 }

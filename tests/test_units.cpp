@@ -85,17 +85,29 @@ TEST(Units, EveryColumnAndSummaryNumberNamesItsUnit) {
 TEST(Units, ForcesColumnsFollowTheSetUpsWalls) {
     Scenario a = load_scenario(std::string(DEMLAB_SOURCE_DIR) + "/scenarios/geometry-A.toml");
     finish_scenario(a);
-    EXPECT_EQ(forces_header(make_setup(a)->force_walls()), kForcesColumns);
+    // the columns of earlier builds and DAN first, then every step's extremes
+    const std::string flume = forces_header(make_setup(a)->force_walls());
+    EXPECT_EQ(flume.substr(0, std::string(kForcesColumns).size() + 1), std::string(kForcesColumns) + ",");
+    EXPECT_EQ(flume.substr(std::string(kForcesColumns).size()),
+              ",fx_slope_max_N_per_m,fx_slope_min_N_per_m,fy_slope_max_N_per_m,fy_slope_min_N_per_m,fx_arc_max_N_per_m,"
+              "fx_arc_min_N_per_m,fy_arc_max_N_per_m,fy_arc_min_N_per_m,fx_barrier_max_N_per_m,fx_barrier_min_N_per_m,"
+              "fy_barrier_max_N_per_m,fy_barrier_min_N_per_m,fx_total_max_N_per_m,fx_total_min_N_per_m,fy_total_max_N_per_m,"
+              "fy_total_min_N_per_m");
     Scenario d = load_scenario(std::string(DEMLAB_SOURCE_DIR) + "/scenarios/dam-break.toml");
     finish_scenario(d);
     EXPECT_EQ(forces_header(make_setup(d)->force_walls()),
               "t_s,fx_floor_N_per_m,fy_floor_N_per_m,fx_back_wall_N_per_m,fy_back_wall_N_per_m,fx_total_N_per_m,"
               "fy_total_N_per_m,ix_floor_Ns_per_m,iy_floor_Ns_per_m,ix_back_wall_Ns_per_m,iy_back_wall_Ns_per_m,"
-              "ix_total_Ns_per_m,iy_total_Ns_per_m,fx_gate_N_per_m,fy_gate_N_per_m,ix_gate_Ns_per_m,iy_gate_Ns_per_m");
+              "ix_total_Ns_per_m,iy_total_Ns_per_m,fx_gate_N_per_m,fy_gate_N_per_m,ix_gate_Ns_per_m,iy_gate_Ns_per_m,"
+              "fx_floor_max_N_per_m,fx_floor_min_N_per_m,fy_floor_max_N_per_m,fy_floor_min_N_per_m,fx_back_wall_max_N_per_m,"
+              "fx_back_wall_min_N_per_m,fy_back_wall_max_N_per_m,fy_back_wall_min_N_per_m,fx_total_max_N_per_m,"
+              "fx_total_min_N_per_m,fy_total_max_N_per_m,fy_total_min_N_per_m");
     ForceWalls terrain;
     terrain.slope = {0, 1};
     EXPECT_EQ(forces_header(terrain), "t_s,fx_slope_N_per_m,fy_slope_N_per_m,fx_total_N_per_m,fy_total_N_per_m,"
-                                      "ix_slope_Ns_per_m,iy_slope_Ns_per_m,ix_total_Ns_per_m,iy_total_Ns_per_m");
+                                      "ix_slope_Ns_per_m,iy_slope_Ns_per_m,ix_total_Ns_per_m,iy_total_Ns_per_m,"
+                                      "fx_slope_max_N_per_m,fx_slope_min_N_per_m,fy_slope_max_N_per_m,fy_slope_min_N_per_m,"
+                                      "fx_total_max_N_per_m,fx_total_min_N_per_m,fy_total_max_N_per_m,fy_total_min_N_per_m");
 }
 
 // The plots read forces.csv, front.csv and energy.csv by name: with the columns in another

@@ -87,7 +87,9 @@ std::vector<std::string> make_plots(const std::string& run_dir, int width, int h
             std::string g;
             if (n.rfind("fx_", 0) == 0 && n.size() > 9 && n.compare(n.size() - 8, 8, "_N_per_m") == 0) g = n.substr(3, n.size() - 11);
             else if (n.rfind("fx_", 0) == 0 && n.find('_', 3) == std::string::npos) g = n.substr(3);  // an earlier build's name
-            if (!g.empty() && g != "total" && g != "gate") parts.push_back(g);
+            // (a group's every-step extremes, fx_<g>_max / _min, are not groups)
+            const bool extreme = g.size() > 4 && (g.compare(g.size() - 4, 4, "_max") == 0 || g.compare(g.size() - 4, 4, "_min") == 0);
+            if (!g.empty() && g != "total" && g != "gate" && !extreme) parts.push_back(g);
         }
         // in one order whatever the file's column order: the flume's roles, then by name
         auto rank = [](const std::string& g) {

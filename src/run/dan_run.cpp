@@ -254,6 +254,11 @@ RunSummary run_dan(const Scenario& s, const RunOptions& o) {
     sum.runup_height = runup_now();
     sum.peak_fx_barrier = std::max(0.0, peak_fx);
     sum.peak_fy_arc = std::max(0.0, peak_fy);
+    // DAN's peaks are of its samples (every-step extremes are the DEM's)
+    sum.peak_fx_barrier_sampled = sum.peak_fx_barrier;
+    sum.peak_fy_arc_sampled = sum.peak_fy_arc;
+    sum.t_peak_fx_barrier_sampled = sum.t_peak_fx_barrier;
+    sum.t_peak_fy_arc_sampled = sum.t_peak_fy_arc;
     sum.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     sum.particle_steps_per_second = double(n) * double(sum.steps) / std::max(sum.wall_seconds, 1e-9);
 

@@ -35,7 +35,70 @@ std::string forces_header(const ForceWalls& walls) {
         h += std::string(",") + q + "x_total" + unit + "," + q + "y_total" + unit;
     }
     if (walls.gate >= 0) h += ",fx_gate_N_per_m,fy_gate_N_per_m,ix_gate_Ns_per_m,iy_gate_Ns_per_m";
+    std::vector<std::string> names;
+    for (const ForceGroup& g : groups) names.push_back(g.name);
+    names.push_back("total");
+    for (const std::string& g : names)
+        for (const char* c : {"x", "y"})
+            for (const char* e : {"max", "min"}) h += std::string(",f") + c + "_" + g + "_" + e + "_N_per_m";
     return h;
+}
+
+ForceExtremes::ForceExtremes(const ForceWalls& walls) : groups_(walls.written()), barrier_(walls.barrier), arc_(walls.arc) {
+    row_.assign(4 * (groups_.size() + 1), 0.0);
+    reset_row();
+}
+
+void ForceExtremes::reset_row() {
+    for (size_t k = 0; k < row_.size(); k += 2) {
+        row_[k] = -INFINITY;     // max
+        row_[k + 1] = INFINITY;  // min
+    }
+}
+
+void ForceExtremes::step(const World& w) {
+    auto force = [&](int k) { return w.wall_force(k); };
+    Vec2 total = Vec2::Zero();
+    auto fold = [&](size_t g, const Vec2& f) {
+        double* r = &row_[4 * g];
+        r[0] = std::max(r[0], f.x());
+        r[1] = std::min(r[1], f.x());
+        r[2] = std::max(r[2], f.y());
+        r[3] = std::min(r[3], f.y());
+    };
+    for (size_t g = 0; g < groups_.size(); ++g) {
+        const Vec2 f = group_sum(groups_[g].walls, force);
+        total = g == 0 ? f : Vec2(total + f);  // summed as forces.csv's total
+        fold(g, f);
+    }
+    fold(groups_.size(), total);
+    if (!barrier_.empty()) {
+        const double fx = std::abs(group_sum(barrier_, force).x());
+        if (fx > peak_fx_barrier) {
+            peak_fx_barrier = fx;
+            t_peak_fx_barrier = w.time();
+        }
+    }
+    if (!arc_.empty()) {
+        const double fy = std::abs(group_sum(arc_, force).y());
+        if (fy > peak_fy_arc) {
+            peak_fy_arc = fy;
+            t_peak_fy_arc = w.time();
+        }
+    }
+}
+
+void ForceExtremes::save(BinaryWriter& out) const {
+    out.put(row_);
+    for (double v : {peak_fx_barrier, t_peak_fx_barrier, peak_fy_arc, t_peak_fy_arc}) out.put(v);
+}
+
+void ForceExtremes::load(BinaryReader& in) {
+    std::vector<double> row;
+    in.get(row);
+    if (row.size() != row_.size()) throw InputError("corrupt checkpoint (the force extremes do not match the set-up's walls)");
+    row_ = std::move(row);
+    for (double* v : {&peak_fx_barrier, &t_peak_fx_barrier, &peak_fy_arc, &t_peak_fy_arc}) in.get(*v);
 }
 
 void RunSeries::open() {
@@ -69,7 +132,7 @@ void RunSeries::close() {
     track_.close();
 }
 
-void RunSeries::sample(const World& w, const MeasureContext& m, RunState& st, RunSummary& sum) {
+void RunSeries::sample(const World& w, const MeasureContext& m, RunState& st, RunSummary& sum, ForceExtremes& extremes) {
     const double t = w.time();
     const ForceWalls& fw = m.force_walls;
     auto force = [&](int k) { return w.wall_force(k); };
@@ -93,14 +156,18 @@ void RunSeries::sample(const World& w, const MeasureContext& m, RunState& st, Ru
         const Vec2 fg = w.wall_force(fw.gate), ig = w.wall_impulse(fw.gate);
         fo << ',' << fg.x() << ',' << fg.y() << ',' << ig.x() << ',' << ig.y();
     }
+    // the extremes of every step since the previous row, this one's included
+    extremes.step(w);
+    for (double v : extremes.row()) fo << ',' << v;
+    extremes.reset_row();
     fo << '\n';
     if (std::abs(f[2].x()) > st.peak_fx_barrier) {
         st.peak_fx_barrier = std::abs(f[2].x());
-        sum.t_peak_fx_barrier = t;
+        sum.t_peak_fx_barrier_sampled = t;
     }
     if (std::abs(f[1].y()) > st.peak_fy_arc) {
         st.peak_fy_arc = std::abs(f[1].y());
-        sum.t_peak_fy_arc = t;
+        sum.t_peak_fy_arc_sampled = t;
     }
     const EnergyReport e = w.energy();
     require_finite_ledger(e, w.step_count(), t);
@@ -305,10 +372,12 @@ std::vector<NotMeasured> not_measured(const RunSummary& sum) {
         add({"t_front_at_barrier", "runup_height", "max_runup_height_during_run"}, "the set-up has no barrier");
     else if (sum.t_front_at_barrier < 0)
         add({"t_front_at_barrier"}, "the front did not reach the barrier by the end of the run");
-    if (!sum.has_barrier_forces) add({"peak_fx_barrier", "t_peak_fx_barrier"}, "the set-up has no barrier");
-    else if (!(sum.peak_fx_barrier > 0)) add({"peak_fx_barrier", "t_peak_fx_barrier"}, "the barrier carried no load in any sample");
-    if (!sum.has_arc) add({"peak_fy_arc", "t_peak_fy_arc"}, "the set-up has no arc");
-    else if (!(sum.peak_fy_arc > 0)) add({"peak_fy_arc", "t_peak_fy_arc"}, "the arc carried no load in any sample");
+    if (!sum.has_barrier_forces) add({"peak_fx_barrier", "t_peak_fx_barrier", "peak_fx_barrier_sampled", "t_peak_fx_barrier_sampled"}, "the set-up has no barrier");
+    else if (!(sum.peak_fx_barrier > 0)) add({"peak_fx_barrier", "t_peak_fx_barrier", "peak_fx_barrier_sampled", "t_peak_fx_barrier_sampled"}, "the barrier carried no load in any step");
+    else if (!(sum.peak_fx_barrier_sampled > 0)) add({"peak_fx_barrier_sampled", "t_peak_fx_barrier_sampled"}, "the barrier carried no load in any sample");
+    if (!sum.has_arc) add({"peak_fy_arc", "t_peak_fy_arc", "peak_fy_arc_sampled", "t_peak_fy_arc_sampled"}, "the set-up has no arc");
+    else if (!(sum.peak_fy_arc > 0)) add({"peak_fy_arc", "t_peak_fy_arc", "peak_fy_arc_sampled", "t_peak_fy_arc_sampled"}, "the arc carried no load in any step");
+    else if (!(sum.peak_fy_arc_sampled > 0)) add({"peak_fy_arc_sampled", "t_peak_fy_arc_sampled"}, "the arc carried no load in any sample");
     return out;
 }
 
@@ -329,6 +398,10 @@ void put_landmarks(SummaryJson& j, const RunSummary& sum) {
     put("t_peak_fy_arc", sum.t_peak_fy_arc, "s");
     put("peak_fx_barrier", sum.peak_fx_barrier, "N/m");
     put("peak_fy_arc", sum.peak_fy_arc, "N/m");
+    put("t_peak_fx_barrier_sampled", sum.t_peak_fx_barrier_sampled, "s");
+    put("t_peak_fy_arc_sampled", sum.t_peak_fy_arc_sampled, "s");
+    put("peak_fx_barrier_sampled", sum.peak_fx_barrier_sampled, "N/m");
+    put("peak_fy_arc_sampled", sum.peak_fy_arc_sampled, "N/m");
     std::vector<std::pair<std::string, std::string>> reasons;
     for (const NotMeasured& m : not_measured(sum)) reasons.emplace_back(m.key, m.reason);
     j.reasons("not_measured", reasons);

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "core/binary_io.h"
 #include "core/fileio.h"
 #include "dem/world.h"
 #include "geometry/deposit.h"
@@ -31,22 +32,45 @@ struct MeasureContext {
 // The loop's own state between two steps, saved in checkpoints (in this order).
 struct RunState {
     // peak_put_in: the largest energy put in at a series sample (energy_put_in), the scale of
-    // the ledger's closure (it holds the slot of the peak elastic energy of earlier builds)
+    // the ledger's closure (it holds the slot of the peak elastic energy of earlier builds);
+    // peak_fx_barrier and peak_fy_arc: the largest of the samples (the every-step ones are
+    // ForceExtremes')
     double peak_fx_barrier = -1, peak_fy_arc = -1, peak_ke = 0, peak_put_in = 0, rest_since = -1, e0 = 0;
     double next_series = 0.0, next_snap = 0.0;
     template <typename IO, typename Field>
     void fields(IO& io, Field&& field, RunSummary& sum) {
         for (double* v : {&peak_fx_barrier, &peak_fy_arc, &peak_ke, &peak_put_in, &rest_since, &e0, &next_series,
-                          &next_snap, &sum.dt_min, &sum.dt_max, &sum.t_peak_fx_barrier, &sum.t_peak_fy_arc,
+                          &next_snap, &sum.dt_min, &sum.dt_max, &sum.t_peak_fx_barrier_sampled, &sum.t_peak_fy_arc_sampled,
                           &sum.max_runup_height_during_run, &sum.t_front_at_barrier})
             field(io, *v);
     }
 };
 
 // forces.csv's header for a set-up's wall groups: t_s, the groups' forces and the total, their
-// impulses and the total, then the gate's force and impulse where there is a gate. The flume's
-// is series_columns.h's kForcesColumns.
+// impulses and the total, then the gate's force and impulse where there is a gate (the flume's
+// is series_columns.h's kForcesColumns), then each group's and the total's every-step extremes
+// since the previous row: fx_<g>_max, fx_<g>_min, fy_<g>_max, fy_<g>_min (N/m).
 std::string forces_header(const ForceWalls& walls);
+
+// The forces of every step, not only of the sampled ones (issue 51): each group's largest and
+// smallest x- and y-force since forces.csv's previous row, and over the run the largest |fx| on
+// the barrier and |fy| on the arc with their times. A few adds and compares per wall group per
+// step; the same bits for any series interval and thread count; carried by checkpoints.
+class ForceExtremes {
+public:
+    explicit ForceExtremes(const ForceWalls& walls);
+    void step(const World& w);           // after each step (and at t = 0)
+    const std::vector<double>& row() const { return row_; }  // per group then total: fx max, fx min, fy max, fy min
+    void reset_row();                    // after forces.csv's row is written
+    double peak_fx_barrier = 0, t_peak_fx_barrier = NAN, peak_fy_arc = 0, t_peak_fy_arc = NAN;
+    void save(BinaryWriter& out) const;
+    void load(BinaryReader& in);
+
+private:
+    std::vector<ForceGroup> groups_;
+    std::vector<int> barrier_, arc_;
+    std::vector<double> row_;
+};
 
 // forces.csv (the set-up's wall groups: ForceWalls), energy.csv, front.csv (with a bed path),
 // track.csv (with tracers).
@@ -58,7 +82,7 @@ public:
     void open();                                        // new files with their headers
     void reopen(const std::array<uint64_t, 4>& sizes);  // a resumed run's, cut back to these sizes
     std::array<uint64_t, 4> flush();                    // their sizes now
-    void sample(const World& w, const MeasureContext& m, RunState& st, RunSummary& sum);
+    void sample(const World& w, const MeasureContext& m, RunState& st, RunSummary& sum, ForceExtremes& extremes);
     void close();
 
 private:

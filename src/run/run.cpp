@@ -221,7 +221,7 @@ void finish_summary(const World& w, RunSummary& sum, double candidate_sum, doubl
 // the solver's state.
 void restore_run(BinaryReader& in, const std::string& checkpoint_path, RunState& st, RunSummary& sum,
                  double& wall_seconds_before, SnapshotWriter* snaps, RunSeries& series, Solver& solver,
-                 BarrierOutputs& barrier) {
+                 BarrierOutputs& barrier, ForceExtremes& extremes) {
     st.fields(in, [](BinaryReader& r, double& v) { r.get(v); }, sum);
     in.get(wall_seconds_before);
     std::vector<double> snap_times;
@@ -233,6 +233,7 @@ void restore_run(BinaryReader& in, const std::string& checkpoint_path, RunState&
     solver.load_state(in);
     if (in.at_end()) barrier.disable();  // an earlier build's checkpoint
     else barrier.load(in);
+    if (!in.at_end()) extremes.load(in);  // (an earlier build's: counted from the resume)
     if (!in.at_end()) throw InputError(checkpoint_path + ": corrupt checkpoint (trailing bytes)");
 }
 
@@ -340,6 +341,7 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
                                  s.output.front_neighbour_gap > 0 ? s.output.front_neighbour_gap : r_max, start_pos};
 
     RunSeries series(dir, measure.force_walls, path != nullptr, !s.output.track.empty(), !w.bonds().empty());
+    ForceExtremes extremes(measure.force_walls);
     BarrierOutputs barrier(dir, w, measure);
     std::unique_ptr<SnapshotWriter> snaps;
     if (s.output.snapshot_interval > 0) snaps = std::make_unique<SnapshotWriter>(dir + "/snapshots", layer, grid, s.output.snapshot_format == "binary");
@@ -364,7 +366,7 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
     st.e0 = solver.energy().balance();
     double wall_seconds_before = 0.0;
     if (restore) {
-        restore_run(*restore, checkpoint_path, st, sum, wall_seconds_before, snaps.get(), series, solver, barrier);
+        restore_run(*restore, checkpoint_path, st, sum, wall_seconds_before, snaps.get(), series, solver, barrier, extremes);
         restore.reset();
     } else {
         series.open();
@@ -405,6 +407,7 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
         for (uint64_t z : series.flush()) out.put(z);
         solver.save_state(out);
         barrier.save(out);
+        extremes.save(out);
         write_file_atomic(checkpoint_path, seal_checkpoint(out.bytes()));
     };
     auto snapshot = [&]() {
@@ -421,7 +424,7 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
     size_t lost_seen = w.lost_discs().size();
     while (true) {
         if (solver.time() >= st.next_series - 1e-12) {
-            series.sample(w, measure, st, sum);
+            series.sample(w, measure, st, sum, extremes);
             barrier.sample(w, solver.time());
             st.next_series += s.output.series_interval;
             sampled_now = true;
@@ -443,6 +446,7 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
             throw;
         }
         sampled_now = false;
+        extremes.step(w);
         // a disc thrown out by created energy is a blow-up, not a stray: look at once
         if (w.lost_discs().size() != lost_seen) {
             lost_seen = w.lost_discs().size();
@@ -504,7 +508,7 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
     progress.finish();
     if (o.on_progress) o.on_progress(solver.time(), s.stop.t_max, steps_per_second());
     if (!sampled_now) {
-        series.sample(w, measure, st, sum);
+        series.sample(w, measure, st, sum, extremes);
         barrier.sample(w, solver.time());
     }
     if (snaps) {
@@ -521,8 +525,12 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
     const double put_in = std::max(st.peak_put_in, energy_put_in(e, st.e0));
     sum.energy_balance_error = put_in > 0 ? std::abs(e.balance() - st.e0) / put_in : 0.0;
     series.close();
-    sum.peak_fx_barrier = std::max(0.0, st.peak_fx_barrier);
-    sum.peak_fy_arc = std::max(0.0, st.peak_fy_arc);
+    sum.peak_fx_barrier_sampled = std::max(0.0, st.peak_fx_barrier);
+    sum.peak_fy_arc_sampled = std::max(0.0, st.peak_fy_arc);
+    sum.peak_fx_barrier = extremes.peak_fx_barrier;
+    sum.t_peak_fx_barrier = extremes.t_peak_fx_barrier;
+    sum.peak_fy_arc = extremes.peak_fy_arc;
+    sum.t_peak_fy_arc = extremes.t_peak_fy_arc;
 
     barrier.finish(sum);
     write_results(s, *setup, w, measure, mass, dir, sum);

@@ -88,10 +88,15 @@ struct RunSummary {
     double runup_height = 0;            // m: highest point of the deposit on the barrier above its foot
     double max_runup_height_during_run = 0;
     double t_front_at_barrier = -1;     // s, -1 if never
+    // the largest |x-force| on the barrier and |y-force| on the arc over every step (N/m), and
+    // when; the largest of forces.csv's samples apart (_sampled: the 5 ms rows miss impacts
+    // between them)
     double t_peak_fx_barrier = -1;
     double t_peak_fy_arc = -1;
-    double peak_fx_barrier = 0;         // N/m, the largest |x-force| on the barrier (forces.csv's samples)
-    double peak_fy_arc = 0;             // N/m, the largest |y-force| on the arc
+    double peak_fx_barrier = 0;
+    double peak_fy_arc = 0;
+    double t_peak_fx_barrier_sampled = -1, t_peak_fy_arc_sampled = -1;
+    double peak_fx_barrier_sampled = 0, peak_fy_arc_sampled = 0;
     // Pa, the largest normal pressure in a bin of the barrier (barrier_pressure.csv), where
     // along it from its lower end (m) and when (s); -1: no barrier
     double peak_barrier_pressure = 0, s_peak_barrier_pressure = -1, t_peak_barrier_pressure = -1;
