@@ -88,6 +88,55 @@ void ForceExtremes::step(const World& w) {
     }
 }
 
+void LoadFilter::step(const World& w, const ForceWalls& walls) {
+    auto impulse = [&](int k) { return w.wall_impulse(k); };
+    step(w.time(), group_sum(walls.barrier, impulse).x(), group_sum(walls.arc, impulse).y());
+}
+
+void LoadFilter::step(double t, double ix_barrier, double iy_arc) {
+    t_.push_back(t);
+    ix_.push_back(ix_barrier);
+    iy_.push_back(iy_arc);
+    // the last entry at or before t - W starts the window; those before it are not needed again
+    while (first_ + 1 < t_.size() && t_[first_ + 1] <= t - window_) ++first_;
+    if (first_ > 4096 && first_ > t_.size() / 2) {  // drop the consumed half now and then
+        t_.erase(t_.begin(), t_.begin() + long(first_));
+        ix_.erase(ix_.begin(), ix_.begin() + long(first_));
+        iy_.erase(iy_.begin(), iy_.begin() + long(first_));
+        first_ = 0;
+    }
+    const double span = t - t_[first_];
+    if (!(t_[first_] <= t - window_) || !(span > 0.0)) return;  // not a whole window yet
+    fx_barrier = (ix_barrier - ix_[first_]) / span;
+    fy_arc = (iy_arc - iy_[first_]) / span;
+    if (std::abs(fx_barrier) > peak_fx_barrier) {
+        peak_fx_barrier = std::abs(fx_barrier);
+        t_peak_fx_barrier = t;
+    }
+    if (std::abs(fy_arc) > peak_fy_arc) {
+        peak_fy_arc = std::abs(fy_arc);
+        t_peak_fy_arc = t;
+    }
+}
+
+void LoadFilter::save(BinaryWriter& out) const {
+    const std::vector<double> t(t_.begin() + long(first_), t_.end()), ix(ix_.begin() + long(first_), ix_.end()),
+        iy(iy_.begin() + long(first_), iy_.end());
+    out.put(t);
+    out.put(ix);
+    out.put(iy);
+    for (double v : {peak_fx_barrier, t_peak_fx_barrier, peak_fy_arc, t_peak_fy_arc, fx_barrier, fy_arc}) out.put(v);
+}
+
+void LoadFilter::load(BinaryReader& in) {
+    in.get(t_);
+    in.get(ix_);
+    in.get(iy_);
+    if (ix_.size() != t_.size() || iy_.size() != t_.size()) throw InputError("corrupt checkpoint (the load filter's window)");
+    first_ = 0;
+    for (double* v : {&peak_fx_barrier, &t_peak_fx_barrier, &peak_fy_arc, &t_peak_fy_arc, &fx_barrier, &fy_arc}) in.get(*v);
+}
+
 void ForceExtremes::save(BinaryWriter& out) const {
     out.put(row_);
     for (double v : {peak_fx_barrier, t_peak_fx_barrier, peak_fy_arc, t_peak_fy_arc}) out.put(v);
@@ -375,6 +424,16 @@ std::vector<NotMeasured> not_measured(const RunSummary& sum) {
     if (!sum.has_barrier_forces) add({"peak_fx_barrier", "t_peak_fx_barrier", "peak_fx_barrier_sampled", "t_peak_fx_barrier_sampled"}, "the set-up has no barrier");
     else if (!(sum.peak_fx_barrier > 0)) add({"peak_fx_barrier", "t_peak_fx_barrier", "peak_fx_barrier_sampled", "t_peak_fx_barrier_sampled"}, "the barrier carried no load in any step");
     else if (!(sum.peak_fx_barrier_sampled > 0)) add({"peak_fx_barrier_sampled", "t_peak_fx_barrier_sampled"}, "the barrier carried no load in any sample");
+    if (!sum.has_load_filter)
+        add({"peak_fx_barrier_filtered", "t_peak_fx_barrier_filtered", "peak_fy_arc_filtered", "t_peak_fy_arc_filtered"},
+            "DAN gives its loads at its samples only");
+    else if (!sum.has_barrier_forces) add({"peak_fx_barrier_filtered", "t_peak_fx_barrier_filtered"}, "the set-up has no barrier");
+    else if (!(sum.peak_fx_barrier_filtered > 0))
+        add({"peak_fx_barrier_filtered", "t_peak_fx_barrier_filtered"}, "no whole output.load_window with a load on the barrier");
+    if (!sum.has_load_filter) {
+    } else if (!sum.has_arc) add({"peak_fy_arc_filtered", "t_peak_fy_arc_filtered"}, "the set-up has no arc");
+    else if (!(sum.peak_fy_arc_filtered > 0))
+        add({"peak_fy_arc_filtered", "t_peak_fy_arc_filtered"}, "no whole output.load_window with a load on the arc");
     if (!sum.has_arc) add({"peak_fy_arc", "t_peak_fy_arc", "peak_fy_arc_sampled", "t_peak_fy_arc_sampled"}, "the set-up has no arc");
     else if (!(sum.peak_fy_arc > 0)) add({"peak_fy_arc", "t_peak_fy_arc", "peak_fy_arc_sampled", "t_peak_fy_arc_sampled"}, "the arc carried no load in any step");
     else if (!(sum.peak_fy_arc_sampled > 0)) add({"peak_fy_arc_sampled", "t_peak_fy_arc_sampled"}, "the arc carried no load in any sample");
@@ -402,6 +461,10 @@ void put_landmarks(SummaryJson& j, const RunSummary& sum) {
     put("t_peak_fy_arc_sampled", sum.t_peak_fy_arc_sampled, "s");
     put("peak_fx_barrier_sampled", sum.peak_fx_barrier_sampled, "N/m");
     put("peak_fy_arc_sampled", sum.peak_fy_arc_sampled, "N/m");
+    put("peak_fx_barrier_filtered", sum.peak_fx_barrier_filtered, "N/m");
+    put("t_peak_fx_barrier_filtered", sum.t_peak_fx_barrier_filtered, "s");
+    put("peak_fy_arc_filtered", sum.peak_fy_arc_filtered, "N/m");
+    put("t_peak_fy_arc_filtered", sum.t_peak_fy_arc_filtered, "s");
     std::vector<std::pair<std::string, std::string>> reasons;
     for (const NotMeasured& m : not_measured(sum)) reasons.emplace_back(m.key, m.reason);
     j.reasons("not_measured", reasons);

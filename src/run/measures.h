@@ -72,6 +72,30 @@ private:
     std::vector<double> row_;
 };
 
+// Loads filtered by their impulse (issue 51): at each step t, the mean force over the window
+// before it, exactly the impulse gained from the last step at or before t - W to t divided by
+// that span (W <= span < W + one step); the largest |x| of the barrier's and |y| of the arc's
+// with their times. A ring of the impulses of the last W (about W / dt entries: 16,000 at scale
+// 4), carried by checkpoints.
+class LoadFilter {
+public:
+    // the step of a world: its time, the barrier walls' x- and the arc walls' y-impulse
+    void step(const World& w, const ForceWalls& walls);
+    explicit LoadFilter(double window) : window_(window) {}
+    // the step's time and the barrier's x- and the arc's y-impulse so far (N s/m)
+    void step(double t, double ix_barrier, double iy_arc);
+    double peak_fx_barrier = 0, t_peak_fx_barrier = NAN, peak_fy_arc = 0, t_peak_fy_arc = NAN;
+    // the last step's filtered loads (NaN before a whole window has passed)
+    double fx_barrier = NAN, fy_arc = NAN;
+    void save(BinaryWriter& out) const;
+    void load(BinaryReader& in);
+
+private:
+    double window_;
+    std::vector<double> t_, ix_, iy_;  // the entries since `first_` are the window's
+    size_t first_ = 0;
+};
+
 // forces.csv (the set-up's wall groups: ForceWalls), energy.csv, front.csv (with a bed path),
 // track.csv (with tracers).
 class RunSeries {

@@ -221,7 +221,7 @@ void finish_summary(const World& w, RunSummary& sum, double candidate_sum, doubl
 // the solver's state.
 void restore_run(BinaryReader& in, const std::string& checkpoint_path, RunState& st, RunSummary& sum,
                  double& wall_seconds_before, SnapshotWriter* snaps, RunSeries& series, Solver& solver,
-                 BarrierOutputs& barrier, ForceExtremes& extremes) {
+                 BarrierOutputs& barrier, ForceExtremes& extremes, LoadFilter& filter) {
     st.fields(in, [](BinaryReader& r, double& v) { r.get(v); }, sum);
     in.get(wall_seconds_before);
     std::vector<double> snap_times;
@@ -234,6 +234,7 @@ void restore_run(BinaryReader& in, const std::string& checkpoint_path, RunState&
     if (in.at_end()) barrier.disable();  // an earlier build's checkpoint
     else barrier.load(in);
     if (!in.at_end()) extremes.load(in);  // (an earlier build's: counted from the resume)
+    if (!in.at_end()) filter.load(in);
     if (!in.at_end()) throw InputError(checkpoint_path + ": corrupt checkpoint (trailing bytes)");
 }
 
@@ -342,6 +343,7 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
 
     RunSeries series(dir, measure.force_walls, path != nullptr, !s.output.track.empty(), !w.bonds().empty());
     ForceExtremes extremes(measure.force_walls);
+    LoadFilter filter(s.output.load_window);
     BarrierOutputs barrier(dir, w, measure);
     std::unique_ptr<SnapshotWriter> snaps;
     if (s.output.snapshot_interval > 0) snaps = std::make_unique<SnapshotWriter>(dir + "/snapshots", layer, grid, s.output.snapshot_format == "binary");
@@ -352,6 +354,7 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
     sum.has_path = path != nullptr;
     sum.has_envelope = setup->measures_envelope();
     sum.has_deposit = sum.has_path || sum.has_envelope;
+    sum.has_load_filter = true;
     sum.has_barrier = path != nullptr && std::isfinite(measure.barrier.s_barrier);
     sum.has_barrier_forces = !measure.force_walls.barrier.empty();
     sum.has_arc = !measure.force_walls.arc.empty();
@@ -366,7 +369,7 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
     st.e0 = solver.energy().balance();
     double wall_seconds_before = 0.0;
     if (restore) {
-        restore_run(*restore, checkpoint_path, st, sum, wall_seconds_before, snaps.get(), series, solver, barrier, extremes);
+        restore_run(*restore, checkpoint_path, st, sum, wall_seconds_before, snaps.get(), series, solver, barrier, extremes, filter);
         restore.reset();
     } else {
         series.open();
@@ -408,6 +411,7 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
         solver.save_state(out);
         barrier.save(out);
         extremes.save(out);
+        filter.save(out);
         write_file_atomic(checkpoint_path, seal_checkpoint(out.bytes()));
     };
     auto snapshot = [&]() {
@@ -447,6 +451,7 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
         }
         sampled_now = false;
         extremes.step(w);
+        filter.step(w, measure.force_walls);
         // a disc thrown out by created energy is a blow-up, not a stray: look at once
         if (w.lost_discs().size() != lost_seen) {
             lost_seen = w.lost_discs().size();
@@ -531,6 +536,10 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
     sum.t_peak_fx_barrier = extremes.t_peak_fx_barrier;
     sum.peak_fy_arc = extremes.peak_fy_arc;
     sum.t_peak_fy_arc = extremes.t_peak_fy_arc;
+    sum.peak_fx_barrier_filtered = filter.peak_fx_barrier;
+    sum.t_peak_fx_barrier_filtered = filter.t_peak_fx_barrier;
+    sum.peak_fy_arc_filtered = filter.peak_fy_arc;
+    sum.t_peak_fy_arc_filtered = filter.t_peak_fy_arc;
 
     barrier.finish(sum);
     write_results(s, *setup, w, measure, mass, dir, sum);

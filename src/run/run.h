@@ -97,6 +97,10 @@ struct RunSummary {
     double peak_fy_arc = 0;
     double t_peak_fx_barrier_sampled = -1, t_peak_fy_arc_sampled = -1;
     double peak_fx_barrier_sampled = 0, peak_fy_arc_sampled = 0;
+    // the largest mean force over output.load_window (the impulse gained over it divided by its
+    // length), N/m, and when its window ended; NaN times: no whole window loaded
+    double peak_fx_barrier_filtered = 0, t_peak_fx_barrier_filtered = NAN;
+    double peak_fy_arc_filtered = 0, t_peak_fy_arc_filtered = NAN;
     // Pa, the largest normal pressure in a bin of the barrier (barrier_pressure.csv), where
     // along it from its lower end (m) and when (s); -1: no barrier
     double peak_barrier_pressure = 0, s_peak_barrier_pressure = -1, t_peak_barrier_pressure = -1;
@@ -120,6 +124,7 @@ struct RunSummary {
     // A landmark the set-up lacks, or that did not happen, is null in summary.json with its reason.
     bool has_path = false, has_envelope = false, has_barrier = false, has_barrier_forces = false, has_arc = false;
     bool has_deposit = false;  // deposit_max_height and deposit_length (the DEM's, along its path or floor)
+    bool has_load_filter = false;  // the impulse-filtered loads (the DEM's)
     long bonds = -1;                    // cohesive bonds at the start (-1: none)
     long bonds_broken = 0;              // of which broken by the end
     long bonds_lost_with_discs = 0;     // intact ones that went with a lost disc

@@ -402,6 +402,7 @@ void add_run_keys(std::vector<Key>& k) {
     k.push_back(text("output.snapshot_format", "the snapshots' arrays: binary (appended raw, zlib-compressed; ParaView and demlab render read both) or ascii (text)", [](Scenario& s) -> std::string& { return s.output.snapshot_format; }, {"binary", "ascii"}));
     k.push_back(real("output.snapshot_interval", "s", "time between snapshots (VTK .vtp with a .pvd series); 0 = none", [](Scenario& s) -> double& { return s.output.snapshot_interval; }, 0, 100));
     k.push_back(real("output.pressure_bin", "m", "bin length of barrier_pressure.csv along the barrier from its lower end, at least the largest disc's diameter (the count is round(length / bin); summary.json's barrier_pressure_bin)", [](Scenario& s) -> double& { return s.output.pressure_bin; }, 0, 10, true));
+    k.push_back(real("output.load_window", "s", "window W of the impulse-filtered loads: the mean force over the last W, the impulse gained over it divided by its length (summary.json's peak_fx_barrier_filtered, peak_fy_arc_filtered)", [](Scenario& s) -> double& { return s.output.load_window; }, 0, 10, true));
     k.push_back(real("output.deposit_bin", "m", "spacing of deposit.csv along the flume path", [](Scenario& s) -> double& { return s.output.deposit_bin; }, 0, 10, true));
     k.push_back(real("output.front_neighbour_gap", "m", "a disc counts for the front only with a neighbour within this gap; 0 = r_max", [](Scenario& s) -> double& { return s.output.front_neighbour_gap; }, 0, 10));
     {

@@ -109,6 +109,7 @@ struct OutputDef {
     std::vector<long> track;               // disc ids whose path is written to track.csv
     double deposit_bin = 0.01;             // m, spacing of deposit.csv (and peaks.csv) along the flume path
     double pressure_bin = 0.01;            // m, bins of barrier_pressure.csv along the barrier
+    double load_window = 0.05;             // s, the window of the impulse-filtered loads (summary's *_filtered)
     double front_neighbour_gap = 0.0;      // m, a front disc must have a neighbour within this gap; 0 = r_max
 };
 
