@@ -22,6 +22,7 @@
 #include "resume.h"
 #include "core/interrupt.h"
 #include "run/run.h"
+#include "run/series_columns.h"
 #include "scenario/scenario.h"
 
 extern char** environ;
@@ -233,6 +234,16 @@ TEST(Checkpoint, EditedScenarioAndTruncatedCheckpointAreRefused) {
         }
         std::ofstream(ck, std::ios::binary | std::ios::trunc) << whole;
         EXPECT_NO_THROW(read_checkpoint_info(dir.string()));
+    }
+    {
+        // a forces.csv begun by an earlier build with other columns (the 21 before the
+        // every-step extremes): this build's rows would not match its header
+        SCOPED_TRACE("earlier forces.csv");
+        const fs::path part = dir / "forces.csv.part";
+        const std::string whole = read_file(part);
+        std::ofstream(part, std::ios::binary | std::ios::trunc) << kForcesColumns << whole.substr(whole.find('\n'));
+        expect_refused(s, "begun by an earlier build with other columns (21, this build writes 37)");
+        std::ofstream(part, std::ios::binary | std::ios::trunc) << whole;
     }
     {
         SCOPED_TRACE("edited");

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <fstream>
 #include <sstream>
 
 #include "core/error.h"
@@ -44,7 +45,11 @@ std::string forces_header(const ForceWalls& walls) {
     return h;
 }
 
-ForceExtremes::ForceExtremes(const ForceWalls& walls) : groups_(walls.written()), barrier_(walls.barrier), arc_(walls.arc) {
+ForceExtremes::ForceExtremes(const ForceWalls& walls) : groups_(walls.written()) {
+    for (size_t g = 0; g < groups_.size(); ++g) {
+        if (groups_[g].name == "barrier") barrier_ = int(g);
+        if (groups_[g].name == "arc") arc_ = int(g);
+    }
     row_.assign(4 * (groups_.size() + 1), 0.0);
     reset_row();
 }
@@ -70,22 +75,16 @@ void ForceExtremes::step(const World& w) {
         const Vec2 f = group_sum(groups_[g].walls, force);
         total = g == 0 ? f : Vec2(total + f);  // summed as forces.csv's total
         fold(g, f);
-    }
-    fold(groups_.size(), total);
-    if (!barrier_.empty()) {
-        const double fx = std::abs(group_sum(barrier_, force).x());
-        if (fx > peak_fx_barrier) {
-            peak_fx_barrier = fx;
+        if (int(g) == barrier_ && std::abs(f.x()) > peak_fx_barrier) {
+            peak_fx_barrier = std::abs(f.x());
             t_peak_fx_barrier = w.time();
         }
-    }
-    if (!arc_.empty()) {
-        const double fy = std::abs(group_sum(arc_, force).y());
-        if (fy > peak_fy_arc) {
-            peak_fy_arc = fy;
+        if (int(g) == arc_ && std::abs(f.y()) > peak_fy_arc) {
+            peak_fy_arc = std::abs(f.y());
             t_peak_fy_arc = w.time();
         }
     }
+    fold(groups_.size(), total);
 }
 
 void LoadFilter::step(const World& w, const ForceWalls& walls) {
@@ -166,6 +165,16 @@ void RunSeries::open() {
 }
 
 void RunSeries::reopen(const std::array<uint64_t, 4>& size) {
+    // a checkpoint of an earlier build whose forces.csv has other columns (before the every-step
+    // extremes, or the flume's columns for a dam break): rows of this build would not match
+    // its header
+    std::string header;
+    std::getline(std::ifstream(dir_ + "/forces.csv.part"), header);
+    if (!header.empty() && header != forces_header_)
+        throw InputError("cannot resume " + dir_ + ": its forces.csv was begun by an earlier build with other columns (" +
+                         std::to_string(std::count(header.begin(), header.end(), ',') + 1) + ", this build writes " +
+                         std::to_string(std::count(forces_header_.begin(), forces_header_.end(), ',') + 1) +
+                         "); run it again from the start (demlab run ... --force)");
     forces_.reopen(dir_ + "/forces.csv", size[0]);
     energy_.reopen(dir_ + "/energy.csv", size[1]);
     if (has_front_) front_.reopen(dir_ + "/front.csv", size[2]);
@@ -421,22 +430,25 @@ std::vector<NotMeasured> not_measured(const RunSummary& sum) {
         add({"t_front_at_barrier", "runup_height", "max_runup_height_during_run"}, "the set-up has no barrier");
     else if (sum.t_front_at_barrier < 0)
         add({"t_front_at_barrier"}, "the front did not reach the barrier by the end of the run");
-    if (!sum.has_barrier_forces) add({"peak_fx_barrier", "t_peak_fx_barrier", "peak_fx_barrier_sampled", "t_peak_fx_barrier_sampled"}, "the set-up has no barrier");
-    else if (!(sum.peak_fx_barrier > 0)) add({"peak_fx_barrier", "t_peak_fx_barrier", "peak_fx_barrier_sampled", "t_peak_fx_barrier_sampled"}, "the barrier carried no load in any step");
-    else if (!(sum.peak_fx_barrier_sampled > 0)) add({"peak_fx_barrier_sampled", "t_peak_fx_barrier_sampled"}, "the barrier carried no load in any sample");
-    if (!sum.has_load_filter)
-        add({"peak_fx_barrier_filtered", "t_peak_fx_barrier_filtered", "peak_fy_arc_filtered", "t_peak_fy_arc_filtered"},
-            "DAN gives its loads at its samples only");
-    else if (!sum.has_barrier_forces) add({"peak_fx_barrier_filtered", "t_peak_fx_barrier_filtered"}, "the set-up has no barrier");
-    else if (!(sum.peak_fx_barrier_filtered > 0))
-        add({"peak_fx_barrier_filtered", "t_peak_fx_barrier_filtered"}, "no whole output.load_window with a load on the barrier");
-    if (!sum.has_load_filter) {
-    } else if (!sum.has_arc) add({"peak_fy_arc_filtered", "t_peak_fy_arc_filtered"}, "the set-up has no arc");
-    else if (!(sum.peak_fy_arc_filtered > 0))
-        add({"peak_fy_arc_filtered", "t_peak_fy_arc_filtered"}, "no whole output.load_window with a load on the arc");
-    if (!sum.has_arc) add({"peak_fy_arc", "t_peak_fy_arc", "peak_fy_arc_sampled", "t_peak_fy_arc_sampled"}, "the set-up has no arc");
-    else if (!(sum.peak_fy_arc > 0)) add({"peak_fy_arc", "t_peak_fy_arc", "peak_fy_arc_sampled", "t_peak_fy_arc_sampled"}, "the arc carried no load in any step");
-    else if (!(sum.peak_fy_arc_sampled > 0)) add({"peak_fy_arc_sampled", "t_peak_fy_arc_sampled"}, "the arc carried no load in any sample");
+    // a wall's load: absent without the wall; its every-step, sampled and filtered peaks each
+    // absent when no step, sample or whole window carried a load (DAN has no filtered loads)
+    auto load = [&](const std::string& k, bool has, const char* wall, double step, double sampled, double filtered) {
+        const std::string peak = "peak_" + k, sampled_peak = peak + "_sampled", filtered_peak = peak + "_filtered";
+        auto pair = [&](const std::string& p, const std::string& reason) {
+            out.push_back({p, reason});
+            out.push_back({"t_" + p, reason});
+        };
+        if (!has) {
+            for (const std::string& p : {peak, sampled_peak, filtered_peak}) pair(p, std::string("the set-up has no ") + wall);
+            return;
+        }
+        if (!(step > 0)) pair(peak, std::string("the ") + wall + " carried no load in any step");
+        if (!(sampled > 0)) pair(sampled_peak, std::string("the ") + wall + " carried no load in any sample");
+        if (!sum.has_load_filter) pair(filtered_peak, "DAN gives its loads at its samples only");
+        else if (!(filtered > 0)) pair(filtered_peak, std::string("no whole output.load_window with a load on the ") + wall);
+    };
+    load("fx_barrier", sum.has_barrier_forces, "barrier", sum.peak_fx_barrier, sum.peak_fx_barrier_sampled, sum.peak_fx_barrier_filtered);
+    load("fy_arc", sum.has_arc, "arc", sum.peak_fy_arc, sum.peak_fy_arc_sampled, sum.peak_fy_arc_filtered);
     return out;
 }
 

@@ -68,7 +68,7 @@ public:
 
 private:
     std::vector<ForceGroup> groups_;
-    std::vector<int> barrier_, arc_;
+    int barrier_ = -1, arc_ = -1;  // the barrier's and the arc's index in groups_ (-1: none)
     std::vector<double> row_;
 };
 
