@@ -34,7 +34,7 @@ namespace fs = std::filesystem;
 
 namespace {
 const std::vector<std::string> kOverrides = {"release.scale=20", "stop.t_max=1.2", "output.snapshot_interval=0.2",
-                                             "output.track=[5, 200]"};
+                                             "output.track=[5, 200]", "output.force_history_steps=50"};
 
 Scenario scenario() {
     Scenario s = load_scenario(std::string(DEMLAB_SOURCE_DIR) + "/scenarios/geometry-A.toml");
@@ -59,6 +59,7 @@ std::string summary_without_timing(const fs::path& p) {
 
 void expect_same_outputs(const fs::path& a, const fs::path& b) {
     for (const char* f : {"forces.csv", "front.csv", "energy.csv", "track.csv", "deposit.csv", "release.csv", "barrier_pressure.csv", "peaks.csv",
+                          "force_history.csv",
                           "snapshots/discs.pvd", "snapshots/walls.pvd"}) {
         ASSERT_TRUE(fs::exists(a / f)) << f;
         EXPECT_EQ(read_file(a / f), read_file(b / f)) << f << " differs";
@@ -139,7 +140,7 @@ TEST(Checkpoint, ResumedRunIsByteIdentical) {
     EXPECT_NEAR(info.time, 0.4, 1e-4);
     EXPECT_FALSE(fs::exists(cut / "forces.csv")) << "an unfinished series keeps its .part name";
     EXPECT_FALSE(fs::exists(cut / "summary.json"));
-    for (const char* f : {"forces.csv.part", "energy.csv.part", "track.csv.part"}) {
+    for (const char* f : {"forces.csv.part", "energy.csv.part", "track.csv.part", "force_history.csv.part"}) {
         std::ofstream junk(cut / f, std::ios::app);
         junk << "9.99,written after the checkpoint by a run that was then killed\n";
     }
@@ -242,7 +243,7 @@ TEST(Checkpoint, EditedScenarioAndTruncatedCheckpointAreRefused) {
         const fs::path part = dir / "forces.csv.part";
         const std::string whole = read_file(part);
         std::ofstream(part, std::ios::binary | std::ios::trunc) << kForcesColumns << whole.substr(whole.find('\n'));
-        expect_refused(s, "begun by an earlier build with other columns (21, this build writes 37)");
+        expect_refused(s, "begun by an earlier build with other columns (21, this build writes 39)");
         std::ofstream(part, std::ios::binary | std::ios::trunc) << whole;
     }
     {

@@ -85,14 +85,15 @@ TEST(Units, EveryColumnAndSummaryNumberNamesItsUnit) {
 TEST(Units, ForcesColumnsFollowTheSetUpsWalls) {
     Scenario a = load_scenario(std::string(DEMLAB_SOURCE_DIR) + "/scenarios/geometry-A.toml");
     finish_scenario(a);
-    // the columns of earlier builds and DAN first, then every step's extremes
+    // the columns of earlier builds and DAN first, then every step's extremes, then the
+    // barrier's and the arc's filtered loads
     const std::string flume = forces_header(make_setup(a)->force_walls());
     EXPECT_EQ(flume.substr(0, std::string(kForcesColumns).size() + 1), std::string(kForcesColumns) + ",");
     EXPECT_EQ(flume.substr(std::string(kForcesColumns).size()),
               ",fx_slope_max_N_per_m,fx_slope_min_N_per_m,fy_slope_max_N_per_m,fy_slope_min_N_per_m,fx_arc_max_N_per_m,"
               "fx_arc_min_N_per_m,fy_arc_max_N_per_m,fy_arc_min_N_per_m,fx_barrier_max_N_per_m,fx_barrier_min_N_per_m,"
               "fy_barrier_max_N_per_m,fy_barrier_min_N_per_m,fx_total_max_N_per_m,fx_total_min_N_per_m,fy_total_max_N_per_m,"
-              "fy_total_min_N_per_m");
+              "fy_total_min_N_per_m,fx_barrier_filtered_N_per_m,fy_arc_filtered_N_per_m");
     Scenario d = load_scenario(std::string(DEMLAB_SOURCE_DIR) + "/scenarios/dam-break.toml");
     finish_scenario(d);
     EXPECT_EQ(forces_header(make_setup(d)->force_walls()),

@@ -2,6 +2,7 @@
 
 #include <cstdlib>
 #include <fstream>
+#include <cmath>
 #include <sstream>
 
 #include "core/error.h"
@@ -80,7 +81,8 @@ CsvTable read_csv_table(const std::string& path) {
         v.reserve(cells.size());
         for (const std::string& c : cells) {
             double x = 0.0;
-            if (!parse_double(c, x))
+            if (c.empty()) x = NAN;  // a value not measured at this row (forces.csv's filtered loads before a whole window)
+            else if (!parse_double(c, x))
                 throw InputError(path + ":" + std::to_string(row) + ": '" + c + "' is not a number");
             v.push_back(x);
         }

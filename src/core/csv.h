@@ -27,7 +27,8 @@ private:
 };
 
 // The columns of a CSV file (all rows parsed as numbers), by name: read whole, with an
-// InputError naming the file and the row for a cell that is not a number.
+// InputError naming the file and the row for a cell that is not a number (an empty cell is NaN:
+// not measured at that row).
 struct CsvTable {
     std::vector<std::string> names;
     std::vector<std::vector<double>> rows;

@@ -6,12 +6,14 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+#include <tuple>
 
 #include "core/csv.h"
 #include "core/error.h"
 #include "core/output_dir.h"
 #include "core/process.h"
 #include "core/fileio.h"
+#include "run/summary_file.h"
 
 namespace demlab {
 
@@ -88,7 +90,8 @@ std::vector<std::string> make_plots(const std::string& run_dir, int width, int h
             if (n.rfind("fx_", 0) == 0 && n.size() > 9 && n.compare(n.size() - 8, 8, "_N_per_m") == 0) g = n.substr(3, n.size() - 11);
             else if (n.rfind("fx_", 0) == 0 && n.find('_', 3) == std::string::npos) g = n.substr(3);  // an earlier build's name
             // (a group's every-step extremes, fx_<g>_max / _min, are not groups)
-            const bool extreme = g.size() > 4 && (g.compare(g.size() - 4, 4, "_max") == 0 || g.compare(g.size() - 4, 4, "_min") == 0);
+            auto ends = [&](const std::string& tail) { return g.size() > tail.size() && g.compare(g.size() - tail.size(), tail.size(), tail) == 0; };
+            const bool extreme = ends("_max") || ends("_min") || ends("_filtered");
             if (!g.empty() && g != "total" && g != "gate" && !extreme) parts.push_back(g);
         }
         // in one order whatever the file's column order: the flume's roles, then by name
@@ -138,6 +141,35 @@ std::vector<std::string> make_plots(const std::string& run_dir, int width, int h
         }
         made.push_back(dir + "/forces_x.png");
         made.push_back(dir + "/forces_y.png");
+        // the barrier's x-load and the arc's y-load as a designer reads them: the band of every
+        // step's extremes between two rows, the 5 ms samples, the impulse-filtered load and the
+        // static load at rest (summary.json)
+        const SummaryFile summary = fs::exists(run_dir + "/summary.json") ? read_summary_file(run_dir + "/summary.json") : SummaryFile{};
+        for (const auto& [part, axis, wall] : {std::tuple<std::string, char, std::string>{"barrier", 'x', "barrier W3"},
+                                               std::tuple<std::string, char, std::string>{"arc", 'y', "arc W2"}}) {
+            const std::string f = std::string("f") + axis + "_" + part;
+            if (!h.has(f + "_max_N_per_m") || !h.has(f + "_filtered_N_per_m")) continue;
+            const size_t cmax = h.column(f + "_max_N_per_m") + 1, cmin = h.column(f + "_min_N_per_m") + 1,
+                         craw = h.column(f + "_N_per_m") + 1, cfil = h.column(f + "_filtered_N_per_m") + 1;
+            const std::string file = "load_" + part + "_" + axis + ".png";
+            // the static load's sign: the filtered load's at the end (the summary holds its size)
+            double stat = summary.number("static_" + f);
+            const CsvTable table = read_csv_table(forces);
+            for (size_t r = table.rows.size(); r-- > 0;)
+                if (std::isfinite(table.rows[r][cfil - 1])) {
+                    stat = std::copysign(stat, table.rows[r][cfil - 1]);
+                    break;
+                }
+            gp << "set output '" << file << "'\nset key inside left top\n"
+               << "set title 'Load on the " << wall << ", " << axis << " (per metre of width)'\n"
+               << "set ylabel 'F_" << axis << " (N/m)'\nplot '../forces.csv' using " << ct + 1 << ":" << cmin << ":" << cmax
+               << " with filledcurves lc rgb '#c8d8f0' title 'every step (min to max since the previous row)', "
+               << "'../forces.csv' using " << ct + 1 << ":" << craw << " with lines lc rgb '#7090c0' title 'samples', "
+               << "'../forces.csv' using " << ct + 1 << ":" << cfil << " with lines lw 3 lc rgb '#c03030' title 'filtered: mean force over the window W before t'";
+            if (std::isfinite(stat)) gp << ", " << stat << " with lines dt 2 lw 2 lc rgb '#202020' title 'static load at rest'";
+            gp << "\nset key outside right top\n";
+            made.push_back(dir + "/" + file);
+        }
     }
     const std::string front = run_dir + "/front.csv";
     if (fs::exists(front)) {

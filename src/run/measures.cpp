@@ -42,6 +42,9 @@ std::string forces_header(const ForceWalls& walls) {
     for (const std::string& g : names)
         for (const char* c : {"x", "y"})
             for (const char* e : {"max", "min"}) h += std::string(",f") + c + "_" + g + "_" + e + "_N_per_m";
+    // the impulse-filtered loads (LoadFilter), empty before a whole window has passed
+    if (!walls.barrier.empty()) h += ",fx_barrier_filtered_N_per_m";
+    if (!walls.arc.empty()) h += ",fy_arc_filtered_N_per_m";
     return h;
 }
 
@@ -190,7 +193,8 @@ void RunSeries::close() {
     track_.close();
 }
 
-void RunSeries::sample(const World& w, const MeasureContext& m, RunState& st, RunSummary& sum, ForceExtremes& extremes) {
+void RunSeries::sample(const World& w, const MeasureContext& m, RunState& st, RunSummary& sum, ForceExtremes& extremes,
+                       const LoadFilter& filter) {
     const double t = w.time();
     const ForceWalls& fw = m.force_walls;
     auto force = [&](int k) { return w.wall_force(k); };
@@ -218,6 +222,12 @@ void RunSeries::sample(const World& w, const MeasureContext& m, RunState& st, Ru
     extremes.step(w);
     for (double v : extremes.row()) fo << ',' << v;
     extremes.reset_row();
+    auto filtered = [&](double v) {
+        fo << ',';
+        if (std::isfinite(v)) fo << v;
+    };
+    if (!fw.barrier.empty()) filtered(filter.fx_barrier);
+    if (!fw.arc.empty()) filtered(filter.fy_arc);
     fo << '\n';
     if (std::abs(f[2].x()) > st.peak_fx_barrier) {
         st.peak_fx_barrier = std::abs(f[2].x());
@@ -449,6 +459,11 @@ std::vector<NotMeasured> not_measured(const RunSummary& sum) {
     };
     load("fx_barrier", sum.has_barrier_forces, "barrier", sum.peak_fx_barrier, sum.peak_fx_barrier_sampled, sum.peak_fx_barrier_filtered);
     load("fy_arc", sum.has_arc, "arc", sum.peak_fy_arc, sum.peak_fy_arc_sampled, sum.peak_fy_arc_filtered);
+    if (!sum.has_load_filter)
+        add({"static_fx_barrier", "static_fy_arc", "t_barrier_load_steady", "impact_ix_barrier", "t_approach", "approach_depth",
+             "approach_speed", "approach_mass_per_length", "impact_coefficient_alpha", "static_coefficient_k", "static_bulk_density"},
+            "DAN gives its loads at its samples only");
+    for (const auto& [key, reason] : sum.unmeasured) out.push_back({key, reason});
     return out;
 }
 
@@ -477,6 +492,18 @@ void put_landmarks(SummaryJson& j, const RunSummary& sum) {
     put("t_peak_fx_barrier_filtered", sum.t_peak_fx_barrier_filtered, "s");
     put("peak_fy_arc_filtered", sum.peak_fy_arc_filtered, "N/m");
     put("t_peak_fy_arc_filtered", sum.t_peak_fy_arc_filtered, "s");
+    // the design figures (design_loads.h)
+    put("static_fx_barrier", sum.static_fx_barrier, "N/m");
+    put("static_fy_arc", sum.static_fy_arc, "N/m");
+    put("t_barrier_load_steady", sum.t_barrier_load_steady, "s");
+    put("impact_ix_barrier", sum.impact_ix_barrier, "N s/m");
+    put("t_approach", sum.t_approach, "s");
+    put("approach_depth", sum.approach_depth, "m");
+    put("approach_speed", sum.approach_speed, "m/s");
+    put("approach_mass_per_length", sum.approach_mass_per_length, "kg/m2");
+    put("impact_coefficient_alpha", sum.impact_coefficient_alpha, "-");
+    put("static_coefficient_k", sum.static_coefficient_k, "-");
+    put("static_bulk_density", sum.static_bulk_density, "kg/m3");
     std::vector<std::pair<std::string, std::string>> reasons;
     for (const NotMeasured& m : not_measured(sum)) reasons.emplace_back(m.key, m.reason);
     j.reasons("not_measured", reasons);

@@ -49,7 +49,8 @@ struct RunState {
 // forces.csv's header for a set-up's wall groups: t_s, the groups' forces and the total, their
 // impulses and the total, then the gate's force and impulse where there is a gate (the flume's
 // is series_columns.h's kForcesColumns), then each group's and the total's every-step extremes
-// since the previous row: fx_<g>_max, fx_<g>_min, fy_<g>_max, fy_<g>_min (N/m).
+// since the previous row: fx_<g>_max, fx_<g>_min, fy_<g>_max, fy_<g>_min (N/m), then the
+// barrier's and the arc's impulse-filtered loads (LoadFilter) where the set-up has them.
 std::string forces_header(const ForceWalls& walls);
 
 // The forces of every step, not only of the sampled ones (issue 51): each group's largest and
@@ -106,7 +107,8 @@ public:
     void open();                                        // new files with their headers
     void reopen(const std::array<uint64_t, 4>& sizes);  // a resumed run's, cut back to these sizes
     std::array<uint64_t, 4> flush();                    // their sizes now
-    void sample(const World& w, const MeasureContext& m, RunState& st, RunSummary& sum, ForceExtremes& extremes);
+    void sample(const World& w, const MeasureContext& m, RunState& st, RunSummary& sum, ForceExtremes& extremes,
+                const LoadFilter& filter);
     void close();
 
 private:

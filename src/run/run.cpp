@@ -24,6 +24,8 @@
 #include "dem/world.h"
 #include "run/checkpoint_file.h"
 #include "run/dan_run.h"
+#include "run/design_loads.h"
+#include "run/force_history.h"
 #include "run/measures.h"
 #include "run/run_folder.h"
 #include "run/snapshot.h"
@@ -221,7 +223,8 @@ void finish_summary(const World& w, RunSummary& sum, double candidate_sum, doubl
 // the solver's state.
 void restore_run(BinaryReader& in, const std::string& checkpoint_path, RunState& st, RunSummary& sum,
                  double& wall_seconds_before, SnapshotWriter* snaps, RunSeries& series, Solver& solver,
-                 BarrierOutputs& barrier, ForceExtremes& extremes, LoadFilter& filter) {
+                 BarrierOutputs& barrier, ForceExtremes& extremes, LoadFilter& filter, DesignLoads& design,
+                 ForceHistory& history) {
     st.fields(in, [](BinaryReader& r, double& v) { r.get(v); }, sum);
     in.get(wall_seconds_before);
     std::vector<double> snap_times;
@@ -235,13 +238,17 @@ void restore_run(BinaryReader& in, const std::string& checkpoint_path, RunState&
     else barrier.load(in);
     if (!in.at_end()) extremes.load(in);  // (an earlier build's: counted from the resume)
     if (!in.at_end()) filter.load(in);
+    if (!in.at_end()) design.load(in);
+    if (!in.at_end()) history.load(in);
+    else if (history.enabled()) throw InputError(checkpoint_path + ": a checkpoint of an earlier build without force_history.csv");
     if (!in.at_end()) throw InputError(checkpoint_path + ": corrupt checkpoint (trailing bytes)");
 }
 
 // The files of a finished run: the deposit along the bed path, the dam break's envelope, the
 // bonds that broke, and the summary.
 void write_results(const Scenario& s, const Setup& setup, const World& w, const MeasureContext& measure,
-                   const ReleaseMass& mass, const std::string& dir, RunSummary& sum) {
+                   const ReleaseMass& mass, const std::string& dir, RunSummary& sum,
+                   const std::function<void(RunSummary&)>& design_figures) {
     if (measure.path) write_deposit(w, measure, dir, sum);
     SlopeAngles angles{};
     if (setup.measures_envelope()) angles = write_envelope(w, measure.front_gap, setup.envelope_length(), dir, sum);
@@ -264,6 +271,7 @@ void write_results(const Scenario& s, const Setup& setup, const World& w, const 
         sum.bonds_broken = long(w.bond_breaks().size());
         sum.bonds_lost_with_discs = long(w.bonds_lost_with_discs());
     }
+    design_figures(sum);  // (after the deposit: the static coefficient reads its height on the barrier)
     // a settled lattice reports its settling (it has no generated porosity)
     const bool settled_lattice = s.lattice_release.enabled && s.lattice_release.settle;
     write_summary(dir + "/summary.json", s, sum,
@@ -344,6 +352,8 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
     RunSeries series(dir, measure.force_walls, path != nullptr, !s.output.track.empty(), !w.bonds().empty());
     ForceExtremes extremes(measure.force_walls);
     LoadFilter filter(s.output.load_window);
+    DesignLoads design(s.output.approach_length);
+    ForceHistory history(dir + "/force_history.csv", measure.force_walls, s.output.force_history_steps);
     BarrierOutputs barrier(dir, w, measure);
     std::unique_ptr<SnapshotWriter> snaps;
     if (s.output.snapshot_interval > 0) snaps = std::make_unique<SnapshotWriter>(dir + "/snapshots", layer, grid, s.output.snapshot_format == "binary");
@@ -369,11 +379,13 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
     st.e0 = solver.energy().balance();
     double wall_seconds_before = 0.0;
     if (restore) {
-        restore_run(*restore, checkpoint_path, st, sum, wall_seconds_before, snaps.get(), series, solver, barrier, extremes, filter);
+        restore_run(*restore, checkpoint_path, st, sum, wall_seconds_before, snaps.get(), series, solver, barrier, extremes, filter,
+                    design, history);
         restore.reset();
     } else {
         series.open();
         barrier.open();
+        history.open();
     }
     // the dissipation accounts as they are now (a resume: as restored)
     DissipationPeaks dissipation(solver.energy());
@@ -412,6 +424,8 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
         barrier.save(out);
         extremes.save(out);
         filter.save(out);
+        design.save(out);
+        history.save(out);
         write_file_atomic(checkpoint_path, seal_checkpoint(out.bytes()));
     };
     auto snapshot = [&]() {
@@ -428,8 +442,9 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
     size_t lost_seen = w.lost_discs().size();
     while (true) {
         if (solver.time() >= st.next_series - 1e-12) {
-            series.sample(w, measure, st, sum, extremes);
+            series.sample(w, measure, st, sum, extremes, filter);
             barrier.sample(w, solver.time());
+            design.sample(w, measure, filter, sum);
             st.next_series += s.output.series_interval;
             sampled_now = true;
         }
@@ -452,6 +467,7 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
         sampled_now = false;
         extremes.step(w);
         filter.step(w, measure.force_walls);
+        history.step(w);
         // a disc thrown out by created energy is a blow-up, not a stray: look at once
         if (w.lost_discs().size() != lost_seen) {
             lost_seen = w.lost_discs().size();
@@ -513,8 +529,9 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
     progress.finish();
     if (o.on_progress) o.on_progress(solver.time(), s.stop.t_max, steps_per_second());
     if (!sampled_now) {
-        series.sample(w, measure, st, sum, extremes);
+        series.sample(w, measure, st, sum, extremes, filter);
         barrier.sample(w, solver.time());
+        design.sample(w, measure, filter, sum);
     }
     if (snaps) {
         // the last instant, unless the loop's last snapshot was taken at it already
@@ -530,6 +547,7 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
     const double put_in = std::max(st.peak_put_in, energy_put_in(e, st.e0));
     sum.energy_balance_error = put_in > 0 ? std::abs(e.balance() - st.e0) / put_in : 0.0;
     series.close();
+    history.close();
     sum.peak_fx_barrier_sampled = std::max(0.0, st.peak_fx_barrier);
     sum.peak_fy_arc_sampled = std::max(0.0, st.peak_fy_arc);
     sum.peak_fx_barrier = extremes.peak_fx_barrier;
@@ -542,7 +560,11 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
     sum.t_peak_fy_arc_filtered = filter.t_peak_fy_arc;
 
     barrier.finish(sum);
-    write_results(s, *setup, w, measure, mass, dir, sum);
+    double disc_area = 0.0;
+    for (double r : start_radius) disc_area += kPi * r * r;
+    write_results(s, *setup, w, measure, mass, dir, sum, [&](RunSummary& out) {
+        design.finish(filter, out, disc_area > 0 ? total_mass / disc_area : 0.0, s.world.gravity.norm());
+    });
     std::filesystem::remove(checkpoint_path);  // the run is complete: nothing to resume
     lock->release_and_remove();
     remove_replaced_output(dir);  // a forced run's old folder, now that the new one is complete

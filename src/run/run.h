@@ -4,8 +4,11 @@
 //   deposit.csv, summary.json, snapshots/ (VTK).
 // With checkpoints it can be stopped (a signal, or killed) and resumed to the same bytes.
 #pragma once
+#include <cmath>
 #include <functional>
 #include <string>
+#include <utility>
+#include <vector>
 
 #include "scenario/scenario.h"
 
@@ -101,6 +104,18 @@ struct RunSummary {
     // length), N/m, and when its window ended; NaN times: no whole window loaded
     double peak_fx_barrier_filtered = 0, t_peak_fx_barrier_filtered = NAN;
     double peak_fy_arc_filtered = 0, t_peak_fy_arc_filtered = NAN;
+    // The barrier's design loads (run/design_loads.h; NaN: not measured, the reason in
+    // `unmeasured`): the filtered load at rest on the barrier (x) and the arc (y), N/m; when the
+    // barrier's filtered load came within kSteadyBand of it for good (s) and the x-impulse from
+    // the front's arrival to then (N s/m); the flow within output.approach_length upstream of
+    // the barrier when the front arrived: time (s), depth (m), speed (m/s), mass per length
+    // (kg/m2: rho h); the hydrodynamic alpha = F_filtered / (q v^2) and the hydrostatic
+    // K = F_static / (1/2 rho_d g H^2) with the bulk density rho_d (kg/m3)
+    double static_fx_barrier = NAN, static_fy_arc = NAN, t_barrier_load_steady = NAN, impact_ix_barrier = NAN;
+    double t_approach = NAN, approach_depth = NAN, approach_speed = NAN, approach_mass_per_length = NAN;
+    double impact_coefficient_alpha = NAN, static_coefficient_k = NAN, static_bulk_density = NAN;
+    // landmarks a part of the run did not measure, with the reason (summary.json's not_measured)
+    std::vector<std::pair<std::string, std::string>> unmeasured;
     // Pa, the largest normal pressure in a bin of the barrier (barrier_pressure.csv), where
     // along it from its lower end (m) and when (s); -1: no barrier
     double peak_barrier_pressure = 0, s_peak_barrier_pressure = -1, t_peak_barrier_pressure = -1;

@@ -110,6 +110,8 @@ struct OutputDef {
     double deposit_bin = 0.01;             // m, spacing of deposit.csv (and peaks.csv) along the flume path
     double pressure_bin = 0.01;            // m, bins of barrier_pressure.csv along the barrier
     double load_window = 0.05;             // s, the window of the impulse-filtered loads (summary's *_filtered)
+    double approach_length = 0.0;          // m upstream of the barrier where the arriving flow is measured; 0 = 20 r_max
+    int force_history_steps = 0;           // steps between rows of force_history.csv; 0 = none
     double front_neighbour_gap = 0.0;      // m, a front disc must have a neighbour within this gap; 0 = r_max
 };
 
