@@ -17,6 +17,7 @@
 #include "run/run.h"
 #include "run/summary_file.h"
 #include "scenario/scenario.h"
+#include "setups/setup.h"
 
 using namespace demlab;
 using namespace demlab::test;
@@ -172,4 +173,32 @@ TEST(DesignLoads, ARunNotAtRestHasNoStaticLoad) {
     }
     EXPECT_TRUE(std::isfinite(j.number("impact_coefficient_alpha")));
     fs::remove_all(run.dir);
+}
+
+// DAN writes the same columns from its own steps: every row's extremes bracket its sample, the
+// every-step peak is at least the sampled one, and its static load is the last filtered load.
+TEST(DesignLoads, DanWritesTheSameColumnsFromItsSteps) {
+    Scenario s = load_scenario(std::string(DEMLAB_SOURCE_DIR) + "/scenarios/geometry-A.toml");
+    apply_override(s, "scenario.solver=\"dan\"");
+    apply_override(s, "output.snapshot_interval=0");
+    finish_scenario(s);
+    const fs::path dir = temp_dir("design-dan");
+    const RunSummary r = run_scenario(s, {dir.string(), false, {}});
+    ASSERT_EQ(r.stop_reason, "rest");
+    const fs::path forces = dir / "forces.csv";
+    EXPECT_EQ(read_file_header(forces), forces_header(make_setup(s)->force_walls()));
+    const std::vector<double> f = csv_column(forces, "fx_barrier_N_per_m"), hi = csv_column(forces, "fx_barrier_max_N_per_m"),
+                              lo = csv_column(forces, "fx_barrier_min_N_per_m"), fil = csv_column(forces, "fx_barrier_filtered_N_per_m");
+    for (size_t k = 0; k < f.size(); ++k) {
+        EXPECT_GE(hi[k], f[k]);
+        EXPECT_LE(lo[k], f[k]);
+    }
+    EXPECT_GE(r.peak_fx_barrier, r.peak_fx_barrier_sampled);
+    EXPECT_GT(r.peak_fx_barrier_filtered, 0.0);
+    EXPECT_NEAR(r.static_fx_barrier, std::abs(fil.back()), 1e-8 * r.static_fx_barrier);
+    EXPECT_GT(r.approach_speed, 0.0);
+    EXPECT_NEAR(r.approach_mass_per_length, s.dan.density * r.approach_depth, 1e-9);
+    EXPECT_TRUE(std::isfinite(r.impact_coefficient_alpha));
+    EXPECT_TRUE(std::isfinite(r.static_coefficient_k));
+    fs::remove_all(dir);
 }

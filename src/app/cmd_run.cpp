@@ -57,10 +57,31 @@ void print_landmarks(const RunSummary& r) {
                     landmark(r, "t_front_at_barrier", r.t_front_at_barrier, "s").c_str(),
                     landmark(r, "t_peak_fx_barrier", r.t_peak_fx_barrier, "s").c_str(),
                     landmark(r, "t_peak_fy_arc", r.t_peak_fy_arc, "s").c_str());
-    if (r.has_path || r.has_envelope)
-        std::printf("  run-out %s; deposit %s high, %s long\n", landmark(r, "runout_s", r.runout_s, "m").c_str(),
-                    landmark(r, "deposit_max_height", r.deposit_max_height, "m").c_str(),
-                    landmark(r, "deposit_length", r.deposit_length, "m").c_str());
+    if (r.has_path || r.has_envelope) {
+        const std::string why = not_measured_reason(r, "deposit_max_height");
+        if (why.empty())
+            std::printf("  run-out %s; deposit %s high, %s long\n", landmark(r, "runout_s", r.runout_s, "m").c_str(),
+                        landmark(r, "deposit_max_height", r.deposit_max_height, "m").c_str(),
+                        landmark(r, "deposit_length", r.deposit_length, "m").c_str());
+        else
+            std::printf("  run-out %s; deposit height and length none (%s)\n", landmark(r, "runout_s", r.runout_s, "m").c_str(), why.c_str());
+    }
+    if (r.has_barrier_forces) {
+        // the barrier's design loads (docs/barrier-loads.md): each figure, or none with its reason
+        auto figure = [&](const char* key, double v, const char* format) {
+            const std::string why = not_measured_reason(r, key);
+            if (!why.empty()) return "none (" + why + ")";
+            char b[64];
+            std::snprintf(b, sizeof b, format, v);
+            return std::string(b);
+        };
+        std::printf("  barrier x-load: every-step peak %s, filtered peak %s, static %s\n",
+                    figure("peak_fx_barrier", r.peak_fx_barrier, "%.0f N/m").c_str(),
+                    figure("peak_fx_barrier_filtered", r.peak_fx_barrier_filtered, "%.0f N/m").c_str(),
+                    figure("static_fx_barrier", r.static_fx_barrier, "%.0f N/m").c_str());
+        std::printf("  design coefficients: alpha %s, K %s\n", figure("impact_coefficient_alpha", r.impact_coefficient_alpha, "%.2f").c_str(),
+                    figure("static_coefficient_k", r.static_coefficient_k, "%.2f").c_str());
+    }
     if (r.has_barrier)
         std::printf("  run-up %s (max during run %s)\n", landmark(r, "runup_height", r.runup_height, "m").c_str(),
                     landmark(r, "max_runup_height_during_run", r.max_runup_height_during_run, "m").c_str());

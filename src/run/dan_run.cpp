@@ -15,6 +15,7 @@
 #include "core/progress.h"
 #include "core/validate.h"
 #include "dem/world.h"
+#include "run/design_loads.h"
 #include "run/measures.h"
 #include "run/run_folder.h"
 #include "run/series_columns.h"
@@ -126,8 +127,18 @@ RunSummary run_dan(const Scenario& s, const RunOptions& o) {
     for (double v : dan.volume()) volume += v;
     const double s_front0 = dan.s().back();
 
+    // forces.csv as a DEM flume's (the walls' roles only name its columns here): the samples,
+    // the impulses, the gate's zeros, every step's extremes and the filtered loads
+    ForceWalls walls;
+    walls.slope = {0};
+    walls.arc = {1};
+    walls.barrier = {2};
+    walls.gate = 3;
+    ForceExtremes extremes(walls);
+    LoadFilter filter(s.output.load_window);
+    DesignLoads design(s.output.approach_length);
     std::ostringstream forces, front, energy, blocks;
-    forces << kForcesColumns << '\n';
+    forces << forces_header(walls) << '\n';
     front << kDanFrontColumns << '\n';
     energy << kDanEnergyColumns << '\n';
     blocks << kDanBlockColumns << '\n';
@@ -161,7 +172,7 @@ RunSummary run_dan(const Scenario& s, const RunOptions& o) {
     // DAN runs on a flume: its path, W3 the barrier, W2 the arc
     sum.has_path = sum.has_barrier = sum.has_barrier_forces = sum.has_arc = true;
     sum.dt = sum.dt_min = sum.dt_max = dan.dt();
-    double peak_fx = -1.0, peak_fy = -1.0, peak_ke = 0.0, rest_since = -1.0, max_front = s_front0;
+    double peak_fx = -1.0, peak_fy = -1.0, t_peak_fx_sampled = -1.0, t_peak_fy_sampled = -1.0, peak_ke = 0.0, rest_since = -1.0, max_front = s_front0;
     bool left_flume = false;
     const DanEnergy e0 = dan.energy();
     const double balance0 = e0.kinetic + e0.potential;
@@ -181,14 +192,23 @@ RunSummary run_dan(const Scenario& s, const RunOptions& o) {
         forces << t;
         for (const Vec2& v : {load[0], load[1], load[2], total, impulse[0], impulse[1], impulse[2], itotal})
             forces << ',' << v.x() << ',' << v.y();
-        forces << ",0,0,0,0\n";
+        forces << ",0,0,0,0";
+        extremes.step(t, load);  // (this step's too: a row's extremes hold its own sample)
+        for (double v : extremes.row()) forces << ',' << v;
+        extremes.reset_row();
+        for (double v : {filter.fx_barrier, filter.fy_arc}) {
+            forces << ',';
+            if (std::isfinite(v)) forces << v;
+        }
+        forces << '\n';
+        design.record(t, filter.fx_barrier, impulse[2].x());
         if (std::abs(load[2].x()) > peak_fx) {
             peak_fx = std::abs(load[2].x());
-            sum.t_peak_fx_barrier = t;
+            t_peak_fx_sampled = t;
         }
         if (std::abs(load[1].y()) > peak_fy) {
             peak_fy = std::abs(load[1].y());
-            sum.t_peak_fy_arc = t;
+            t_peak_fy_sampled = t;
         }
         front << t << ',' << dan.s().back() << ',' << dan.s().back() - s_front0 << ',' << dan.s().front() << ',' << dan.v().back() << '\n';
         const DanEnergy e = dan.energy();
@@ -220,9 +240,17 @@ RunSummary run_dan(const Scenario& s, const RunOptions& o) {
         split_loads();
         for (int p = 0; p < 3; ++p) impulse[p] += dan.dt() * load[p];
         const double t = dan.time(), s_front = dan.s().back();
+        extremes.step(t, load);
+        filter.step(t, impulse[2].x(), impulse[1].y());
         max_front = std::max(max_front, s_front);
         if (s_front > length) left_flume = true;
-        if (sum.t_front_at_barrier < 0 && s_front >= s_barrier) sum.t_front_at_barrier = t;
+        if (sum.t_front_at_barrier < 0 && s_front >= s_barrier) {
+            sum.t_front_at_barrier = t;
+            // the flow that arrives: the last block before the barrier's foot
+            size_t i = 0;
+            while (i + 1 < n && dan.s()[i + 1] < s_barrier) ++i;
+            design.record_approach(t, dan.height()[i], std::abs(dan.v()[i]), d.density * dan.height()[i], 1);
+        }
         sum.max_runup_height_during_run = std::max(sum.max_runup_height_during_run, runup_now());
         if (t >= next_series - 1e-12) {
             sample();
@@ -252,13 +280,20 @@ RunSummary run_dan(const Scenario& s, const RunOptions& o) {
     sum.dt = dan.dt();
     sum.runout_s = dan.s().back();
     sum.runup_height = runup_now();
-    sum.peak_fx_barrier = std::max(0.0, peak_fx);
-    sum.peak_fy_arc = std::max(0.0, peak_fy);
-    // DAN's peaks are of its samples (every-step extremes are the DEM's)
-    sum.peak_fx_barrier_sampled = sum.peak_fx_barrier;
-    sum.peak_fy_arc_sampled = sum.peak_fy_arc;
-    sum.t_peak_fx_barrier_sampled = sum.t_peak_fx_barrier;
-    sum.t_peak_fy_arc_sampled = sum.t_peak_fy_arc;
+    // the peaks of every step, of the samples, and filtered (as a DEM run's)
+    sum.peak_fx_barrier_sampled = std::max(0.0, peak_fx);
+    sum.peak_fy_arc_sampled = std::max(0.0, peak_fy);
+    sum.t_peak_fx_barrier_sampled = t_peak_fx_sampled;
+    sum.t_peak_fy_arc_sampled = t_peak_fy_sampled;
+    sum.peak_fx_barrier = extremes.peak_fx_barrier;
+    sum.t_peak_fx_barrier = extremes.t_peak_fx_barrier;
+    sum.peak_fy_arc = extremes.peak_fy_arc;
+    sum.t_peak_fy_arc = extremes.t_peak_fy_arc;
+    sum.peak_fx_barrier_filtered = filter.peak_fx_barrier;
+    sum.t_peak_fx_barrier_filtered = filter.t_peak_fx_barrier;
+    sum.peak_fy_arc_filtered = filter.peak_fy_arc;
+    sum.t_peak_fy_arc_filtered = filter.t_peak_fy_arc;
+    design.finish(filter, sum, d.density, s.world.gravity.norm());
     sum.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     sum.particle_steps_per_second = double(n) * double(sum.steps) / std::max(sum.wall_seconds, 1e-9);
 

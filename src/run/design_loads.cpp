@@ -17,9 +17,7 @@ void DesignLoads::sample(const World& w, const MeasureContext& m, const LoadFilt
         const double v = w.wall_impulse(m.force_walls.barrier[k]).x();
         ix = k == 0 ? v : ix + v;  // summed as forces.csv's barrier column
     }
-    t_.push_back(w.time());
-    fx_.push_back(filter.fx_barrier);
-    ix_.push_back(ix);
+    record(w.time(), filter.fx_barrier, ix);
     if (!std::isnan(t_approach_) || sum.t_front_at_barrier < 0 || !m.path || !std::isfinite(m.barrier.s_barrier)) return;
     // the first sample with the front at the barrier: the flow within the approach length
     // upstream of its foot (the connected discs: a lone disc ahead of the mass is not the flow)
@@ -41,12 +39,22 @@ void DesignLoads::sample(const World& w, const MeasureContext& m, const LoadFilt
         top = std::max(top, h + w.radii()[i]);
         ++count;
     }
-    t_approach_ = w.time();
-    approach_discs_ = double(count);
-    if (count == 0) return;
-    depth_ = top;
-    speed_ = momentum.norm() / mass;
-    mass_per_length_ = mass / length;
+    if (count == 0) record_approach(w.time(), NAN, NAN, NAN, 0);
+    else record_approach(w.time(), top, momentum.norm() / mass, mass / length, count);
+}
+
+void DesignLoads::record(double t, double fx_filtered, double ix_barrier) {
+    t_.push_back(t);
+    fx_.push_back(fx_filtered);
+    ix_.push_back(ix_barrier);
+}
+
+void DesignLoads::record_approach(double t, double depth, double speed, double mass_per_length, long discs) {
+    t_approach_ = t;
+    approach_discs_ = double(discs);
+    depth_ = depth;
+    speed_ = speed;
+    mass_per_length_ = mass_per_length;
 }
 
 namespace {
@@ -57,7 +65,7 @@ size_t sample_at(const std::vector<double>& times, double t) {
 }
 }  // namespace
 
-void DesignLoads::finish(const LoadFilter& filter, RunSummary& sum, double disc_density, double gravity) const {
+void DesignLoads::finish(const LoadFilter& filter, RunSummary& sum, double bulk_density, double gravity) const {
     auto unmeasured = [&](std::initializer_list<const char*> keys, const std::string& why) {
         for (const char* k : keys) sum.unmeasured.emplace_back(k, why);
     };
@@ -129,11 +137,11 @@ void DesignLoads::finish(const LoadFilter& filter, RunSummary& sum, double disc_
     const double t_steady = std::max(t_arrival, t_[std::min(first_steady, t_.size() - 1)]);
     sum.t_barrier_load_steady = t_steady;
     sum.impact_ix_barrier = std::abs(ix_[sample_at(t_, t_steady)] - ix_[sample_at(t_, t_arrival)]);
-    if (sum.porosity_inside_mass < 0) {
+    if (!(bulk_density > 0)) {
         unmeasured({"static_coefficient_k", "static_bulk_density"}, "no settled release mass to give the bulk density");
         return;
     }
-    sum.static_bulk_density = disc_density * (1.0 - sum.porosity_inside_mass);
+    sum.static_bulk_density = bulk_density;
     const double height = sum.runup_height;
     if (!sum.has_barrier || !(height > 0)) {
         unmeasured({"static_coefficient_k"}, "no deposit height on the barrier (runup_height)");

@@ -15,6 +15,9 @@
 // their mean velocity's magnitude (the mass-weighted mean). H is the deposit's height on the
 // barrier above its foot (summary's runup_height) and rho_d the release's bulk density, the
 // discs' density times one less the porosity inside the settled mass.
+//
+// DAN (dan_run.cpp) gives the same figures from its own steps: h and v of the last block
+// before the barrier's foot when the front reaches it, q = dan.density h, rho_d = dan.density.
 #pragma once
 #include <cmath>
 #include <vector>
@@ -37,9 +40,14 @@ public:
     // At each series sample: the filtered loads and the barrier's impulse, and at the first
     // sample with the front at the barrier (sum.t_front_at_barrier) the approaching flow.
     void sample(const World& w, const MeasureContext& m, const LoadFilter& filter, const RunSummary& sum);
+    // the same for another solver (DAN): a sample's time, filtered barrier x-load and x-impulse,
+    // and once the flow that arrives (mass per length q = rho h; discs: how many measured it)
+    void record(double t, double fx_filtered, double ix_barrier);
+    void record_approach(double t, double depth, double speed, double mass_per_length, long discs);
+    bool approach_measured() const { return !std::isnan(t_approach_); }
     // The summary's design figures (NaN where not measured, the reason in sum.unmeasured).
-    // disc_density: kg/m3, the discs' mass over their area at the start.
-    void finish(const LoadFilter& filter, RunSummary& sum, double disc_density, double gravity) const;
+    // bulk_density: kg/m3 of the deposit, rho_d (NaN: not known).
+    void finish(const LoadFilter& filter, RunSummary& sum, double bulk_density, double gravity) const;
     void save(BinaryWriter& out) const;
     void load(BinaryReader& in);
 

@@ -61,6 +61,8 @@ class ForceExtremes {
 public:
     explicit ForceExtremes(const ForceWalls& walls);
     void step(const World& w);           // after each step (and at t = 0)
+    // a step of another solver (DAN): its time and each group's force, in written() order
+    void step(double t, const Vec2* group_forces);
     const std::vector<double>& row() const { return row_; }  // per group then total: fx max, fx min, fy max, fy min
     void reset_row();                    // after forces.csv's row is written
     double peak_fx_barrier = 0, t_peak_fx_barrier = NAN, peak_fy_arc = 0, t_peak_fy_arc = NAN;
@@ -71,6 +73,7 @@ private:
     std::vector<ForceGroup> groups_;
     int barrier_ = -1, arc_ = -1;  // the barrier's and the arc's index in groups_ (-1: none)
     std::vector<double> row_;
+    std::vector<Vec2> forces_;  // the step's group forces (World steps)
 };
 
 // Loads filtered by their impulse (issue 51): at each step t, the mean force over the window

@@ -364,7 +364,6 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
     sum.has_path = path != nullptr;
     sum.has_envelope = setup->measures_envelope();
     sum.has_deposit = sum.has_path || sum.has_envelope;
-    sum.has_load_filter = true;
     sum.has_barrier = path != nullptr && std::isfinite(measure.barrier.s_barrier);
     sum.has_barrier_forces = !measure.force_walls.barrier.empty();
     sum.has_arc = !measure.force_walls.arc.empty();
@@ -563,7 +562,9 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
     double disc_area = 0.0;
     for (double r : start_radius) disc_area += kPi * r * r;
     write_results(s, *setup, w, measure, mass, dir, sum, [&](RunSummary& out) {
-        design.finish(filter, out, disc_area > 0 ? total_mass / disc_area : 0.0, s.world.gravity.norm());
+        // the deposit's bulk density: the discs' over their area, less the settled mass's porosity
+        const double bulk = disc_area > 0 && out.porosity_inside_mass >= 0 ? total_mass / disc_area * (1.0 - out.porosity_inside_mass) : NAN;
+        design.finish(filter, out, bulk, s.world.gravity.norm());
     });
     std::filesystem::remove(checkpoint_path);  // the run is complete: nothing to resume
     lock->release_and_remove();

@@ -139,7 +139,6 @@ struct RunSummary {
     // A landmark the set-up lacks, or that did not happen, is null in summary.json with its reason.
     bool has_path = false, has_envelope = false, has_barrier = false, has_barrier_forces = false, has_arc = false;
     bool has_deposit = false;  // deposit_max_height and deposit_length (the DEM's, along its path or floor)
-    bool has_load_filter = false;  // the impulse-filtered loads (the DEM's)
     long bonds = -1;                    // cohesive bonds at the start (-1: none)
     long bonds_broken = 0;              // of which broken by the end
     long bonds_lost_with_discs = 0;     // intact ones that went with a lost disc
