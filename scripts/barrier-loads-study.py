@@ -50,6 +50,8 @@ def summary(folder):
     # the impact ratio: the largest filtered load within 0.3 s of the front's arrival over the
     # static load (forces.csv's filtered column)
     s["impact_ratio"] = None
+    if s.get("approach_froude") is None and s.get("approach_depth"):
+        s["approach_froude"] = s["approach_speed"] / (9.81 * s["approach_depth"]) ** 0.5
     t0, static = s.get("t_front_at_barrier"), s.get("static_fx_barrier")
     if t0 is not None and static:
         with open(os.path.join(folder, "forces.csv")) as f:
@@ -76,6 +78,7 @@ COLUMNS = [  # key, header, format
     ("t_barrier_load_steady", "steady from (s)", ".2f"),
     ("approach_depth", "h (m)", ".3f"),
     ("approach_speed", "v (m/s)", ".2f"),
+    ("approach_froude", "Fr", ".1f"),
     ("impact_coefficient_alpha", "alpha", ".2f"),
     ("static_coefficient_k", "K", ".2f"),
     ("runout_s", "run-out (m)", ".3f"),

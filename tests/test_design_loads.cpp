@@ -147,6 +147,7 @@ TEST(DesignLoads, FiguresFollowFromTheRunsOwnSeries) {
     EXPECT_GT(r.approach_depth, 0.0);
     EXPECT_GT(r.approach_speed, 0.0);
     EXPECT_GT(r.approach_mass_per_length, 0.0);
+    EXPECT_NEAR(r.approach_froude, r.approach_speed / std::sqrt(9.81 * r.approach_depth), 1e-12 * r.approach_froude);
     EXPECT_NEAR(r.impact_coefficient_alpha,
                 r.peak_fx_barrier_filtered / (r.approach_mass_per_length * r.approach_speed * r.approach_speed), 1e-12 * r.impact_coefficient_alpha);
     EXPECT_NEAR(r.static_bulk_density, 2672.0 * (1.0 - r.porosity_inside_mass), 1e-9);

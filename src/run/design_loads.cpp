@@ -72,7 +72,7 @@ void DesignLoads::finish(const LoadFilter& filter, RunSummary& sum, double bulk_
     if (!sum.has_arc) unmeasured({"static_fy_arc"}, "the set-up has no arc");
     if (!sum.has_barrier_forces) {
         unmeasured({"static_fx_barrier", "t_barrier_load_steady", "impact_ix_barrier", "t_approach", "approach_depth",
-                    "approach_speed", "approach_mass_per_length", "impact_coefficient_alpha", "static_coefficient_k",
+                    "approach_speed", "approach_mass_per_length", "approach_froude", "impact_coefficient_alpha", "static_coefficient_k",
                     "static_bulk_density"},
                    "the set-up has no barrier");
         if (sum.stop_reason == "rest" && sum.has_arc) sum.static_fy_arc = std::abs(filter.fy_arc);
@@ -81,13 +81,13 @@ void DesignLoads::finish(const LoadFilter& filter, RunSummary& sum, double bulk_
     }
     // the approaching flow and the hydrodynamic coefficient
     if (!sum.has_barrier) {
-        unmeasured({"t_approach", "approach_depth", "approach_speed", "approach_mass_per_length", "impact_coefficient_alpha"},
+        unmeasured({"t_approach", "approach_depth", "approach_speed", "approach_mass_per_length", "approach_froude", "impact_coefficient_alpha"},
                    "the barrier is not on a bed path");
     } else if (std::isnan(t_approach_)) {
-        unmeasured({"t_approach", "approach_depth", "approach_speed", "approach_mass_per_length", "impact_coefficient_alpha"},
+        unmeasured({"t_approach", "approach_depth", "approach_speed", "approach_mass_per_length", "approach_froude", "impact_coefficient_alpha"},
                    "the front did not reach the barrier by the end of the run");
     } else if (approach_discs_ == 0) {
-        unmeasured({"approach_depth", "approach_speed", "approach_mass_per_length", "impact_coefficient_alpha"},
+        unmeasured({"approach_depth", "approach_speed", "approach_mass_per_length", "approach_froude", "impact_coefficient_alpha"},
                    "no disc of the mass within output.approach_length upstream of the barrier when the front arrived");
         sum.t_approach = t_approach_;
     } else {
@@ -95,6 +95,7 @@ void DesignLoads::finish(const LoadFilter& filter, RunSummary& sum, double bulk_
         sum.approach_depth = depth_;
         sum.approach_speed = speed_;
         sum.approach_mass_per_length = mass_per_length_;
+        if (depth_ > 0) sum.approach_froude = speed_ / std::sqrt(gravity * depth_);
         if (sum.peak_fx_barrier_filtered > 0 && speed_ > 0)
             sum.impact_coefficient_alpha = sum.peak_fx_barrier_filtered / (mass_per_length_ * speed_ * speed_);
         else

@@ -12,7 +12,7 @@
 // projection, so K keeps its meaning there). q is the mass per length of bed of the connected
 // discs within output.approach_length upstream of the barrier's foot: rho h at once, with no
 // assumed porosity; h, the flow's depth, is those discs' highest top normal to the bed, and v
-// their mean velocity's magnitude (the mass-weighted mean). H is the deposit's height on the
+// their mean velocity's magnitude (the mass-weighted mean); the Froude number v / sqrt(g h). H is the deposit's height on the
 // barrier above its foot (summary's runup_height) and rho_d the release's bulk density, the
 // discs' density times one less the porosity inside the settled mass.
 //

@@ -502,6 +502,7 @@ void put_landmarks(SummaryJson& j, const RunSummary& sum) {
     put("approach_depth", sum.approach_depth, "m");
     put("approach_speed", sum.approach_speed, "m/s");
     put("approach_mass_per_length", sum.approach_mass_per_length, "kg/m2");
+    put("approach_froude", sum.approach_froude, "-");
     put("impact_coefficient_alpha", sum.impact_coefficient_alpha, "-");
     put("static_coefficient_k", sum.static_coefficient_k, "-");
     put("static_bulk_density", sum.static_bulk_density, "kg/m3");

@@ -109,10 +109,10 @@ struct RunSummary {
     // barrier's filtered load came within kSteadyBand of it for good (s) and the x-impulse from
     // the front's arrival to then (N s/m); the flow within output.approach_length upstream of
     // the barrier when the front arrived: time (s), depth (m), speed (m/s), mass per length
-    // (kg/m2: rho h); the hydrodynamic alpha = F_filtered / (q v^2) and the hydrostatic
+    // (kg/m2: rho h), Froude number v / sqrt(g h); the hydrodynamic alpha = F_filtered / (q v^2) and the hydrostatic
     // K = F_static / (1/2 rho_d g H^2) with the bulk density rho_d (kg/m3)
     double static_fx_barrier = NAN, static_fy_arc = NAN, t_barrier_load_steady = NAN, impact_ix_barrier = NAN;
-    double t_approach = NAN, approach_depth = NAN, approach_speed = NAN, approach_mass_per_length = NAN;
+    double t_approach = NAN, approach_depth = NAN, approach_speed = NAN, approach_mass_per_length = NAN, approach_froude = NAN;
     double impact_coefficient_alpha = NAN, static_coefficient_k = NAN, static_bulk_density = NAN;
     // landmarks a part of the run did not measure, with the reason (summary.json's not_measured)
     std::vector<std::pair<std::string, std::string>> unmeasured;
