@@ -28,6 +28,7 @@
 #include "run/force_history.h"
 #include "run/measures.h"
 #include "run/run_folder.h"
+#include "run/run_loop.h"
 #include "run/snapshot.h"
 #include "run/solver.h"
 #include "setups/lattice_release.h"
@@ -389,20 +390,50 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
     // the dissipation accounts as they are now (a resume: as restored)
     DissipationPeaks dissipation(solver.energy());
     const long steps_start = solver.step_count();
-    Progress progress(s.stop.t_max, "s", solver.time(), steps_start);
     const auto t0 = std::chrono::steady_clock::now();
-    // (the first progress call comes at once, at the first check: a script sees the run start,
-    // and a run shorter than the call interval still reports while it runs)
-    auto last_checkpoint = t0, last_progress_call = t0 - std::chrono::milliseconds(250);
-    auto steps_per_second = [&] {
-        const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-        return secs > 0 ? double(solver.step_count() - steps_start) / secs : 0.0;
-    };
     auto elapsed = [&] { return wall_seconds_before + std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(); };
 
+    double candidate_sum = 0, touching_sum = 0;
+    long pair_samples = 0;
+    size_t lost_seen = w.lost_discs().size();
+    RunParts parts;
+    parts.watch_steps = 10;
+    parts.sample = [&] {
+        series.sample(w, measure, st, sum, extremes, filter);
+        barrier.sample(w, solver.time());
+        design.sample(w, measure, filter, sum);
+    };
+    if (snaps)
+        parts.snapshot = [&] {
+            snaps->write(w);
+            if (o.on_snapshot) o.on_snapshot(snaps->last_discs(), snaps->last_walls(), snaps->count() - 1);
+        };
+    // a lost disc or an overlap after energy was created: name the runaway as such
+    parts.step_failed = [&] { check_energy_growth(solver, st.e0, s.stop.max_energy_gain, noise, st.peak_put_in, dissipation); };
+    parts.after_step = [&]() -> std::string {
+        extremes.step(w);
+        filter.step(w, measure.force_walls);
+        history.step(w);
+        // a disc thrown out by created energy is a blow-up, not a stray: look at once
+        if (w.lost_discs().size() != lost_seen) {
+            lost_seen = w.lost_discs().size();
+            check_energy_growth(solver, st.e0, s.stop.max_energy_gain, noise, st.peak_put_in, dissipation);
+            // nothing left to move: not "rest" (the kinetic energy of no disc is 0)
+            if (w.disc_count() == 0) return kStopAllDiscsLeft;
+        }
+        sum.dt_min = std::min(sum.dt_min, solver.dt());
+        sum.dt_max = std::max(sum.dt_max, solver.dt());
+        return "";
+    };
+    parts.watch = [&] {
+        candidate_sum += double(w.disc_contacts().size());
+        touching_sum += double(w.touching_disc_pairs());
+        ++pair_samples;
+        if (solver.step_count() % kEnergyWatchSteps == 0) check_energy_growth(solver, st.e0, s.stop.max_energy_gain, noise, st.peak_put_in, dissipation);
+    };
     // Between two steps: everything the loop carries, written atomically. The series files
     // are flushed first and their lengths recorded, so a resume cuts off what came after.
-    auto write_checkpoint = [&]() {
+    parts.write_checkpoint = [&] {
         BinaryWriter out;
         put_checkpoint_header(out, scenario_text, inputs, solver.time(), s.stop.t_max, solver.step_count(), o);
         out.tag("RUN ");
@@ -427,114 +458,10 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
         history.save(out);
         write_file_atomic(checkpoint_path, seal_checkpoint(out.bytes()));
     };
-    auto snapshot = [&]() {
-        snaps->write(w);
-        if (o.on_snapshot) o.on_snapshot(snaps->last_discs(), snaps->last_walls(), snaps->count() - 1);
-    };
-
-    sum.stop_reason = "t_max";
-    double candidate_sum = 0, touching_sum = 0;
-    long pair_samples = 0;
-    // whether the series were sampled at the current time (the last row is not written twice
-    // when the run ends at a sample time)
-    bool sampled_now = false;
-    size_t lost_seen = w.lost_discs().size();
-    while (true) {
-        if (solver.time() >= st.next_series - 1e-12) {
-            series.sample(w, measure, st, sum, extremes, filter);
-            barrier.sample(w, solver.time());
-            design.sample(w, measure, filter, sum);
-            st.next_series += s.output.series_interval;
-            sampled_now = true;
-        }
-        if (snaps && solver.time() >= st.next_snap - 1e-12) {
-            snapshot();
-            st.next_snap += s.output.snapshot_interval;
-        }
-        if (solver.time() >= s.stop.t_max) break;
-        if (s.stop.max_steps > 0 && solver.step_count() >= s.stop.max_steps) {
-            sum.stop_reason = "max_steps";
-            break;
-        }
-        try {
-            solver.step();
-        } catch (const RunError&) {
-            // a lost disc or an overlap after energy was created: name the runaway as such
-            check_energy_growth(solver, st.e0, s.stop.max_energy_gain, noise, st.peak_put_in, dissipation);
-            throw;
-        }
-        sampled_now = false;
-        extremes.step(w);
-        filter.step(w, measure.force_walls);
-        history.step(w);
-        // a disc thrown out by created energy is a blow-up, not a stray: look at once
-        if (w.lost_discs().size() != lost_seen) {
-            lost_seen = w.lost_discs().size();
-            check_energy_growth(solver, st.e0, s.stop.max_energy_gain, noise, st.peak_put_in, dissipation);
-            // nothing left to move: not "rest" (the kinetic energy of no disc is 0)
-            if (w.disc_count() == 0) {
-                sum.stop_reason = kStopAllDiscsLeft;
-                break;
-            }
-        }
-        // a step so small that the run would not end in any time is refused at once
-        if (solver.step_count() == steps_start + 1 && (s.stop.t_max - solver.time()) / solver.dt() > kMaxRunSteps)
-            throw RunError(s.source + ": the run would take " + format_number((s.stop.t_max - solver.time()) / solver.dt()) +
-                           " steps of " + format_number(solver.dt()) + " s to stop.t_max (more than " + format_number(kMaxRunSteps) +
-                           "): the stiffnesses and densities give an absurdly small time step");
-        sum.dt_min = std::min(sum.dt_min, solver.dt());
-        sum.dt_max = std::max(sum.dt_max, solver.dt());
-        if (solver.step_count() % 10 == 0) {
-            candidate_sum += double(w.disc_contacts().size());
-            touching_sum += double(w.touching_disc_pairs());
-            ++pair_samples;
-            // summed by the integration, in parallel (a pass over the discs here was 2 % of the
-            // calling thread's time on 2 threads, with the other one waiting)
-            const double ke = solver.kinetic_energy();
-            st.peak_ke = std::max(st.peak_ke, ke);
-            if (solver.step_count() % kEnergyWatchSteps == 0) check_energy_growth(solver, st.e0, s.stop.max_energy_gain, noise, st.peak_put_in, dissipation);
-            if (ke < s.stop.rest_ke_fraction * st.peak_ke) {
-                if (st.rest_since < 0) st.rest_since = solver.time();
-                if (solver.time() - st.rest_since >= s.stop.rest_duration) {
-                    sum.stop_reason = "rest";
-                    break;
-                }
-            } else {
-                st.rest_since = -1;
-            }
-            progress.update(solver.time(), solver.step_count());
-            if (o.on_progress) {
-                const auto now = std::chrono::steady_clock::now();
-                if (now - last_progress_call >= std::chrono::milliseconds(250)) {
-                    last_progress_call = now;
-                    o.on_progress(solver.time(), s.stop.t_max, steps_per_second());
-                }
-            }
-        }
-        if (const int sig = o.handle_signals ? pending_interrupt() : 0) {
-            progress.finish();
-            write_checkpoint();
-            throw Interrupted("signal " + std::to_string(sig) + " at t = " + format_number(solver.time()) + " s (step " +
-                              std::to_string(solver.step_count()) + "): checkpoint written; continue with: demlab resume " + dir);
-        }
-        if (o.checkpoint_every > 0 && solver.step_count() % 10 == 0) {
-            const auto now = std::chrono::steady_clock::now();
-            if (std::chrono::duration<double>(now - last_checkpoint).count() >= o.checkpoint_every) {
-                write_checkpoint();
-                last_checkpoint = now;
-            }
-        }
-    }
-    progress.finish();
-    if (o.on_progress) o.on_progress(solver.time(), s.stop.t_max, steps_per_second());
-    if (!sampled_now) {
-        series.sample(w, measure, st, sum, extremes, filter);
-        barrier.sample(w, solver.time());
-        design.sample(w, measure, filter, sum);
-    }
+    sum.stop_reason = run_loop(solver, parts, s, o, LoopClock{st.next_series, st.next_snap, st.peak_ke, st.rest_since});
     if (snaps) {
         // the last instant, unless the loop's last snapshot was taken at it already
-        if (snaps->times().empty() || snaps->times().back() != solver.time()) snapshot();
+        if (snaps->times().empty() || snaps->times().back() != solver.time()) parts.snapshot();
         snaps->finish();
     }
     sum.wall_seconds = elapsed();
