@@ -127,6 +127,20 @@ int report_run(const Scenario& s, const RunSummary& r, const std::string& dir, b
     return kExitOk;
 }
 
+// A run (new or resumed) with its frames: the DEM's as each snapshot is written, DAN's from its
+// blocks.csv after the run; then its report.
+int run_with_frames(const Scenario& s, RunOptions& ro) {
+    if (ro.frames && s.solver != "dan") attach_frame_hook(ro, make_setup(s)->kind() == "flume");
+    const RunSummary r = run_scenario(s, ro);
+    if (ro.frames && s.solver == "dan") {
+        RenderRunOptions frames;
+        frames.run_dir = ro.out_dir;
+        frames.force = ro.force;
+        render_run(frames);
+    }
+    return report_run(s, r, ro.out_dir, ro.plots);
+}
+
 namespace {
 
 int run_command(const RunCliOptions& o) {
@@ -164,11 +178,9 @@ int run_command(const RunCliOptions& o) {
         throw InputError("--scale does not apply to " + o.scenario + no_box);
     if (!o.variant.empty() && !s.flume.enabled)
         throw InputError("--variant does not apply to " + o.scenario + ": the variants are a [flume]'s gate (removed, or lifted)");
-    if (s.solver == "dan" && (o.checkpoint_every > 0 || o.model || !o.release_from.empty()))
+    if (s.solver == "dan" && (o.model || !o.release_from.empty()))
         throw InputError(std::string("--solver dan: ") +
-                         (o.checkpoint_every > 0 ? "--checkpoint-every (a DAN run takes seconds and writes no checkpoint)"
-                          : o.model ? "--model (the rotation models are the discs')"
-                                    : "--release-from (DAN fills the release box itself)") +
+                         (o.model ? "--model (the rotation models are the discs')" : "--release-from (DAN fills the release box itself)") +
                          " does not apply to the continuum model");
     s.world.threads = o.threads;
     s.world.simd = !o.scalar;
@@ -180,15 +192,7 @@ int run_command(const RunCliOptions& o) {
     ro.handle_signals = true;
     ro.frames = o.frames;
     ro.plots = !o.no_plots;
-    if (o.frames && s.solver != "dan") attach_frame_hook(ro, make_setup(s)->kind() == "flume");
-    const RunSummary r = run_scenario(s, ro);
-    if (o.frames && s.solver == "dan") {  // DAN's frames from its blocks.csv, after the run
-        RenderRunOptions frames;
-        frames.run_dir = ro.out_dir;
-        frames.force = o.force;
-        render_run(frames);
-    }
-    return report_run(s, r, ro.out_dir, ro.plots);
+    return run_with_frames(s, ro);
 }
 }  // namespace
 
@@ -266,9 +270,7 @@ int resume_command(const ResumeCliOptions& o) {
         ro.frames = fs::exists(dir + "/frames");
         std::fprintf(stderr, "%s has no checkpoint: running it again from the start (same scenario and seed)\n", dir.c_str());
     }
-    if (ro.frames) attach_frame_hook(ro, make_setup(s)->kind() == "flume");
-    const RunSummary r = run_scenario(s, ro);
-    return report_run(s, r, dir, ro.plots);
+    return run_with_frames(s, ro);
 }
 }  // namespace
 

@@ -4,12 +4,14 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 
 #include "core/csv.h"
 #include "core/error.h"
 #include "core/fileio.h"
+#include "core/interrupt.h"
 #include "core/machine.h"
 #include "core/output_dir.h"
 #include "core/progress.h"
@@ -17,7 +19,10 @@
 #include "dem/world.h"
 #include "run/design_loads.h"
 #include "run/measures.h"
+#include "run/checkpoint_file.h"
 #include "run/run_folder.h"
+#include "run/run_loop.h"
+#include "run/solver.h"
 #include "run/series_columns.h"
 #include "run/summary_file.h"
 #include "setups/flume.h"
@@ -102,207 +107,233 @@ DanSolver dan_of_scenario(const Scenario& s) {
     return solver;
 }
 
-RunSummary run_dan(const Scenario& s, const RunOptions& o) {
-    if (o.resume) throw InputError(o.out_dir + ": a DAN run writes no checkpoint to resume (it takes seconds): run it again");
-    const DanDef& d = s.dan;
-    if (d.phi_basal_deg > d.phi_internal_deg)
-        std::fprintf(stderr, "demlab: warning: dan.phi_basal_deg %.4g > dan.phi_internal_deg %.4g: the earth-pressure limits "
-                             "(D5) are clamped to 2/cos^2(phi_i) - 1\n", d.phi_basal_deg, d.phi_internal_deg);
-    DanSolver dan = dan_of_scenario(s);  // every refusal before the folder is touched
-    FrontSeries reference;
-    if (!d.sync_front.empty()) reference = read_front(d.sync_front);
+namespace {
 
-    const std::string dir = o.out_dir;
-    const std::vector<ScenarioInput> inputs = scenario_inputs(s);
-    std::unique_ptr<RunFolderLock> lock;
-    open_run_folder(o, resolved_toml(s), inputs, lock, run_inputs(s, o, inputs));
-    const auto t0 = std::chrono::steady_clock::now();
+// DAN as the run loop's solver; its ledger in the DEM's terms: the kinetic energy, the
+// potential, and the basal and internal friction's dissipation in dissipated_contacts.
+class DanLoopSolver final : public Solver {
+public:
+    explicit DanLoopSolver(DanSolver& dan) : dan_(dan) {}
+    void step() override { dan_.step(); }
+    double time() const override { return dan_.time(); }
+    double dt() const override { return dan_.dt(); }
+    long step_count() const override { return dan_.step_count(); }
+    double kinetic_energy() const override { return dan_.kinetic_energy(); }
+    EnergyReport energy() const override {
+        const DanEnergy e = dan_.energy();
+        EnergyReport r;
+        r.kinetic_translation = e.kinetic;
+        r.potential = e.potential;
+        r.dissipated_contacts = e.dissipated_friction;
+        return r;
+    }
+    void save_state(BinaryWriter& out) const override { dan_.save_state(out); }
+    void load_state(BinaryReader& in) override { dan_.load_state(in); }
 
-    const DanPath& path = dan.path();
-    const size_t n = dan.blocks();
-    const double s_arc = path.part_start(1), s_barrier = path.part_start(2), length = path.length();
-    const Vec2 foot = path.at(s_barrier).p;
-    double total_mass = 0.0, volume = 0.0;
-    for (double m : dan.mass()) total_mass += m;
-    for (double v : dan.volume()) volume += v;
-    const double s_front0 = dan.s().back();
+private:
+    DanSolver& dan_;
+};
 
-    // forces.csv as a DEM flume's (the walls' roles only name its columns here): the samples,
-    // the impulses, the gate's zeros, every step's extremes and the filtered loads
-    ForceWalls walls;
-    walls.slope = {0};
-    walls.arc = {1};
-    walls.barrier = {2};
-    walls.gate = 3;
-    ForceExtremes extremes(walls);
-    LoadFilter filter(s.output.load_window);
-    DesignLoads design(s.output.approach_length);
-    std::ostringstream forces, front, energy, blocks;
-    forces << forces_header(walls) << '\n';
-    front << kDanFrontColumns << '\n';
-    energy << kDanEnergyColumns << '\n';
-    blocks << kDanBlockColumns << '\n';
-    for (auto* o2 : {&forces, &front, &energy, &blocks}) o2->precision(10);
-
-    // each block's bed force split between slope, arc and barrier by the share of its
-    // tributary interval on each
-    Vec2 load[3], impulse[3] = {Vec2::Zero(), Vec2::Zero(), Vec2::Zero()};
-    auto split_loads = [&] {
-        for (Vec2& f : load) f = Vec2::Zero();
-        const std::vector<double>& S = dan.s();
-        for (size_t i = 0; i < n; ++i) {
-            const double a = i > 0 ? S[i] - 0.5 * (S[i] - S[i - 1]) : S[i];
-            const double b = i + 1 < n ? S[i] + 0.5 * (S[i + 1] - S[i]) : S[i];
-            const double edges[4] = {-INFINITY, s_arc, s_barrier, INFINITY};
-            if (b <= a) {  // (a single block: all at its point)
-                const int part = S[i] < s_arc ? 0 : S[i] < s_barrier ? 1 : 2;
-                load[part] += dan.bed_force()[i];
-                continue;
-            }
-            for (int p = 0; p < 3; ++p) {
-                const double overlap = std::max(0.0, std::min(b, edges[p + 1]) - std::max(a, edges[p]));
-                load[p] += (overlap / (b - a)) * dan.bed_force()[i];
-            }
-        }
-    };
-    RunSummary sum;
-    sum.n_discs = 0;
-    sum.total_mass = total_mass;
-    sum.porosity_over_release_box = -1.0;
-    // DAN runs on a flume: its path, W3 the barrier, W2 the arc
-    sum.has_path = sum.has_barrier = sum.has_barrier_forces = sum.has_arc = true;
-    sum.dt = sum.dt_min = sum.dt_max = dan.dt();
-    double peak_fx = -1.0, peak_fy = -1.0, t_peak_fx_sampled = -1.0, t_peak_fy_sampled = -1.0, peak_ke = 0.0, rest_since = -1.0, max_front = s_front0;
-    bool left_flume = false;
-    const DanEnergy e0 = dan.energy();
-    const double balance0 = e0.kinetic + e0.potential;
-    auto runup_now = [&] {
-        double up = 0.0;
-        for (size_t i = 0; i < n; ++i) {
-            if (dan.s()[i] <= s_barrier) continue;
-            const DanPathPoint q = path.at(dan.s()[i]);
-            const double top = d.columns == DanColumns::Vertical ? dan.height()[i] / std::cos(q.alpha) : dan.height()[i] * std::cos(q.alpha);
-            up = std::max(up, q.p.y() + top - foot.y());
-        }
-        return up;
-    };
-    auto sample = [&] {
-        const double t = dan.time();
-        const Vec2 total = load[0] + load[1] + load[2], itotal = impulse[0] + impulse[1] + impulse[2];
-        forces << t;
-        for (const Vec2& v : {load[0], load[1], load[2], total, impulse[0], impulse[1], impulse[2], itotal})
-            forces << ',' << v.x() << ',' << v.y();
-        forces << ",0,0,0,0";
-        extremes.step(t, load);  // (this step's too: a row's extremes hold its own sample)
-        for (double v : extremes.row()) forces << ',' << v;
-        extremes.reset_row();
-        for (double v : {filter.fx_barrier, filter.fy_arc}) {
-            forces << ',';
-            if (std::isfinite(v)) forces << v;
-        }
-        forces << '\n';
-        design.record(t, filter.fx_barrier, impulse[2].x());
-        if (std::abs(load[2].x()) > peak_fx) {
-            peak_fx = std::abs(load[2].x());
-            t_peak_fx_sampled = t;
-        }
-        if (std::abs(load[1].y()) > peak_fy) {
-            peak_fy = std::abs(load[1].y());
-            t_peak_fy_sampled = t;
-        }
-        front << t << ',' << dan.s().back() << ',' << dan.s().back() - s_front0 << ',' << dan.s().front() << ',' << dan.v().back() << '\n';
-        const DanEnergy e = dan.energy();
-        const double balance = e.kinetic + e.potential + e.dissipated_friction;
-        energy << t << ',' << e.kinetic << ',' << e.potential << ',' << e.dissipated_friction << ',' << balance0 - balance << ','
-               << balance << '\n';
-    };
-    auto snapshot = [&] {
-        for (size_t i = 0; i < n; ++i) {
-            const DanPathPoint q = path.at(dan.s()[i]);
-            blocks << dan.time() << ',' << i << ',' << dan.s()[i] << ',' << q.p.x() << ',' << q.p.y() << ',' << dan.v()[i] << ','
-                   << dan.height()[i] << ',' << dan.k()[i > 0 ? i - 1 : 0] << '\n';
-        }
-    };
-    split_loads();
-    sample();
-    if (s.output.snapshot_interval > 0) snapshot();
-    double next_series = s.output.series_interval, next_snap = s.output.snapshot_interval;
-    Progress progress(s.stop.t_max, "s");
-    sum.stop_reason = "t_max";
-    while (dan.time() < s.stop.t_max - 1e-12) {
-        if (s.stop.max_steps > 0 && dan.step_count() >= s.stop.max_steps) {
-            sum.stop_reason = "max_steps";
-            break;
-        }
-        dan.step();
-        sum.dt_min = std::min(sum.dt_min, dan.dt());
-        sum.dt_max = std::max(sum.dt_max, dan.dt());
+// A DAN run's measures and files, the parts the run loop calls: the walls' loads (each block's
+// bed force split between slope, arc and barrier by the share of its tributary interval on
+// each), forces.csv as a DEM flume's, front.csv, energy.csv, the blocks at each snapshot
+// (blocks.csv), the front's arrival and the run-up.
+class DanRun {
+public:
+    DanRun(const Scenario& s, DanSolver& dan, const std::string& dir)
+        : s_(s), dan_(dan), dir_(dir), n_(dan.blocks()), s_arc_(dan.path().part_start(1)),
+          s_barrier_(dan.path().part_start(2)), foot_(dan.path().at(s_barrier_).p), s_front0_(dan.s().back()),
+          extremes_(walls()), filter_(s.output.load_window), design_(s.output.approach_length) {
+        const DanEnergy e0 = dan.energy();
+        balance0_ = e0.kinetic + e0.potential;
+        max_front_ = s_front0_;
         split_loads();
-        for (int p = 0; p < 3; ++p) impulse[p] += dan.dt() * load[p];
-        const double t = dan.time(), s_front = dan.s().back();
-        extremes.step(t, load);
-        filter.step(t, impulse[2].x(), impulse[1].y());
-        max_front = std::max(max_front, s_front);
-        if (s_front > length) left_flume = true;
-        if (sum.t_front_at_barrier < 0 && s_front >= s_barrier) {
-            sum.t_front_at_barrier = t;
-            // the flow that arrives: the last block before the barrier's foot
-            size_t i = 0;
-            while (i + 1 < n && dan.s()[i + 1] < s_barrier) ++i;
-            design.record_approach(t, dan.height()[i], std::abs(dan.v()[i]), d.density * dan.height()[i], 1);
-        }
-        sum.max_runup_height_during_run = std::max(sum.max_runup_height_during_run, runup_now());
-        if (t >= next_series - 1e-12) {
-            sample();
-            while (next_series <= t + 1e-12) next_series += s.output.series_interval;
-        }
-        if (s.output.snapshot_interval > 0 && t >= next_snap - 1e-12) {
-            snapshot();
-            while (next_snap <= t + 1e-12) next_snap += s.output.snapshot_interval;
-        }
-        const double ke = dan.kinetic_energy();
-        peak_ke = std::max(peak_ke, ke);
-        if ((dan.step_count() & 255) == 0) progress.update(t, dan.step_count());
-        if (peak_ke > 0.0 && ke < s.stop.rest_ke_fraction * peak_ke) {
-            if (rest_since < 0) rest_since = t;
-            if (t - rest_since >= s.stop.rest_duration) {
-                sum.stop_reason = "rest";
-                break;
-            }
-        } else {
-            rest_since = -1.0;
+    }
+    static ForceWalls walls() {
+        // (the walls' roles only name forces.csv's columns here)
+        ForceWalls w;
+        w.slope = {0};
+        w.arc = {1};
+        w.barrier = {2};
+        w.gate = 3;
+        return w;
+    }
+    void open() {
+        forces_.open(dir_ + "/forces.csv");
+        forces_.out() << forces_header(walls()) << '\n';
+        front_.open(dir_ + "/front.csv");
+        front_.out() << kDanFrontColumns << '\n';
+        energy_.open(dir_ + "/energy.csv");
+        energy_.out() << kDanEnergyColumns << '\n';
+        if (s_.output.snapshot_interval > 0) {
+            blocks_.open(dir_ + "/blocks.csv");
+            blocks_.out() << kDanBlockColumns << '\n';
         }
     }
-    progress.finish();
-    if (std::abs(dan.time() - (next_series - s.output.series_interval)) > 1e-12) sample();  // the last state, once
-    sum.t_end = dan.time();
-    sum.steps = dan.step_count();
-    sum.dt = dan.dt();
-    sum.runout_s = dan.s().back();
-    sum.runup_height = runup_now();
-    // the peaks of every step, of the samples, and filtered (as a DEM run's)
-    sum.peak_fx_barrier_sampled = std::max(0.0, peak_fx);
-    sum.peak_fy_arc_sampled = std::max(0.0, peak_fy);
-    sum.t_peak_fx_barrier_sampled = t_peak_fx_sampled;
-    sum.t_peak_fy_arc_sampled = t_peak_fy_sampled;
-    sum.peak_fx_barrier = extremes.peak_fx_barrier;
-    sum.t_peak_fx_barrier = extremes.t_peak_fx_barrier;
-    sum.peak_fy_arc = extremes.peak_fy_arc;
-    sum.t_peak_fy_arc = extremes.t_peak_fy_arc;
-    sum.peak_fx_barrier_filtered = filter.peak_fx_barrier;
-    sum.t_peak_fx_barrier_filtered = filter.t_peak_fx_barrier;
-    sum.peak_fy_arc_filtered = filter.peak_fy_arc;
-    sum.t_peak_fy_arc_filtered = filter.t_peak_fy_arc;
-    design.finish(filter, sum, d.density, s.world.gravity.norm());
-    sum.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    sum.particle_steps_per_second = double(n) * double(sum.steps) / std::max(sum.wall_seconds, 1e-9);
+    void sample();
+    void snapshot();
+    std::string after_step();
+    // the run's state after the loop's clock in a checkpoint, and back
+    void save(BinaryWriter& out, double elapsed);
+    void load(BinaryReader& in, double& elapsed);
+    // the files and the summary of the finished run
+    RunSummary finish(const std::vector<ScenarioInput>& inputs, double wall_seconds);
+    double next_series = 0, next_snap = 0, peak_ke = 0, rest_since = -1;
+    RunSummary sum;
 
-    // the deposit: H between the boundary blocks, 0 outside, and the holding block's h
+private:
+    void split_loads();
+    double runup_now() const;
+    const Scenario& s_;
+    DanSolver& dan_;
+    std::string dir_;
+    size_t n_;
+    double s_arc_, s_barrier_;
+    Vec2 foot_;
+    double s_front0_, balance0_ = 0, max_front_ = 0;
+    Vec2 load_[3], impulse_[3] = {Vec2::Zero(), Vec2::Zero(), Vec2::Zero()};
+    double peak_fx_ = -1, peak_fy_ = -1, t_peak_fx_ = -1, t_peak_fy_ = -1;
+    bool left_flume_ = false;
+    ForceExtremes extremes_;
+    LoadFilter filter_;
+    DesignLoads design_;
+    SeriesFile forces_, front_, energy_, blocks_;
+};
+
+void DanRun::split_loads() {
+    for (Vec2& f : load_) f = Vec2::Zero();
+    const std::vector<double>& S = dan_.s();
+    const double edges[4] = {-INFINITY, s_arc_, s_barrier_, INFINITY};
+    for (size_t i = 0; i < n_; ++i) {
+        const double a = i > 0 ? S[i] - 0.5 * (S[i] - S[i - 1]) : S[i];
+        const double b = i + 1 < n_ ? S[i] + 0.5 * (S[i + 1] - S[i]) : S[i];
+        if (b <= a) {  // (a single block: all at its point)
+            const int part = S[i] < s_arc_ ? 0 : S[i] < s_barrier_ ? 1 : 2;
+            load_[part] += dan_.bed_force()[i];
+            continue;
+        }
+        for (int p = 0; p < 3; ++p) {
+            const double overlap = std::max(0.0, std::min(b, edges[p + 1]) - std::max(a, edges[p]));
+            load_[p] += (overlap / (b - a)) * dan_.bed_force()[i];
+        }
+    }
+}
+
+double DanRun::runup_now() const {
+    double up = 0.0;
+    for (size_t i = 0; i < n_; ++i) {
+        if (dan_.s()[i] <= s_barrier_) continue;
+        const DanPathPoint q = dan_.path().at(dan_.s()[i]);
+        const double top = s_.dan.columns == DanColumns::Vertical ? dan_.height()[i] / std::cos(q.alpha) : dan_.height()[i] * std::cos(q.alpha);
+        up = std::max(up, q.p.y() + top - foot_.y());
+    }
+    return up;
+}
+
+void DanRun::sample() {
+    const double t = dan_.time();
+    const Vec2 total = load_[0] + load_[1] + load_[2], itotal = impulse_[0] + impulse_[1] + impulse_[2];
+    std::ostream& fo = forces_.out();
+    fo << t;
+    for (const Vec2& v : {load_[0], load_[1], load_[2], total, impulse_[0], impulse_[1], impulse_[2], itotal}) fo << ',' << v.x() << ',' << v.y();
+    fo << ",0,0,0,0";
+    extremes_.step(t, load_);  // (this step's too: a row's extremes hold its own sample)
+    for (double v : extremes_.row()) fo << ',' << v;
+    extremes_.reset_row();
+    for (double v : {filter_.fx_barrier, filter_.fy_arc}) {
+        fo << ',';
+        if (std::isfinite(v)) fo << v;
+    }
+    fo << '\n';
+    design_.record(t, filter_.fx_barrier, impulse_[2].x());
+    if (std::abs(load_[2].x()) > peak_fx_) {
+        peak_fx_ = std::abs(load_[2].x());
+        t_peak_fx_ = t;
+    }
+    if (std::abs(load_[1].y()) > peak_fy_) {
+        peak_fy_ = std::abs(load_[1].y());
+        t_peak_fy_ = t;
+    }
+    front_.out() << t << ',' << dan_.s().back() << ',' << dan_.s().back() - s_front0_ << ',' << dan_.s().front() << ','
+                 << dan_.v().back() << '\n';
+    const DanEnergy e = dan_.energy();
+    const double balance = e.kinetic + e.potential + e.dissipated_friction;
+    energy_.out() << t << ',' << e.kinetic << ',' << e.potential << ',' << e.dissipated_friction << ',' << balance0_ - balance << ','
+                  << balance << '\n';
+    for (SeriesFile* f : {&forces_, &front_, &energy_}) f->check();
+}
+
+void DanRun::snapshot() {
+    for (size_t i = 0; i < n_; ++i) {
+        const DanPathPoint q = dan_.path().at(dan_.s()[i]);
+        blocks_.out() << dan_.time() << ',' << i << ',' << dan_.s()[i] << ',' << q.p.x() << ',' << q.p.y() << ',' << dan_.v()[i]
+                      << ',' << dan_.height()[i] << ',' << dan_.k()[i > 0 ? i - 1 : 0] << '\n';
+    }
+    blocks_.check();
+}
+
+std::string DanRun::after_step() {
+    sum.dt_min = std::min(sum.dt_min, dan_.dt());
+    sum.dt_max = std::max(sum.dt_max, dan_.dt());
+    split_loads();
+    for (int p = 0; p < 3; ++p) impulse_[p] += dan_.dt() * load_[p];
+    const double t = dan_.time(), s_front = dan_.s().back();
+    extremes_.step(t, load_);
+    filter_.step(t, impulse_[2].x(), impulse_[1].y());
+    max_front_ = std::max(max_front_, s_front);
+    if (s_front > dan_.path().length()) left_flume_ = true;
+    if (sum.t_front_at_barrier < 0 && s_front >= s_barrier_) {
+        sum.t_front_at_barrier = t;
+        // the flow that arrives: the last block before the barrier's foot
+        size_t i = 0;
+        while (i + 1 < n_ && dan_.s()[i + 1] < s_barrier_) ++i;
+        design_.record_approach(t, dan_.height()[i], std::abs(dan_.v()[i]), s_.dan.density * dan_.height()[i], 1);
+    }
+    sum.max_runup_height_during_run = std::max(sum.max_runup_height_during_run, runup_now());
+    return "";
+}
+
+void DanRun::save(BinaryWriter& out, double elapsed) {
+    for (double v : {next_series, next_snap, peak_ke, rest_since, balance0_, max_front_, peak_fx_, peak_fy_, t_peak_fx_, t_peak_fy_,
+                     left_flume_ ? 1.0 : 0.0, sum.t_front_at_barrier, sum.max_runup_height_during_run, sum.dt_min, sum.dt_max, elapsed})
+        out.put(v);
+    for (const Vec2& v : load_) out.put(v);
+    for (const Vec2& v : impulse_) out.put(v);
+    for (SeriesFile* f : {&forces_, &front_, &energy_, &blocks_}) out.put(f->flush());
+    dan_.save_state(out);
+    extremes_.save(out);
+    filter_.save(out);
+    design_.save(out);
+}
+
+void DanRun::load(BinaryReader& in, double& elapsed) {
+    double left = 0;
+    for (double* v : {&next_series, &next_snap, &peak_ke, &rest_since, &balance0_, &max_front_, &peak_fx_, &peak_fy_, &t_peak_fx_,
+                      &t_peak_fy_, &left, &sum.t_front_at_barrier, &sum.max_runup_height_during_run, &sum.dt_min, &sum.dt_max, &elapsed})
+        in.get(*v);
+    left_flume_ = left != 0.0;
+    for (Vec2& v : load_) in.get(v);
+    for (Vec2& v : impulse_) in.get(v);
+    uint64_t size[4];
+    for (uint64_t& z : size) in.get(z);
+    forces_.reopen(dir_ + "/forces.csv", size[0]);
+    front_.reopen(dir_ + "/front.csv", size[1]);
+    energy_.reopen(dir_ + "/energy.csv", size[2]);
+    if (s_.output.snapshot_interval > 0) blocks_.reopen(dir_ + "/blocks.csv", size[3]);
+    dan_.load_state(in);
+    extremes_.load(in);
+    filter_.load(in);
+    design_.load(in);
+    if (!in.at_end()) throw InputError(dir_ + "/" + kCheckpointFile + ": corrupt checkpoint (trailing bytes)");
+}
+
+// the deposit: H between the boundary blocks, 0 outside, and the holding block's h
+std::string dan_deposit(const DanSolver& dan, double bin) {
     std::ostringstream dep;
     dep.precision(10);
     dep << "s_m,height_m,block_height_m\n";
-    const double bin = s.output.deposit_bin;
-    const int bins = int(std::ceil(length / bin)) + 1;
+    const size_t n = dan.blocks();
+    const int bins = int(std::ceil(dan.path().length() / bin)) + 1;
     const std::vector<double>& S = dan.s();
     for (int b = 0; b < bins; ++b) {
         const double at = b * bin;
@@ -316,49 +347,76 @@ RunSummary run_dan(const Scenario& s, const RunOptions& o) {
         }
         dep << at << ',' << height << ',' << block << '\n';
     }
+    return dep.str();
+}
 
-    // front_synced.csv: DAN's front shifted in time to meet the reference at dan.sync_time
-    double sync_shift = NAN;
-    if (!reference.t.empty()) {
-        const double target = value_at(reference.t, reference.s, d.sync_time);
-        std::vector<double> ft, fs;
-        std::istringstream rows(front.str());
-        std::string line;
-        std::getline(rows, line);
-        std::vector<std::string> lines;
-        while (std::getline(rows, line)) {
-            lines.push_back(line);
-            std::istringstream c(line);
-            std::string a, b;
-            std::getline(c, a, ',');
-            std::getline(c, b, ',');
-            ft.push_back(std::stod(a));
-            fs.push_back(std::stod(b));
-        }
-        const double t_dan = first_time_at(ft, fs, target);
-        if (std::isfinite(t_dan)) {
-            sync_shift = d.sync_time - t_dan;
-            std::ostringstream synced;
-            synced.precision(10);
-            synced << kDanFrontColumns << '\n';
-            for (size_t k = 0; k < lines.size(); ++k) synced << ft[k] + sync_shift << lines[k].substr(lines[k].find(',')) << '\n';
-            write_file_atomic(dir + "/front_synced.csv", synced.str());
-        } else {
-            std::fprintf(stderr, "demlab: warning: the DAN front never reached the reference's s = %.4g m at %.4g s: no "
-                                 "front_synced.csv\n", target, d.sync_time);
-        }
+// front_synced.csv: DAN's front shifted in time to meet the reference at dan.sync_time; the
+// shift (NaN: none)
+double write_synced_front(const DanDef& d, const std::string& dir) {
+    if (d.sync_front.empty()) return NAN;
+    const FrontSeries reference = read_front(d.sync_front);
+    const double target = value_at(reference.t, reference.s, d.sync_time);
+    std::vector<double> ft, fs;
+    std::istringstream rows(read_whole(dir + "/front.csv"));
+    std::string line;
+    std::getline(rows, line);
+    std::vector<std::string> lines;
+    while (std::getline(rows, line)) {
+        lines.push_back(line);
+        const std::vector<std::string> c = csv_cells(line);
+        ft.push_back(std::stod(c.at(0)));
+        fs.push_back(std::stod(c.at(1)));
     }
+    const double t_dan = first_time_at(ft, fs, target);
+    if (!std::isfinite(t_dan)) {
+        std::fprintf(stderr, "demlab: warning: the DAN front never reached the reference's s = %.4g m at %.4g s: no "
+                             "front_synced.csv\n", target, d.sync_time);
+        return NAN;
+    }
+    const double shift = d.sync_time - t_dan;
+    std::ostringstream synced;
+    synced.precision(10);
+    synced << kDanFrontColumns << '\n';
+    for (size_t k = 0; k < lines.size(); ++k) synced << ft[k] + shift << lines[k].substr(lines[k].find(',')) << '\n';
+    write_file_atomic(dir + "/front_synced.csv", synced.str());
+    return shift;
+}
 
-    write_file_atomic(dir + "/forces.csv", forces.str());
-    write_file_atomic(dir + "/front.csv", front.str());
-    write_file_atomic(dir + "/energy.csv", energy.str());
-    if (s.output.snapshot_interval > 0) write_file_atomic(dir + "/blocks.csv", blocks.str());
-    write_file_atomic(dir + "/deposit.csv", dep.str());
+RunSummary DanRun::finish(const std::vector<ScenarioInput>& inputs, double wall_seconds) {
+    const DanDef& d = s_.dan;
+    for (SeriesFile* f : {&forces_, &front_, &energy_, &blocks_}) f->close();
+    double total_mass = 0.0, volume = 0.0;
+    for (double m : dan_.mass()) total_mass += m;
+    for (double v : dan_.volume()) volume += v;
+    sum.total_mass = total_mass;
+    sum.t_end = dan_.time();
+    sum.steps = dan_.step_count();
+    sum.dt = dan_.dt();
+    sum.runout_s = dan_.s().back();
+    sum.runup_height = runup_now();
+    // the peaks of every step, of the samples, and filtered (as a DEM run's)
+    sum.peak_fx_barrier_sampled = std::max(0.0, peak_fx_);
+    sum.peak_fy_arc_sampled = std::max(0.0, peak_fy_);
+    sum.t_peak_fx_barrier_sampled = t_peak_fx_;
+    sum.t_peak_fy_arc_sampled = t_peak_fy_;
+    sum.peak_fx_barrier = extremes_.peak_fx_barrier;
+    sum.t_peak_fx_barrier = extremes_.t_peak_fx_barrier;
+    sum.peak_fy_arc = extremes_.peak_fy_arc;
+    sum.t_peak_fy_arc = extremes_.t_peak_fy_arc;
+    sum.peak_fx_barrier_filtered = filter_.peak_fx_barrier;
+    sum.t_peak_fx_barrier_filtered = filter_.t_peak_fx_barrier;
+    sum.peak_fy_arc_filtered = filter_.peak_fy_arc;
+    sum.t_peak_fy_arc_filtered = filter_.t_peak_fy_arc;
+    design_.finish(filter_, sum, d.density, s_.world.gravity.norm());
+    sum.wall_seconds = wall_seconds;
+    sum.particle_steps_per_second = double(n_) * double(sum.steps) / std::max(sum.wall_seconds, 1e-9);
+    write_file_atomic(dir_ + "/deposit.csv", dan_deposit(dan_, s_.output.deposit_bin));
+    const double sync_shift = write_synced_front(d, dir_);
     SummaryJson j;
-    j.text("scenario", s.name);
-    j.text("scenario_fingerprint", scenario_fingerprint(s, inputs));  // what a sweep's reuse compares
+    j.text("scenario", s_.name);
+    j.text("scenario_fingerprint", scenario_fingerprint(s_, inputs));  // what a sweep's reuse compares
     j.text("model", "dan");
-    j.integer("blocks", long(n));
+    j.integer("blocks", long(n_));
     j.text("columns", d.columns == DanColumns::Vertical ? "vertical" : "normal");
     j.number("volume", volume, "m2");
     j.number("total_mass", total_mass, "kg/m");
@@ -371,16 +429,67 @@ RunSummary run_dan(const Scenario& s, const RunOptions& o) {
     j.number("wall_seconds", sum.wall_seconds, "s");
     j.text("machine", machine_summary(machine_info()));
     j.number("runout_s", sum.runout_s, "m");
-    j.number("max_front_s", max_front, "m");
+    j.number("max_front_s", max_front_, "m");
     put_landmarks(j, sum);  // the DEM's landmark keys, for `demlab compare`
-    sum.runout_lower_bound = left_flume;
-    j.boolean("left_flume", left_flume);
-    j.boolean("runout_lower_bound", left_flume);  // (the front passed the flume's end: as a DEM run says it)
+    sum.runout_lower_bound = left_flume_;
+    j.boolean("left_flume", left_flume_);
+    j.boolean("runout_lower_bound", left_flume_);  // (the front passed the flume's end: as a DEM run says it)
     j.number("sync_shift", sync_shift, "s");
-    j.number("max_cfl", dan.max_cfl(), "-");
-    j.number("momentum_corrected", dan.momentum_corrected(), "kg/s");  // momentum per metre of width
+    j.number("max_cfl", dan_.max_cfl(), "-");
+    j.number("momentum_corrected", dan_.momentum_corrected(), "kg/s");  // momentum per metre of width
     j.text("note", "DAN releases the mass at once: release.variant (the gate) does not apply");
-    write_file_atomic(dir + "/summary.json", j.str());
+    write_file_atomic(dir_ + "/summary.json", j.str());
+    return sum;
+}
+
+}  // namespace
+
+RunSummary run_dan(const Scenario& s, const RunOptions& o) {
+    const DanDef& d = s.dan;
+    if (d.phi_basal_deg > d.phi_internal_deg)
+        std::fprintf(stderr, "demlab: warning: dan.phi_basal_deg %.4g > dan.phi_internal_deg %.4g: the earth-pressure limits "
+                             "(D5) are clamped to 2/cos^2(phi_i) - 1\n", d.phi_basal_deg, d.phi_internal_deg);
+    DanSolver dan = dan_of_scenario(s);  // every refusal before the folder is touched
+    if (!d.sync_front.empty()) read_front(d.sync_front);
+    const std::string dir = o.out_dir, checkpoint_path = dir + "/" + kCheckpointFile;
+    const std::string scenario_text = resolved_toml(s);
+    const std::vector<ScenarioInput> inputs = scenario_inputs(s);
+    std::unique_ptr<RunFolderLock> lock;
+    std::unique_ptr<BinaryReader> restore = open_run_folder(o, scenario_text, inputs, lock, run_inputs(s, o, inputs));
+    std::unique_ptr<InterruptScope> interrupts;
+    if (o.handle_signals) interrupts = std::make_unique<InterruptScope>();
+
+    DanLoopSolver solver(dan);
+    DanRun run(s, dan, dir);
+    run.sum.n_discs = 0;
+    run.sum.porosity_over_release_box = -1.0;
+    // DAN runs on a flume: its path, W3 the barrier, W2 the arc
+    run.sum.has_path = run.sum.has_barrier = run.sum.has_barrier_forces = run.sum.has_arc = true;
+    run.sum.dt = run.sum.dt_min = run.sum.dt_max = dan.dt();
+    double wall_seconds_before = 0.0;
+    if (restore) run.load(*restore, wall_seconds_before);
+    else run.open();
+    const auto t0 = std::chrono::steady_clock::now();
+    auto elapsed = [&] { return wall_seconds_before + std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(); };
+
+    RunParts parts;
+    parts.sample = [&] { run.sample(); };
+    if (s.output.snapshot_interval > 0)
+        parts.snapshot = [&] {
+            run.snapshot();
+            if (o.on_snapshot) o.on_snapshot(dir + "/blocks.csv.part", "", int(std::lround(dan.time() / s.output.snapshot_interval)));
+        };
+    parts.after_step = [&] { return run.after_step(); };
+    parts.write_checkpoint = [&] {
+        BinaryWriter out;
+        put_checkpoint_header(out, scenario_text, inputs, solver.time(), s.stop.t_max, solver.step_count(), o);
+        out.tag("RUN ");
+        run.save(out, elapsed());
+        write_file_atomic(checkpoint_path, seal_checkpoint(out.bytes()));
+    };
+    run.sum.stop_reason = run_loop(solver, parts, s, o, LoopClock{run.next_series, run.next_snap, run.peak_ke, run.rest_since});
+    const RunSummary sum = run.finish(inputs, elapsed());
+    std::filesystem::remove(checkpoint_path);  // the run is complete: nothing to resume
     lock->release_and_remove();
     remove_replaced_output(dir);  // a forced run's old folder, now that the new one is complete
     return sum;

@@ -21,7 +21,8 @@ constexpr double kMaxRunSteps = 1e10;
 struct RunOptions {
     std::string out_dir;
     bool force = false;     // replace the files of an existing folder
-    // called after each snapshot is written, with the two files and the snapshot's index
+    // called after each snapshot is written, with the two files and the snapshot's index (a
+    // DAN run: its blocks.csv so far, no walls file, the index from the time)
     std::function<void(const std::string& discs_vtp, const std::string& walls_vtp, int index)> on_snapshot;
     // Checkpoints (RUN_DIR/checkpoint.bin, replaced atomically; removed when the run ends):
     double checkpoint_every = 0.0;  // s of wall-clock time between checkpoints; 0: none on a timer
