@@ -219,6 +219,78 @@ void finish_summary(const World& w, RunSummary& sum, double candidate_sum, doubl
     sum.dt = w.dt();
 }
 
+// The summary's figures known at the start: the set-up's landmarks (which it has), the mass and
+// the release's porosities.
+RunSummary start_summary(const Setup& setup, const MeasureContext& measure, const ReleaseMass& mass,
+                         double total_mass, size_t n) {
+    RunSummary sum;
+    sum.n_discs = long(n);
+    sum.total_mass = total_mass;
+    sum.has_path = measure.path != nullptr;
+    sum.has_envelope = setup.measures_envelope();
+    sum.has_deposit = sum.has_path || sum.has_envelope;
+    sum.has_barrier = measure.path != nullptr && std::isfinite(measure.barrier.s_barrier);
+    sum.has_barrier_forces = !measure.force_walls.barrier.empty();
+    sum.has_arc = !measure.force_walls.arc.empty();
+    sum.porosity_over_release_box = setup.has_release() ? mass.porosity_settled : -1.0;
+    if (setup.has_release()) {
+        std::vector<std::array<Vec2, 2>> box;
+        for (const WallDef& wd : setup.release_box().walls) box.push_back({wd.p0, wd.p1});
+        sum.porosity_inside_mass = interior_porosity(mass.pos, mass.radius, box).porosity;
+    }
+    return sum;
+}
+
+// The wall loads' peaks into the summary: of the samples, of every step, filtered.
+void take_peaks(RunSummary& sum, const RunState& st, const ForceExtremes& extremes, const LoadFilter& filter) {
+    sum.peak_fx_barrier_sampled = std::max(0.0, st.peak_fx_barrier);
+    sum.peak_fy_arc_sampled = std::max(0.0, st.peak_fy_arc);
+    sum.peak_fx_barrier = extremes.peak_fx_barrier;
+    sum.t_peak_fx_barrier = extremes.t_peak_fx_barrier;
+    sum.peak_fy_arc = extremes.peak_fy_arc;
+    sum.t_peak_fy_arc = extremes.t_peak_fy_arc;
+    sum.peak_fx_barrier_filtered = filter.peak_fx_barrier;
+    sum.t_peak_fx_barrier_filtered = filter.t_peak_fx_barrier;
+    sum.peak_fy_arc_filtered = filter.peak_fy_arc;
+    sum.t_peak_fy_arc_filtered = filter.t_peak_fy_arc;
+}
+
+// What rebuilds a run's world: the discs at the start and the release mass's figures.
+struct RunStart {
+    const std::vector<Vec2>& pos;
+    const std::vector<double>& radius;
+    const std::vector<int>& layer;
+    const std::vector<int>& grid;
+    const ReleaseMass& mass;
+};
+
+// The loop's state into a checkpoint, after its header and tag (restore_run reads it back):
+// the world's start, the measurements so far, the timings, the snapshots' times, the series
+// files' lengths (flushed first: a resume cuts off what came after), the solver's state and
+// the measures' own.
+void save_run(BinaryWriter& out, const RunStart& start, RunState& st, RunSummary& sum, double elapsed, const SnapshotWriter* snaps,
+              RunSeries& series, const Solver& solver, BarrierOutputs& barrier, const ForceExtremes& extremes,
+              const LoadFilter& filter, const DesignLoads& design, ForceHistory& history) {
+    out.put(start.pos);
+    out.put(start.radius);
+    out.put(start.layer);
+    out.put(start.grid);
+    out.put(start.mass.porosity_settled);
+    out.put(start.mass.porosity_generated);
+    out.put(start.mass.settle_time);
+    out.put(start.mass.wall_seconds);
+    st.fields(out, [](BinaryWriter& b, double& v) { b.put(v); }, sum);
+    out.put(elapsed);
+    out.put(snaps ? snaps->times() : std::vector<double>{});
+    for (uint64_t z : series.flush()) out.put(z);
+    solver.save_state(out);
+    barrier.save(out);
+    extremes.save(out);
+    filter.save(out);
+    design.save(out);
+    history.save(out);
+}
+
 // The loop's state from a checkpoint (after the world's set-up part): the measurements so
 // far, the timings, the snapshots' times, the series files cut back to what they held, and
 // the solver's state.
@@ -358,22 +430,8 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
     BarrierOutputs barrier(dir, w, measure);
     std::unique_ptr<SnapshotWriter> snaps;
     if (s.output.snapshot_interval > 0) snaps = std::make_unique<SnapshotWriter>(dir + "/snapshots", layer, grid, s.output.snapshot_format == "binary");
-    RunSummary sum;
+    RunSummary sum = start_summary(*setup, measure, mass, total_mass, n);
     sum.scenario_fingerprint = scenario_fingerprint(s, inputs);
-    sum.n_discs = long(n);
-    sum.total_mass = total_mass;
-    sum.has_path = path != nullptr;
-    sum.has_envelope = setup->measures_envelope();
-    sum.has_deposit = sum.has_path || sum.has_envelope;
-    sum.has_barrier = path != nullptr && std::isfinite(measure.barrier.s_barrier);
-    sum.has_barrier_forces = !measure.force_walls.barrier.empty();
-    sum.has_arc = !measure.force_walls.arc.empty();
-    sum.porosity_over_release_box = setup->has_release() ? mass.porosity_settled : -1.0;
-    if (setup->has_release()) {
-        std::vector<std::array<Vec2, 2>> box;
-        for (const WallDef& wd : setup->release_box().walls) box.push_back({wd.p0, wd.p1});
-        sum.porosity_inside_mass = interior_porosity(mass.pos, mass.radius, box).porosity;
-    }
     sum.dt_min = INFINITY;
     RunState st;
     st.e0 = solver.energy().balance();
@@ -437,25 +495,8 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
         BinaryWriter out;
         put_checkpoint_header(out, scenario_text, inputs, solver.time(), s.stop.t_max, solver.step_count(), o);
         out.tag("RUN ");
-        // what rebuilds this world: the discs at the start
-        out.put(start_pos);
-        out.put(start_radius);
-        out.put(layer);
-        out.put(grid);
-        out.put(mass.porosity_settled);
-        out.put(mass.porosity_generated);
-        out.put(mass.settle_time);
-        out.put(mass.wall_seconds);
-        st.fields(out, [](BinaryWriter& b, double& v) { b.put(v); }, sum);
-        out.put(elapsed());
-        out.put(snaps ? snaps->times() : std::vector<double>{});
-        for (uint64_t z : series.flush()) out.put(z);
-        solver.save_state(out);
-        barrier.save(out);
-        extremes.save(out);
-        filter.save(out);
-        design.save(out);
-        history.save(out);
+        save_run(out, RunStart{start_pos, start_radius, layer, grid, mass}, st, sum, elapsed(), snaps.get(), series, solver,
+                 barrier, extremes, filter, design, history);
         write_file_atomic(checkpoint_path, seal_checkpoint(out.bytes()));
     };
     sum.stop_reason = run_loop(solver, parts, s, o, LoopClock{st.next_series, st.next_snap, st.peak_ke, st.rest_since});
@@ -474,16 +515,7 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
     sum.energy_balance_error = put_in > 0 ? std::abs(e.balance() - st.e0) / put_in : 0.0;
     series.close();
     history.close();
-    sum.peak_fx_barrier_sampled = std::max(0.0, st.peak_fx_barrier);
-    sum.peak_fy_arc_sampled = std::max(0.0, st.peak_fy_arc);
-    sum.peak_fx_barrier = extremes.peak_fx_barrier;
-    sum.t_peak_fx_barrier = extremes.t_peak_fx_barrier;
-    sum.peak_fy_arc = extremes.peak_fy_arc;
-    sum.t_peak_fy_arc = extremes.t_peak_fy_arc;
-    sum.peak_fx_barrier_filtered = filter.peak_fx_barrier;
-    sum.t_peak_fx_barrier_filtered = filter.t_peak_fx_barrier;
-    sum.peak_fy_arc_filtered = filter.peak_fy_arc;
-    sum.t_peak_fy_arc_filtered = filter.t_peak_fy_arc;
+    take_peaks(sum, st, extremes, filter);
 
     barrier.finish(sum);
     double disc_area = 0.0;
