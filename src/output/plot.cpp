@@ -60,21 +60,48 @@ static CsvHeader header_of(const std::string& path) {
     return CsvHeader(line, path);
 }
 
-bool gnuplot_available() { return program_available("gnuplot"); }
+namespace {
 
-std::vector<std::string> make_plots(const std::string& run_dir, int width, int height) {
+// The barrier's x-load and the arc's y-load as a designer reads them (forces.csv's every-step
+// extremes and filtered columns, summary.json's static loads).
+void plot_loads(const std::string& run_dir, const std::string& dir, const CsvHeader& h, size_t ct, std::ostringstream& gp,
+                std::vector<std::string>& made) {
     namespace fs = std::filesystem;
-    if (!gnuplot_available())
-        throw RunError("gnuplot is not installed, so no plots were made (apt-get install gnuplot-nox, or "
-                       "scripts/install-deps.sh)");
-    const std::string dir = run_dir + "/plots";
-    fs::create_directories(dir);
-    mark_output_dir(dir);
-    std::ostringstream gp;
-    gp << "set terminal pngcairo size " << width << "," << height << " font 'DejaVu Sans,11'\n"
-       << "set datafile separator ','\nset key autotitle columnhead\nset grid\nset key outside right top\n"
-       << "set xlabel 't (s)'\n";
-    std::vector<std::string> made;
+    const std::string forces = run_dir + "/forces.csv";
+    // the barrier's x-load and the arc's y-load as a designer reads them: the band of every
+    // step's extremes between two rows, the 5 ms samples, the impulse-filtered load and the
+    // static load at rest (summary.json)
+    const SummaryFile summary = fs::exists(run_dir + "/summary.json") ? read_summary_file(run_dir + "/summary.json") : SummaryFile{};
+    for (const auto& [part, axis, wall] : {std::tuple<std::string, char, std::string>{"barrier", 'x', "barrier W3"},
+                                           std::tuple<std::string, char, std::string>{"arc", 'y', "arc W2"}}) {
+        const std::string f = std::string("f") + axis + "_" + part;
+        if (!h.has(f + "_max_N_per_m") || !h.has(f + "_filtered_N_per_m")) continue;
+        const size_t cmax = h.column(f + "_max_N_per_m") + 1, cmin = h.column(f + "_min_N_per_m") + 1,
+                     craw = h.column(f + "_N_per_m") + 1, cfil = h.column(f + "_filtered_N_per_m") + 1;
+        const std::string file = "load_" + part + "_" + axis + ".png";
+        // the static load's sign: the filtered load's at the end (the summary holds its size)
+        double stat = summary.number("static_" + f);
+        const CsvTable table = read_csv_table(forces);
+        for (size_t r = table.rows.size(); r-- > 0;)
+            if (std::isfinite(table.rows[r][cfil - 1])) {
+                stat = std::copysign(stat, table.rows[r][cfil - 1]);
+                break;
+            }
+        gp << "set output '" << file << "'\nset key inside left top\n"
+           << "set title 'Load on the " << wall << ", " << axis << " (per metre of width)'\n"
+           << "set ylabel 'F_" << axis << " (N/m)'\nplot '../forces.csv' using " << ct + 1 << ":" << cmin << ":" << cmax
+           << " with filledcurves lc rgb '#c8d8f0' title 'every step (min to max since the previous row)', "
+           << "'../forces.csv' using " << ct + 1 << ":" << craw << " with lines lc rgb '#7090c0' title 'samples', "
+           << "'../forces.csv' using " << ct + 1 << ":" << cfil << " with lines lw 3 lc rgb '#c03030' title 'filtered: mean force over the window W before t'";
+        if (std::isfinite(stat)) gp << ", " << stat << " with lines dt 2 lw 2 lc rgb '#202020' title 'static load at rest'";
+        gp << "\nset key outside right top\n";
+        made.push_back(dir + "/" + file);
+    }
+}
+
+// forces_x.png and forces_y.png: each wall group's force, raw and smoothed.
+void plot_forces(const std::string& run_dir, const std::string& dir, std::ostringstream& gp, std::vector<std::string>& made) {
+    namespace fs = std::filesystem;
     const std::string forces = run_dir + "/forces.csv";
     if (fs::exists(forces)) {
         // forces.csv, by name: the samples are instantaneous (single impacts show); a 50 ms
@@ -141,36 +168,13 @@ std::vector<std::string> make_plots(const std::string& run_dir, int width, int h
         }
         made.push_back(dir + "/forces_x.png");
         made.push_back(dir + "/forces_y.png");
-        // the barrier's x-load and the arc's y-load as a designer reads them: the band of every
-        // step's extremes between two rows, the 5 ms samples, the impulse-filtered load and the
-        // static load at rest (summary.json)
-        const SummaryFile summary = fs::exists(run_dir + "/summary.json") ? read_summary_file(run_dir + "/summary.json") : SummaryFile{};
-        for (const auto& [part, axis, wall] : {std::tuple<std::string, char, std::string>{"barrier", 'x', "barrier W3"},
-                                               std::tuple<std::string, char, std::string>{"arc", 'y', "arc W2"}}) {
-            const std::string f = std::string("f") + axis + "_" + part;
-            if (!h.has(f + "_max_N_per_m") || !h.has(f + "_filtered_N_per_m")) continue;
-            const size_t cmax = h.column(f + "_max_N_per_m") + 1, cmin = h.column(f + "_min_N_per_m") + 1,
-                         craw = h.column(f + "_N_per_m") + 1, cfil = h.column(f + "_filtered_N_per_m") + 1;
-            const std::string file = "load_" + part + "_" + axis + ".png";
-            // the static load's sign: the filtered load's at the end (the summary holds its size)
-            double stat = summary.number("static_" + f);
-            const CsvTable table = read_csv_table(forces);
-            for (size_t r = table.rows.size(); r-- > 0;)
-                if (std::isfinite(table.rows[r][cfil - 1])) {
-                    stat = std::copysign(stat, table.rows[r][cfil - 1]);
-                    break;
-                }
-            gp << "set output '" << file << "'\nset key inside left top\n"
-               << "set title 'Load on the " << wall << ", " << axis << " (per metre of width)'\n"
-               << "set ylabel 'F_" << axis << " (N/m)'\nplot '../forces.csv' using " << ct + 1 << ":" << cmin << ":" << cmax
-               << " with filledcurves lc rgb '#c8d8f0' title 'every step (min to max since the previous row)', "
-               << "'../forces.csv' using " << ct + 1 << ":" << craw << " with lines lc rgb '#7090c0' title 'samples', "
-               << "'../forces.csv' using " << ct + 1 << ":" << cfil << " with lines lw 3 lc rgb '#c03030' title 'filtered: mean force over the window W before t'";
-            if (std::isfinite(stat)) gp << ", " << stat << " with lines dt 2 lw 2 lc rgb '#202020' title 'static load at rest'";
-            gp << "\nset key outside right top\n";
-            made.push_back(dir + "/" + file);
-        }
+        plot_loads(run_dir, dir, h, ct, gp, made);
     }
+}
+
+// front.png: the front along the path.
+void plot_front(const std::string& run_dir, const std::string& dir, std::ostringstream& gp, std::vector<std::string>& made) {
+    namespace fs = std::filesystem;
     const std::string front = run_dir + "/front.csv";
     if (fs::exists(front)) {
         const CsvHeader h = header_of(front);
@@ -181,6 +185,11 @@ std::vector<std::string> make_plots(const std::string& run_dir, int width, int h
            << ct << ":" << cd << " with lines lw 2 title 'front displacement'\n";
         made.push_back(dir + "/front.png");
     }
+}
+
+// kinetic_energy.png.
+void plot_energy(const std::string& run_dir, const std::string& dir, std::ostringstream& gp, std::vector<std::string>& made) {
+    namespace fs = std::filesystem;
     const std::string energy = run_dir + "/energy.csv";
     if (fs::exists(energy)) {
         const CsvHeader h = header_of(energy);
@@ -198,6 +207,11 @@ std::vector<std::string> make_plots(const std::string& run_dir, int width, int h
         }
         made.push_back(dir + "/kinetic_energy.png");
     }
+}
+
+// barrier_pressure_peak.png and barrier_pressure_map.png.
+void plot_pressure(const std::string& run_dir, const std::string& dir, std::ostringstream& gp, std::vector<std::string>& made) {
+    namespace fs = std::filesystem;
     const std::string pressure = run_dir + "/barrier_pressure.csv";
     if (fs::exists(pressure)) {
         // the pressure along the barrier at the instant of its largest bin, and all instants
@@ -262,6 +276,11 @@ std::vector<std::string> make_plots(const std::string& run_dir, int width, int h
             made.push_back(dir + "/barrier_pressure_map.png");
         }
     }
+}
+
+// peaks.png: the largest flow height and speed along the path.
+void plot_peaks(const std::string& run_dir, const std::string& dir, std::ostringstream& gp, std::vector<std::string>& made) {
+    namespace fs = std::filesystem;
     const std::string peaks = run_dir + "/peaks.csv";
     if (fs::exists(peaks)) {
         gp << "set output 'peaks.png'\nset title 'Largest flow height and mean speed along the path over the run'\n"
@@ -270,6 +289,30 @@ std::vector<std::string> make_plots(const std::string& run_dir, int width, int h
            << "title 'speed' axes x1y2\nunset y2tics\nunset y2label\nset xlabel 't (s)'\n";
         made.push_back(dir + "/peaks.png");
     }
+}
+
+}  // namespace
+
+bool gnuplot_available() { return program_available("gnuplot"); }
+
+std::vector<std::string> make_plots(const std::string& run_dir, int width, int height) {
+    namespace fs = std::filesystem;
+    if (!gnuplot_available())
+        throw RunError("gnuplot is not installed, so no plots were made (apt-get install gnuplot-nox, or "
+                       "scripts/install-deps.sh)");
+    const std::string dir = run_dir + "/plots";
+    fs::create_directories(dir);
+    mark_output_dir(dir);
+    std::ostringstream gp;
+    gp << "set terminal pngcairo size " << width << "," << height << " font 'DejaVu Sans,11'\n"
+       << "set datafile separator ','\nset key autotitle columnhead\nset grid\nset key outside right top\n"
+       << "set xlabel 't (s)'\n";
+    std::vector<std::string> made;
+    plot_forces(run_dir, dir, gp, made);
+    plot_front(run_dir, dir, gp, made);
+    plot_energy(run_dir, dir, gp, made);
+    plot_pressure(run_dir, dir, gp, made);
+    plot_peaks(run_dir, dir, gp, made);
     if (made.empty()) throw InputError(run_dir + ": no forces.csv, front.csv or energy.csv to plot");
     const std::string script = dir + "/plots.gp";
     write_file_atomic(script, gp.str());
