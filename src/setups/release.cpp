@@ -151,6 +151,139 @@ void throw_if_interrupted_in_generation() {
 }
 }  // namespace
 
+// The radius expansion: the placed discs grown from s0 of their radii to their full size in
+// stages, frictionless, without gravity, heavily damped, rotation locked; their positions then.
+std::vector<Vec2> expand_to_size(const Scenario& s, const ReleaseBox& box, const std::vector<double>& radius,
+                                 const std::vector<Vec2>& start, double s0, Progress& progress) {
+    // --- radius expansion: frictionless, no gravity, heavily damped, rotation locked
+    WorldDef gen;
+    gen.threads = s.world.threads;  // the same bits for any count
+    gen.gravity = Vec2::Zero();
+    gen.rotation.model = 1;
+    gen.damping.beta_n = 0.5;
+    gen.damping.beta_s = 0.0;
+    gen.damping.local_alpha = 0.7;
+    gen.max_overlap_ratio = 2.0;
+    gen.timestep.safety = 0.8;
+    World expand(gen);
+    MaterialDef slick = s.disc;
+    slick.friction = 0.0;
+    const int mat = expand.add_material(slick);
+    for (size_t i = 0; i < radius.size(); ++i) expand.add_disc({start[i], s0 * radius[i], Vec2::Zero(), 0, 0, mat});
+    std::vector<WallDef> walls = box.walls;
+    for (WallDef& w : walls) {
+        w.friction = 0.0;
+        expand.add_wall(w);
+    }
+    expand.finalize();
+    const int stages = 60, steps_per_stage = 150;
+    for (int k = 1; k <= stages; ++k) {
+        const double sk = s0 + (1.0 - s0) * double(k) / stages;
+        for (size_t i = 0; i < radius.size(); ++i) expand.set_radius(int(i), sk * radius[i]);
+        expand.refresh_dashpots();
+        expand.run(steps_per_stage);
+        throw_if_interrupted_in_generation();
+        progress.update(0.5 * double(k) / stages, expand.step_count());
+    }
+    expand.run(3000);  // relax at full size
+    return expand.positions();
+}
+
+// The reduced discs settled under gravity (release.h): their positions, and in m the ratio
+// reached, the lid's load, whether they settled, the time and steps it took.
+void settle_release(const Scenario& s, const ReleaseBox& box, std::vector<Vec2>& positions, const std::vector<double>& radius,
+                    ReleaseMass& m, Progress& progress) {
+    const ReleaseDef& rd = s.release;
+    // --- radius reduction, then settling under gravity: first frictionless, so the mass
+    // compacts below the lid as far as it can (frictional discs jam looser than the
+    // generated density and would stay pressed against the lid), then with the real
+    // friction until it is at rest
+    WorldDef settle = s.world;
+    settle.rotation.model = 1;  // settling is quasi-static; rotation does not change the state reached
+    settle.damping.local_alpha = rd.settle_alpha;
+    // no tensile contact forces while settling: with local damping, PFC mode 0 chatters
+    settle.damping.dp_mode = DashpotMode::NoTension;
+    double settled_time = 0.0;
+    long settled_steps = 0;
+    for (int phase = 0; phase < 2; ++phase) {
+        // local damping compacts the frictionless phase quickly; with friction it makes the
+        // mass chatter (measured: unbalanced ratio stays at 0.4), so the second phase settles
+        // on the dashpots alone
+        settle.damping.local_alpha = phase == 0 ? rd.settle_alpha : 0.0;
+        World w(settle);
+        MaterialDef mat_phase = s.disc;
+        if (phase == 0) mat_phase.friction = 0.0;
+        const int mat2 = w.add_material(mat_phase);
+        for (size_t i = 0; i < radius.size(); ++i) w.add_disc({positions[i], radius[i], Vec2::Zero(), 0, 0, mat2});
+        std::vector<WallDef> walls = box.walls;
+        // the lid only holds the mass while it compacts; the second phase goes without it, so
+        // prestress locked in by the lid (a small mass of large discs jams looser than the
+        // generated density) is released gently here rather than at the release
+        int lid_index = -1;
+        for (int k = 0; k < int(walls.size()); ++k) {
+            if (phase == 0) walls[size_t(k)].friction = 0.0;
+            if (k == box.lid) {
+                if (phase != 0) continue;
+                lid_index = int(w.wall_count());
+            }
+            w.add_wall(walls[size_t(k)]);
+        }
+        w.finalize();
+        const double t_phase = 0.5 * rd.settle_max_time;
+        bool done = false;
+        while (w.time() < t_phase) {
+            w.run(settle_chunk(w, t_phase));
+            throw_if_interrupted_in_generation();
+            // a step so small that settling would not end in any time (an absurd stiffness or
+            // density) is refused at once instead of running for ever
+            if (w.step_count() <= 200 && (t_phase - w.time()) / w.dt() > kMaxSettleSteps)
+                throw RunError(s.source + ": settling the release would take " + format_number((t_phase - w.time()) / w.dt()) +
+                               " steps of " + format_number(w.dt()) + " s (more than " + format_number(kMaxSettleSteps) +
+                               "): material.kn / ks and material.density give an absurdly small time step");
+            m.settle_ratio = w.unbalanced_force_ratio();
+            progress.update(0.5 + 0.25 * phase + 0.25 * std::min(1.0, w.time() / t_phase), w.step_count());
+            // the frictionless phase only compacts: it may stop at ten times the final ratio
+            if (w.time() > 0.02 && m.settle_ratio < (phase == 0 ? 10.0 : 1.0) * rd.settle_ratio) {
+                done = true;
+                break;
+            }
+        }
+        if (phase == 0) {
+            double weight = 0;
+            for (double mi : w.masses()) weight += mi * s.world.gravity.norm();
+            m.lid_load_fraction = w.wall_force(lid_index).norm() / weight;
+        }
+        positions = w.positions();
+        settled_time += w.time();
+        settled_steps += w.step_count();
+        if (phase == 1) m.settled = done;
+    }
+    m.settle_time = settled_time;
+    m.settle_steps = settled_steps;
+}
+
+// The settled mass's porosity over its box, and each disc's layer and grid cell (the renderer's
+// colours).
+void mark_layers(ReleaseMass& m, const ReleaseDef& rd) {
+    double solid_settled = 0.0;
+    double y_min = INFINITY;
+    Vec2 lo(INFINITY, INFINITY);
+    for (size_t i = 0; i < m.pos.size(); ++i) {
+        solid_settled += kPi * m.radius[i] * m.radius[i];
+        y_min = std::min(y_min, m.pos[i].y());
+        lo = lo.cwiseMin(m.pos[i]);
+    }
+    m.porosity_settled = 1.0 - solid_settled / m.box_area;
+    m.layer.resize(m.pos.size());
+    m.grid.resize(m.pos.size());
+    for (size_t i = 0; i < m.pos.size(); ++i) {
+        m.layer[i] = int(std::floor((m.pos[i].y() - y_min) / rd.layer_height));
+        const int gx = int(std::floor((m.pos[i].x() - lo.x()) / rd.grid_cell));
+        const int gy = int(std::floor((m.pos[i].y() - lo.y()) / rd.grid_cell));
+        m.grid[i] = gy * 1000 + gx;  // the renderer decodes the cell as (grid % 1000, grid / 1000)
+    }
+}
+
 ReleaseMass generate_release(const Scenario& s) {
     const auto t0 = std::chrono::steady_clock::now();
     const ReleaseDef& rd = s.release;
@@ -197,130 +330,18 @@ ReleaseMass generate_release(const Scenario& s) {
         radius = std::move(placed.radius);
     }
 
-    // --- radius expansion: frictionless, no gravity, heavily damped, rotation locked
-    WorldDef gen;
-    gen.threads = s.world.threads;  // the same bits for any count
-    gen.gravity = Vec2::Zero();
-    gen.rotation.model = 1;
-    gen.damping.beta_n = 0.5;
-    gen.damping.beta_s = 0.0;
-    gen.damping.local_alpha = 0.7;
-    gen.max_overlap_ratio = 2.0;
-    gen.timestep.safety = 0.8;
-    World expand(gen);
-    MaterialDef slick = s.disc;
-    slick.friction = 0.0;
-    const int mat = expand.add_material(slick);
-    for (size_t i = 0; i < radius.size(); ++i) expand.add_disc({start[i], s0 * radius[i], Vec2::Zero(), 0, 0, mat});
-    std::vector<WallDef> walls = box.walls;
-    for (WallDef& w : walls) {
-        w.friction = 0.0;
-        expand.add_wall(w);
-    }
-    expand.finalize();
     Progress progress(1.0, "of generation");
-    const int stages = 60, steps_per_stage = 150;
-    for (int k = 1; k <= stages; ++k) {
-        const double sk = s0 + (1.0 - s0) * double(k) / stages;
-        for (size_t i = 0; i < radius.size(); ++i) expand.set_radius(int(i), sk * radius[i]);
-        expand.refresh_dashpots();
-        expand.run(steps_per_stage);
-        throw_if_interrupted_in_generation();
-        progress.update(0.5 * double(k) / stages, expand.step_count());
-    }
-    expand.run(3000);  // relax at full size
+    std::vector<Vec2> positions = expand_to_size(s, box, radius, start, s0, progress);
     m.porosity_generated = 1.0 - solid / m.box_area;
 
-    // --- radius reduction, then settling under gravity: first frictionless, so the mass
-    // compacts below the lid as far as it can (frictional discs jam looser than the
-    // generated density and would stay pressed against the lid), then with the real
-    // friction until it is at rest
-    WorldDef settle = s.world;
-    settle.rotation.model = 1;  // settling is quasi-static; rotation does not change the state reached
-    settle.damping.local_alpha = rd.settle_alpha;
-    // no tensile contact forces while settling: with local damping, PFC mode 0 chatters
-    settle.damping.dp_mode = DashpotMode::NoTension;
     const double shrink = 1.0 - rd.radius_reduction;
-    std::vector<Vec2> positions = expand.positions();
     for (double& r : radius) r *= shrink;
-    double settled_time = 0.0;
-    long settled_steps = 0;
-    for (int phase = 0; phase < 2; ++phase) {
-        // local damping compacts the frictionless phase quickly; with friction it makes the
-        // mass chatter (measured: unbalanced ratio stays at 0.4), so the second phase settles
-        // on the dashpots alone
-        settle.damping.local_alpha = phase == 0 ? rd.settle_alpha : 0.0;
-        World w(settle);
-        MaterialDef mat_phase = s.disc;
-        if (phase == 0) mat_phase.friction = 0.0;
-        const int mat2 = w.add_material(mat_phase);
-        for (size_t i = 0; i < radius.size(); ++i) w.add_disc({positions[i], radius[i], Vec2::Zero(), 0, 0, mat2});
-        walls = box.walls;
-        // the lid only holds the mass while it compacts; the second phase goes without it, so
-        // prestress locked in by the lid (a small mass of large discs jams looser than the
-        // generated density) is released gently here rather than at the release
-        int lid_index = -1;
-        for (int k = 0; k < int(walls.size()); ++k) {
-            if (phase == 0) walls[size_t(k)].friction = 0.0;
-            if (k == box.lid) {
-                if (phase != 0) continue;
-                lid_index = int(w.wall_count());
-            }
-            w.add_wall(walls[size_t(k)]);
-        }
-        w.finalize();
-        const double t_phase = 0.5 * rd.settle_max_time;
-        bool done = false;
-        while (w.time() < t_phase) {
-            w.run(settle_chunk(w, t_phase));
-            throw_if_interrupted_in_generation();
-            // a step so small that settling would not end in any time (an absurd stiffness or
-            // density) is refused at once instead of running for ever
-            if (w.step_count() <= 200 && (t_phase - w.time()) / w.dt() > kMaxSettleSteps)
-                throw RunError(s.source + ": settling the release would take " + format_number((t_phase - w.time()) / w.dt()) +
-                               " steps of " + format_number(w.dt()) + " s (more than " + format_number(kMaxSettleSteps) +
-                               "): material.kn / ks and material.density give an absurdly small time step");
-            m.settle_ratio = w.unbalanced_force_ratio();
-            progress.update(0.5 + 0.25 * phase + 0.25 * std::min(1.0, w.time() / t_phase), w.step_count());
-            // the frictionless phase only compacts: it may stop at ten times the final ratio
-            if (w.time() > 0.02 && m.settle_ratio < (phase == 0 ? 10.0 : 1.0) * rd.settle_ratio) {
-                done = true;
-                break;
-            }
-        }
-        if (phase == 0) {
-            double weight = 0;
-            for (double mi : w.masses()) weight += mi * s.world.gravity.norm();
-            m.lid_load_fraction = w.wall_force(lid_index).norm() / weight;
-        }
-        positions = w.positions();
-        settled_time += w.time();
-        settled_steps += w.step_count();
-        if (phase == 1) m.settled = done;
-    }
+    settle_release(s, box, positions, radius, m, progress);
     progress.finish();
     refuse_mass_outside_box(s, box, tri, positions, radius);
-    m.settle_time = settled_time;
-    m.settle_steps = settled_steps;
     m.pos = positions;
     m.radius = radius;
-    double solid_settled = 0.0;
-    double y_min = INFINITY;
-    Vec2 lo(INFINITY, INFINITY);
-    for (size_t i = 0; i < m.pos.size(); ++i) {
-        solid_settled += kPi * m.radius[i] * m.radius[i];
-        y_min = std::min(y_min, m.pos[i].y());
-        lo = lo.cwiseMin(m.pos[i]);
-    }
-    m.porosity_settled = 1.0 - solid_settled / m.box_area;
-    m.layer.resize(m.pos.size());
-    m.grid.resize(m.pos.size());
-    for (size_t i = 0; i < m.pos.size(); ++i) {
-        m.layer[i] = int(std::floor((m.pos[i].y() - y_min) / rd.layer_height));
-        const int gx = int(std::floor((m.pos[i].x() - lo.x()) / rd.grid_cell));
-        const int gy = int(std::floor((m.pos[i].y() - lo.y()) / rd.grid_cell));
-        m.grid[i] = gy * 1000 + gx;  // the renderer decodes the cell as (grid % 1000, grid / 1000)
-    }
+    mark_layers(m, rd);
     m.wall_seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     return m;
 }
