@@ -99,95 +99,142 @@ std::string cell(double v, int digits = 3, const char* none = "-") {
 }  // namespace
 
 namespace {
+// deposit.png: the final deposits, over the flume in x, y (each run's surface from its own
+// path) when all runs are flume runs, else along s.
+void compare_deposits(const CompareOptions& o, const std::vector<RunInfo>& runs, bool all_flume, std::ostringstream& gp,
+                      std::vector<std::string>& made) {
+    std::ostringstream plot;
+    // each run's flume from its own scenario: one grey line when all runs share it, else each
+    // run's bed in the run's colour (a deposit is drawn over the flume it ran on)
+    bool one_bed = all_flume;
+    std::vector<std::string> beds;
+    if (all_flume) {
+        for (const RunInfo& r : runs) {
+            const DanPath bed = flume_dan_path(r.scenario);
+            std::ostringstream b;
+            b.precision(10);
+            b << "x_m,y_m\n";
+            for (double s = 0.0; s <= bed.length() + 1e-9; s += 0.005) b << bed.at(s).p.x() << ',' << bed.at(s).p.y() << '\n';
+            beds.push_back(b.str());
+            one_bed = one_bed && beds.back() == beds.front();
+        }
+    }
+    if (one_bed) {
+        write_file_atomic(o.out + "/bed.csv", beds.front());
+        plot << "plot 'bed.csv' using 1:2 with lines lw 3 lc rgb '#303030' title 'flume'";
+    } else if (all_flume) {
+        plot << "plot ";
+        for (size_t k = 0; k < runs.size(); ++k) {
+            const std::string file = "bed_" + std::to_string(k) + ".csv";
+            write_file_atomic(o.out + "/" + file, beds[k]);
+            plot << (k ? ", " : "") << "'" << file << "' using 1:2 with lines lw 3 lc " << k + 1 << " dt 3 title "
+                 << quoted("flume of " + runs[k].label);
+        }
+    } else {
+        plot << "plot ";
+    }
+    for (size_t k = 0; k < runs.size(); ++k) {
+        const RunInfo& r = runs[k];
+        const std::string src = r.dir + "/deposit.csv";
+        if (!fs::exists(src)) continue;
+        std::ifstream in(src);
+        std::string line;
+        std::getline(in, line);
+        const CsvHeader header(line, src);
+        const size_t cs = header.column("s_m"), ch = header.column("height_m");
+        std::ostringstream surf;
+        surf << "x_m,y_m\n";
+        const DanPath* path = nullptr;
+        std::unique_ptr<DanPath> own;
+        if (all_flume) {
+            own = std::make_unique<DanPath>(flume_dan_path(r.scenario));
+            path = own.get();
+        }
+        double last_x = -INFINITY;
+        while (std::getline(in, line)) {
+            const std::vector<std::string> c = csv_cells(line);
+            if (std::max(cs, ch) >= c.size()) throw InputError(src + ": a short row '" + line + "'");
+            const double s = std::stod(c[cs]), height = std::stod(c[ch]);
+            if (path) {
+                const DanPathPoint q = path->at(s);
+                if (height <= 0.0) {
+                    surf << '\n';  // a gap in the surface where there is no mass
+                    continue;
+                }
+                // over the arc the bed's normals converge: a deposit thicker than the
+                // radius maps back on itself there, so a point behind the last is left out
+                const Vec2 p = q.p + height * q.normal();
+                if (p.x() <= last_x) continue;
+                last_x = p.x();
+                surf << p.x() << ',' << p.y() << '\n';
+            } else {
+                surf << s << ',' << height << '\n';
+            }
+        }
+        const std::string file = "deposit_" + std::to_string(k) + ".csv";
+        write_file_atomic(o.out + "/" + file, surf.str());
+        plot << (k > 0 || all_flume ? ", " : "") << "'" << file << "' using 1:2 with lines lw 2 lc " << k + 1 << " title "
+             << quoted(r.label);
+    }
+    gp << "set output 'deposit.png'\nset title 'Final deposits'\n";
+    if (all_flume) gp << "set size ratio -1\nset xlabel 'x (m)'\nset ylabel 'y (m)'\n";
+    else gp << "set xlabel 's along the bed path (m)'\nset ylabel 'height normal to the bed (m)'\n";
+    gp << plot.str() << "\nset size noratio\n";
+    made.push_back(o.out + "/deposit.png");
+}
+
+// comparison.md and comparison.csv: the landmarks side by side, and why a "-" was not measured.
+void compare_table(const CompareOptions& o, const std::vector<RunInfo>& runs, std::vector<std::string>& made) {
+    // the landmarks side by side
+    std::ostringstream md, csv;
+    md << "# Comparison\n\n| run | front at the barrier (s) | run-out s (m) | run-up (m) | highest run-up (m) | peak fx on the "
+          "barrier (N/m) | at (s) | filtered peak fx (N/m) | static fx (N/m) | at rest (s) | stop |\n|---|---|---|---|---|---|---|---|---|---|---|\n";
+    csv << "run,model,t_front_at_barrier_s,runout_s_m,runup_height_m,max_runup_height_during_run_m,peak_fx_barrier_N_per_m,"
+           "t_peak_fx_barrier_s,t_end_s,stop_reason,peak_fx_barrier_filtered_N_per_m,static_fx_barrier_N_per_m\n";
+    for (const RunInfo& r : runs) {
+        const SummaryFile& s = r.summary;
+        const double shift = s.number("sync_shift");
+        const std::string arrival = cell(s.number("t_front_at_barrier")) +
+                                    (std::isfinite(shift) ? " (" + cell(s.number("t_front_at_barrier") + shift) + " synchronised)" : "");
+        // mass that left the flume: the run-out and run-up are lower bounds (">=")
+        const std::string bound = s.number("runout_lower_bound") == 1.0 ? ">= " : "";
+        md << "| " << r.label << " | " << arrival << " | " << bound << cell(s.number("runout_s")) << " | " << bound
+           << cell(s.number("runup_height")) << " | " << cell(s.number("max_runup_height_during_run")) << " | "
+           << cell(s.number("peak_fx_barrier"), 1) << " | " << cell(s.number("t_peak_fx_barrier")) << " | "
+           << cell(s.number("peak_fx_barrier_filtered"), 1) << " | " << cell(s.number("static_fx_barrier"), 1) << " | "
+           << cell(s.number("t_end")) << " | " << s.text("stop_reason") << " |\n";
+        csv << '"' << r.label << "\"," << (r.dan ? "dan" : "dem") << ',' << cell(s.number("t_front_at_barrier"), 6, "") << ','
+            << cell(s.number("runout_s"), 6, "") << ',' << cell(s.number("runup_height"), 6, "") << ','
+            << cell(s.number("max_runup_height_during_run"), 6, "") << ',' << cell(s.number("peak_fx_barrier"), 3, "") << ','
+            << cell(s.number("t_peak_fx_barrier"), 6, "") << ',' << cell(s.number("t_end"), 6, "") << ',' << s.text("stop_reason") << ','
+            << cell(s.number("peak_fx_barrier_filtered"), 3, "") << ',' << cell(s.number("static_fx_barrier"), 3, "") << '\n';
+    }
+    md << "\nRun-out: s of the deposit's front along the bed path (DEM: the foremost connected disc; DAN: the front "
+          "block). Run-up: the deposit's highest point on the barrier above its foot. \">=\": mass left the flume "
+          "(summary.json's left_flume), so the figure is a lower bound.\n";
+    // "-": a landmark the run did not measure; why, from its summary
+    bool heading = false;
+    for (const RunInfo& r : runs)
+        for (const auto& [key, why] : r.summary.not_measured) {
+            if (!heading) md << "\n\"-\": not measured:\n\n";
+            heading = true;
+            md << "- " << r.label << ", " << key << ": " << why << "\n";
+        }
+    write_file_atomic(o.out + "/comparison.md", md.str());
+    write_file_atomic(o.out + "/comparison.csv", csv.str());
+    made.push_back(o.out + "/comparison.md");
+    made.push_back(o.out + "/comparison.csv");
+}
+
 std::vector<std::string> compare_into(const CompareOptions& o, const std::vector<RunInfo>& runs) {
     std::vector<std::string> made;
     bool all_flume = true;
     for (const RunInfo& r : runs) all_flume = all_flume && r.flume;
 
-    // the deposits: over the flume in x, y (each run's surface from its own path), or along s
     std::ostringstream gp;
     gp << "set terminal pngcairo size 1100,600 font 'DejaVu Sans,11'\nset datafile separator ','\nset grid\n"
        << "set key below\n";
-    {
-        std::ostringstream plot;
-        // each run's flume from its own scenario: one grey line when all runs share it, else each
-        // run's bed in the run's colour (a deposit is drawn over the flume it ran on)
-        bool one_bed = all_flume;
-        std::vector<std::string> beds;
-        if (all_flume) {
-            for (const RunInfo& r : runs) {
-                const DanPath bed = flume_dan_path(r.scenario);
-                std::ostringstream b;
-                b.precision(10);
-                b << "x_m,y_m\n";
-                for (double s = 0.0; s <= bed.length() + 1e-9; s += 0.005) b << bed.at(s).p.x() << ',' << bed.at(s).p.y() << '\n';
-                beds.push_back(b.str());
-                one_bed = one_bed && beds.back() == beds.front();
-            }
-        }
-        if (one_bed) {
-            write_file_atomic(o.out + "/bed.csv", beds.front());
-            plot << "plot 'bed.csv' using 1:2 with lines lw 3 lc rgb '#303030' title 'flume'";
-        } else if (all_flume) {
-            plot << "plot ";
-            for (size_t k = 0; k < runs.size(); ++k) {
-                const std::string file = "bed_" + std::to_string(k) + ".csv";
-                write_file_atomic(o.out + "/" + file, beds[k]);
-                plot << (k ? ", " : "") << "'" << file << "' using 1:2 with lines lw 3 lc " << k + 1 << " dt 3 title "
-                     << quoted("flume of " + runs[k].label);
-            }
-        } else {
-            plot << "plot ";
-        }
-        for (size_t k = 0; k < runs.size(); ++k) {
-            const RunInfo& r = runs[k];
-            const std::string src = r.dir + "/deposit.csv";
-            if (!fs::exists(src)) continue;
-            std::ifstream in(src);
-            std::string line;
-            std::getline(in, line);
-            const CsvHeader header(line, src);
-            const size_t cs = header.column("s_m"), ch = header.column("height_m");
-            std::ostringstream surf;
-            surf << "x_m,y_m\n";
-            const DanPath* path = nullptr;
-            std::unique_ptr<DanPath> own;
-            if (all_flume) {
-                own = std::make_unique<DanPath>(flume_dan_path(r.scenario));
-                path = own.get();
-            }
-            double last_x = -INFINITY;
-            while (std::getline(in, line)) {
-                const std::vector<std::string> c = csv_cells(line);
-                if (std::max(cs, ch) >= c.size()) throw InputError(src + ": a short row '" + line + "'");
-                const double s = std::stod(c[cs]), height = std::stod(c[ch]);
-                if (path) {
-                    const DanPathPoint q = path->at(s);
-                    if (height <= 0.0) {
-                        surf << '\n';  // a gap in the surface where there is no mass
-                        continue;
-                    }
-                    // over the arc the bed's normals converge: a deposit thicker than the
-                    // radius maps back on itself there, so a point behind the last is left out
-                    const Vec2 p = q.p + height * q.normal();
-                    if (p.x() <= last_x) continue;
-                    last_x = p.x();
-                    surf << p.x() << ',' << p.y() << '\n';
-                } else {
-                    surf << s << ',' << height << '\n';
-                }
-            }
-            const std::string file = "deposit_" + std::to_string(k) + ".csv";
-            write_file_atomic(o.out + "/" + file, surf.str());
-            plot << (k > 0 || all_flume ? ", " : "") << "'" << file << "' using 1:2 with lines lw 2 lc " << k + 1 << " title "
-                 << quoted(r.label);
-        }
-        gp << "set output 'deposit.png'\nset title 'Final deposits'\n";
-        if (all_flume) gp << "set size ratio -1\nset xlabel 'x (m)'\nset ylabel 'y (m)'\n";
-        else gp << "set xlabel 's along the bed path (m)'\nset ylabel 'height normal to the bed (m)'\n";
-        gp << plot.str() << "\nset size noratio\n";
-        made.push_back(o.out + "/deposit.png");
-    }
+    compare_deposits(o, runs, all_flume, gp, made);
     // the fronts over time
     gp << "set output 'front.png'\nset title 'Front along the bed path'\nset xlabel 't (s)'\n"
        << "set ylabel 's of the front (m)'\nplot ";
@@ -226,43 +273,7 @@ std::vector<std::string> compare_into(const CompareOptions& o, const std::vector
     gnuplot.stderr_file = o.out + "/gnuplot.log";
     if (run_process(gnuplot) != 0) throw RunError("gnuplot failed on " + script + " (see " + o.out + "/gnuplot.log)");
 
-    // the landmarks side by side
-    std::ostringstream md, csv;
-    md << "# Comparison\n\n| run | front at the barrier (s) | run-out s (m) | run-up (m) | highest run-up (m) | peak fx on the "
-          "barrier (N/m) | at (s) | at rest (s) | stop |\n|---|---|---|---|---|---|---|---|---|\n";
-    csv << "run,model,t_front_at_barrier_s,runout_s_m,runup_height_m,max_runup_height_during_run_m,peak_fx_barrier_N_per_m,"
-           "t_peak_fx_barrier_s,t_end_s,stop_reason\n";
-    for (const RunInfo& r : runs) {
-        const SummaryFile& s = r.summary;
-        const double shift = s.number("sync_shift");
-        const std::string arrival = cell(s.number("t_front_at_barrier")) +
-                                    (std::isfinite(shift) ? " (" + cell(s.number("t_front_at_barrier") + shift) + " synchronised)" : "");
-        // mass that left the flume: the run-out and run-up are lower bounds (">=")
-        const std::string bound = s.number("runout_lower_bound") == 1.0 ? ">= " : "";
-        md << "| " << r.label << " | " << arrival << " | " << bound << cell(s.number("runout_s")) << " | " << bound
-           << cell(s.number("runup_height")) << " | " << cell(s.number("max_runup_height_during_run")) << " | "
-           << cell(s.number("peak_fx_barrier"), 1) << " | " << cell(s.number("t_peak_fx_barrier")) << " | "
-           << cell(s.number("t_end")) << " | " << s.text("stop_reason") << " |\n";
-        csv << '"' << r.label << "\"," << (r.dan ? "dan" : "dem") << ',' << cell(s.number("t_front_at_barrier"), 6, "") << ','
-            << cell(s.number("runout_s"), 6, "") << ',' << cell(s.number("runup_height"), 6, "") << ','
-            << cell(s.number("max_runup_height_during_run"), 6, "") << ',' << cell(s.number("peak_fx_barrier"), 3, "") << ','
-            << cell(s.number("t_peak_fx_barrier"), 6, "") << ',' << cell(s.number("t_end"), 6, "") << ',' << s.text("stop_reason") << '\n';
-    }
-    md << "\nRun-out: s of the deposit's front along the bed path (DEM: the foremost connected disc; DAN: the front "
-          "block). Run-up: the deposit's highest point on the barrier above its foot. \">=\": mass left the flume "
-          "(summary.json's left_flume), so the figure is a lower bound.\n";
-    // "-": a landmark the run did not measure; why, from its summary
-    bool heading = false;
-    for (const RunInfo& r : runs)
-        for (const auto& [key, why] : r.summary.not_measured) {
-            if (!heading) md << "\n\"-\": not measured:\n\n";
-            heading = true;
-            md << "- " << r.label << ", " << key << ": " << why << "\n";
-        }
-    write_file_atomic(o.out + "/comparison.md", md.str());
-    write_file_atomic(o.out + "/comparison.csv", csv.str());
-    made.push_back(o.out + "/comparison.md");
-    made.push_back(o.out + "/comparison.csv");
+    compare_table(o, runs, made);
     return made;
 }
 
