@@ -50,6 +50,8 @@ DanDef plain(double phi_basal_deg) {
     d.k_mode = DanKMode::Fixed;
     d.k_fixed = 0.0;
     d.smoothing = false;
+    d.shock_viscosity = 0.0;  // (the closed forms have no bore)
+    d.shock_viscosity_linear = 0.0;
     return d;
 }
 }  // namespace
