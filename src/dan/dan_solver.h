@@ -84,7 +84,7 @@ private:
     std::vector<DanPathPoint> at_;
     std::vector<double> l_, h_, H_, cos_mid_, l_before_;
     std::vector<Vec2> bed_force_;
-    std::vector<double> v_star_, v_plus_, v_hat_, accel_;
+    std::vector<double> v_star_, v_plus_, v_hat_, accel_, q_;
     double time_ = 0.0, dt_ = 0.0, dissipated_ = 0.0, max_cfl_ = 0.0, momentum_corrected_ = 0.0;
     long steps_ = 0;
 };
