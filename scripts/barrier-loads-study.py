@@ -85,6 +85,23 @@ COLUMNS = [  # key, header, format
 ]
 
 
+WINDOWS = (0.005, 0.01, 0.02, 0.05, 0.1, 0.2)  # s
+
+
+def windowed_peaks(folder):
+    """The largest mean x-force on the barrier over each window W, from forces.csv's impulse
+    (summed every step, so a difference over rows is the exact mean force between them; the
+    windows are whole numbers of the 5 ms rows)."""
+    with open(os.path.join(folder, "forces.csv")) as f:
+        rows = [(float(r["t_s"]), float(r["ix_barrier_Ns_per_m"])) for r in csv.DictReader(f)]
+    dt = rows[1][0] - rows[0][0]
+    out = {}
+    for w in WINDOWS:
+        lag = max(1, round(w / dt))
+        out[w] = max(abs(rows[k][1] - rows[k - lag][1]) / (rows[k][0] - rows[k - lag][0]) for k in range(lag, len(rows)))
+    return out
+
+
 def table(rows):
     lines = ["| run | " + " | ".join(h for _, h, _ in COLUMNS) + " |", "|---" * (len(COLUMNS) + 1) + "|"]
     for name, s in rows:
@@ -103,7 +120,7 @@ def main():
     md = []
     parts = a.part.split(",")
     if "stiffness" in parts:
-        rows = []
+        rows, folders = [], []
         for scale, cases in ((8, [("1e7", "1e7", "1e7"), ("1e8", "1e8", "1e8"), ("1e9", "1e9", "1e9"),
                                   ("walls 1e7", "1e8", "1e7"), ("walls 1e9", "1e8", "1e9")]),
                              (4, [("1e7", "1e7", "1e7"), ("1e8", "1e8", "1e8"), ("1e9", "1e9", "1e9")])):
@@ -111,8 +128,17 @@ def main():
                 name = f"k-s{scale}-{label.replace(' ', '-')}"
                 sets = [f"release.scale={scale}", f"material.kn={k_disc}", f"material.ks={k_disc}",
                         f"material.wall_kn={k_wall}", f"material.wall_ks={k_wall}"]
-                rows.append((f"scale {scale}, k {label}", summary(run(a.demlab, a.out, name, sets, a.threads))))
+                folder = run(a.demlab, a.out, name, sets, a.threads)
+                rows.append((f"scale {scale}, k {label}", summary(folder)))
+                folders.append((f"scale {scale}, k {label}", folder))
         md += ["## Contact stiffness (geometry A, Model 3)", ""] + table(rows) + [""]
+        md += ["## The barrier's largest mean x-force over a window W (N/m), by stiffness", "",
+               "| run | every step | " + " | ".join(f"W = {w * 1000:g} ms" for w in WINDOWS) + " |",
+               "|---" * (len(WINDOWS) + 2) + "|"]
+        for name, folder in folders:
+            p = windowed_peaks(folder)
+            md.append(f"| {name} | {summary(folder)['peak_fx_barrier']:.0f} | " + " | ".join(f"{p[w]:.0f}" for w in WINDOWS) + " |")
+        md.append("")
     if "masses" in parts:
         rows, by_model = [], {}
         for seed in (1, 2, 3):
