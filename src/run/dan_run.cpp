@@ -399,14 +399,7 @@ RunSummary DanRun::finish(const std::vector<ScenarioInput>& inputs, double wall_
     sum.peak_fy_arc_sampled = std::max(0.0, peak_fy_);
     sum.t_peak_fx_barrier_sampled = t_peak_fx_;
     sum.t_peak_fy_arc_sampled = t_peak_fy_;
-    sum.peak_fx_barrier = extremes_.peak_fx_barrier;
-    sum.t_peak_fx_barrier = extremes_.t_peak_fx_barrier;
-    sum.peak_fy_arc = extremes_.peak_fy_arc;
-    sum.t_peak_fy_arc = extremes_.t_peak_fy_arc;
-    sum.peak_fx_barrier_filtered = filter_.peak_fx_barrier;
-    sum.t_peak_fx_barrier_filtered = filter_.t_peak_fx_barrier;
-    sum.peak_fy_arc_filtered = filter_.peak_fy_arc;
-    sum.t_peak_fy_arc_filtered = filter_.t_peak_fy_arc;
+    take_load_peaks(sum, extremes_, filter_);
     design_.finish(filter_, sum, d.density, s_.world.gravity.norm());
     sum.wall_seconds = wall_seconds;
     sum.particle_steps_per_second = double(n_) * double(sum.steps) / std::max(sum.wall_seconds, 1e-9);

@@ -127,6 +127,17 @@ void LoadFilter::step(double t, double ix_barrier, double iy_arc) {
     }
 }
 
+void take_load_peaks(RunSummary& sum, const ForceExtremes& extremes, const LoadFilter& filter) {
+    sum.peak_fx_barrier = extremes.peak_fx_barrier;
+    sum.t_peak_fx_barrier = extremes.t_peak_fx_barrier;
+    sum.peak_fy_arc = extremes.peak_fy_arc;
+    sum.t_peak_fy_arc = extremes.t_peak_fy_arc;
+    sum.peak_fx_barrier_filtered = filter.peak_fx_barrier;
+    sum.t_peak_fx_barrier_filtered = filter.t_peak_fx_barrier;
+    sum.peak_fy_arc_filtered = filter.peak_fy_arc;
+    sum.t_peak_fy_arc_filtered = filter.t_peak_fy_arc;
+}
+
 void LoadFilter::save(BinaryWriter& out) const {
     const std::vector<double> t(t_.begin() + long(first_), t_.end()), ix(ix_.begin() + long(first_), ix_.end()),
         iy(iy_.begin() + long(first_), iy_.end());

@@ -100,6 +100,10 @@ private:
     size_t first_ = 0;
 };
 
+// The barrier's and the arc's every-step and filtered peaks, with their times, into the
+// summary (a DEM or DAN run's).
+void take_load_peaks(RunSummary& sum, const ForceExtremes& extremes, const LoadFilter& filter);
+
 // forces.csv (the set-up's wall groups: ForceWalls), energy.csv, front.csv (with a bed path),
 // track.csv (with tracers).
 class RunSeries {

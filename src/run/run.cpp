@@ -245,14 +245,7 @@ RunSummary start_summary(const Setup& setup, const MeasureContext& measure, cons
 void take_peaks(RunSummary& sum, const RunState& st, const ForceExtremes& extremes, const LoadFilter& filter) {
     sum.peak_fx_barrier_sampled = std::max(0.0, st.peak_fx_barrier);
     sum.peak_fy_arc_sampled = std::max(0.0, st.peak_fy_arc);
-    sum.peak_fx_barrier = extremes.peak_fx_barrier;
-    sum.t_peak_fx_barrier = extremes.t_peak_fx_barrier;
-    sum.peak_fy_arc = extremes.peak_fy_arc;
-    sum.t_peak_fy_arc = extremes.t_peak_fy_arc;
-    sum.peak_fx_barrier_filtered = filter.peak_fx_barrier;
-    sum.t_peak_fx_barrier_filtered = filter.t_peak_fx_barrier;
-    sum.peak_fy_arc_filtered = filter.peak_fy_arc;
-    sum.t_peak_fy_arc_filtered = filter.t_peak_fy_arc;
+    take_load_peaks(sum, extremes, filter);
 }
 
 // What rebuilds a run's world: the discs at the start and the release mass's figures.
