@@ -3,6 +3,7 @@
 // run's static load, steady time, impact impulse and coefficients against its own series.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -202,4 +203,22 @@ TEST(DesignLoads, DanWritesTheSameColumnsFromItsSteps) {
     EXPECT_TRUE(std::isfinite(r.impact_coefficient_alpha));
     EXPECT_TRUE(std::isfinite(r.static_coefficient_k));
     fs::remove_all(dir);
+}
+
+// A set-up with a barrier and no arc (terrain), stopped at t_max: the arc's static load is
+// unmeasured for both reasons, but summary.json lists each figure once (its first reason).
+TEST(DesignLoads, EachUnmeasuredFigureIsListedOnce) {
+    RunSummary sum;
+    sum.has_barrier_forces = true;
+    sum.has_arc = false;
+    sum.stop_reason = "t_max";
+    DesignLoads loads(0.1);
+    loads.finish(LoadFilter(0.05), sum, NAN, 9.81);
+    std::vector<std::string> keys;
+    for (const NotMeasured& m : not_measured(sum)) {
+        EXPECT_EQ(std::count(keys.begin(), keys.end(), m.key), 0) << m.key;
+        keys.push_back(m.key);
+    }
+    EXPECT_EQ(not_measured_reason(sum, "static_fy_arc"), "the set-up has no arc");
+    EXPECT_NE(not_measured_reason(sum, "static_fx_barrier").find("did not come to rest"), std::string::npos);
 }

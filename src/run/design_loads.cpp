@@ -66,8 +66,12 @@ size_t sample_at(const std::vector<double>& times, double t) {
 }  // namespace
 
 void DesignLoads::finish(const LoadFilter& filter, RunSummary& sum, double bulk_density, double gravity) const {
+    // a key keeps its first reason (the set-up's before the run's): summary.json has one entry a key
     auto unmeasured = [&](std::initializer_list<const char*> keys, const std::string& why) {
-        for (const char* k : keys) sum.unmeasured.emplace_back(k, why);
+        for (const char* k : keys) {
+            const bool known = std::any_of(sum.unmeasured.begin(), sum.unmeasured.end(), [&](const auto& e) { return e.first == k; });
+            if (!known) sum.unmeasured.emplace_back(k, why);
+        }
     };
     if (!sum.has_arc) unmeasured({"static_fy_arc"}, "the set-up has no arc");
     if (!sum.has_barrier_forces) {
