@@ -33,12 +33,12 @@ const double kMass = kRho * kPi;  // R = 1 m, t = 1 m
 
 WorldDef debris_world(double mu = 0.3, double eta = 0.0, Vec2 g = Vec2(0.0, -kG)) {
     WorldDef def;
-    def.law = ContactLawKind::Debris;
+    def.law = law_kind<DebrisLaw>();
     def.rotation.model = 1;
     def.gravity = g;
-    def.debris.youngs_modulus = kE;
-    def.debris.mu = mu;
-    def.debris.eta = eta;
+    def.law_def<DebrisLaw>().youngs_modulus = kE;
+    def.law_def<DebrisLaw>().mu = mu;
+    def.law_def<DebrisLaw>().eta = eta;
     def.domain_lo = Vec2(-1000, -1000);
     def.domain_hi = Vec2(1000, 1000);
     return def;
@@ -467,8 +467,8 @@ TEST(Debris, ScenarioKeysAndRefusals) {
     const std::string base = "[contact]\nlaw = \"debris\"\n[[discs]]\nposition = [0, 1]\nradius = 1\n[[walls]]\nstart = [-5, 0]\nend = [5, 0]\n";
     Scenario ok = parse_scenario(base + "[rotation]\nmodel = 1\n[debris]\nmu = 0.2\n", "ok.toml");
     finish_scenario(ok);
-    EXPECT_EQ(ok.world.law, ContactLawKind::Debris);
-    EXPECT_EQ(ok.world.debris.mu, 0.2);
+    EXPECT_EQ(ok.world.law, law_kind<DebrisLaw>());
+    EXPECT_EQ(ok.world.law_def<DebrisLaw>().mu, 0.2);
     // the resolved scenario reads back the same (a resume's check)
     Scenario again = parse_scenario(resolved_toml(ok), "ok.toml");
     finish_scenario(again);
@@ -607,7 +607,7 @@ TEST(Debris, ShippedAttabadScenarios) {
     Scenario g = load_scenario(root + "/scenarios/attabad-2d-grid.toml");
     finish_scenario(p);
     finish_scenario(g);
-    EXPECT_EQ(p.world.law, ContactLawKind::Debris);
+    EXPECT_EQ(p.world.law, law_kind<DebrisLaw>());
     ASSERT_FALSE(g.terrain.points.empty());
     // a sample every 10 m from x = -400; the profile's corners lie on 20 m grid nodes or between
     for (const Vec2& q : g.terrain.points) {

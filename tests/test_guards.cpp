@@ -71,7 +71,7 @@ void write_text(const fs::path& p, const std::string& text) {
 // instead of passing through it and being taken out as "lost".
 TEST(Guards, DebrisDiscDroppedOntoAFloorDoesNotPassThroughIt) {
     const Scenario s = one_disc("position = [0.0, 2.0]", "[contact]\nlaw = \"debris\"\n[rotation]\nmodel = 1\n");
-    ASSERT_EQ(s.world.debris.dt_max, 0.01);
+    ASSERT_EQ(s.world.law_def<DebrisLaw>().dt_max, 0.01);
     ASSERT_EQ(s.world.lost_discs, LostDiscs::Remove);
     const fs::path dir = temp_dir("debris-drop");
     const RunSummary r = run_scenario(s, {dir.string(), false, {}});

@@ -43,7 +43,8 @@
 namespace demlab {
 
 bool World::centred_dashpots() const {
-    return def_.law == ContactLawKind::Linear && def_.timestep.dashpots == DashpotScheme::Centred;
+    return with_contact_law(def_.law, [](auto law) { return decltype(law)::kCentredDashpots; }) &&
+           def_.timestep.dashpots == DashpotScheme::Centred;
 }
 
 namespace {

@@ -198,7 +198,7 @@ void World::compute_forces_with(bool then_integrate) {
             if (f.index != SIZE_MAX && (!first || f.index < first->index)) first = &f;
         if (first) throw RunError(first->message);
     }
-    if constexpr (std::is_same_v<Law, LinearLaw>)
+    if constexpr (Law::kCentredDashpots)
         if (centred) {
             centre_dashpots(ctx.pp, integrate_prepare());
         }

@@ -23,8 +23,8 @@ World::DtFactors World::dt_factors() const {
     const bool lagged = corr && !centred_dashpots();
     const double phi = local * (lagged ? rotational_damping_factor(def_.damping.beta_s) : 1.0);
     const double phi_t = local * (lagged ? translational_damping_factor(def_.damping.beta_n) : 1.0);
-    // DEBRIS: no dashpots, translation only
-    if (def_.law == ContactLawKind::Debris) return {false, 1.0, 1.0};
+    // a law without dashpots or rotation (DEBRIS): translation only, no factors
+    if (with_contact_law(def_.law, [](auto law) { return decltype(law)::kTranslationOnly; })) return {false, 1.0, 1.0};
     return {def_.rotation.model != 1, phi * phi, phi_t * phi_t};
 }
 
@@ -46,14 +46,11 @@ double World::critical_step_squared_of(size_t i, const DtFactors& f) const {
 }
 
 double World::step_from_critical_squared(double best_sq) const {
-    // DEBRIS: the rule capped by debris.dt_max, which a disc without contacts takes (D12),
-    // shrinking at once and growing slowly (DebrisLaw::kStepGrowth)
-    if (def_.law == ContactLawKind::Debris) {
-        const double rule = std::isfinite(best_sq) ? def_.timestep.safety * std::sqrt(best_sq) : INFINITY;
-        return std::min({def_.debris.dt_max, rule, dt_ > 0.0 ? DebrisLaw::kStepGrowth * dt_ : INFINITY});
-    }
-    if (!std::isfinite(best_sq)) return def_.timestep.fixed;  // no discs
-    return def_.timestep.safety * std::sqrt(best_sq);
+    // the law's: PFC's rule, or (DEBRIS) capped by a ceiling and growing slowly (law_part.h)
+    return with_contact_law(def_.law, [&](auto law) {
+        using Law = decltype(law);
+        return Law::step_from_rule(def_.law_def<Law>(), def_.timestep.safety, def_.timestep.fixed, best_sq, dt_);
+    });
 }
 
 double World::automatic_dt() const {
@@ -75,12 +72,12 @@ World::IntegrateConsts World::integrate_prepare() {
 }
 
 bool World::avx2_integration() const {
-    return avx2_ && def_.law != ContactLawKind::Debris &&
+    return avx2_ && !disc_friction() &&
            !(def_.rotation.model == 3 && def_.rotation.damping_per != RotDampingPer::Disc);
 }
 
 void World::integrate_discs(size_t begin, size_t end, int chunk, const IntegrateConsts& k) {
-    if (def_.law == ContactLawKind::Debris) return integrate_discs_debris(begin, end, chunk, k);
+    if (disc_friction()) return integrate_discs_debris(begin, end, chunk, k);
     // four (AVX2) or eight (AVX-512) discs at a time where those loops have every rule the run
     // uses (per-disc rotational damping; local damping or none), the same bits
     if (avx2_integration()) {

@@ -27,7 +27,7 @@ void World::integrate_discs_debris(size_t begin, size_t end, int chunk, const In
     // -dt/2 (PFC's convention), h = dt.
     const double h = last_dt_ > 0.0 ? 0.5 * (last_dt_ + dt) : dt;
     const Vec2 g = k.g;
-    const DebrisDef& dd = def_.debris;
+    const DebrisDef& dd = def_.law_def<DebrisLaw>();
     const bool resultant = dd.friction_normal == DebrisNormal::Resultant;
     const bool trial = dd.friction_direction == DebrisDirection::Trial;
     Vec2* const pos = pos_.data();

@@ -33,19 +33,10 @@ void validate(const WorldDef& d, const std::string& where) {
     require_non_negative(where + ".wall_piece_length", d.wall_piece_length, "m");
     require_non_negative(where + ".joint_tolerance", d.joint_tolerance, "m");
     require_range(where + ".max_overlap_ratio", d.max_overlap_ratio, 1e-6, 2.0, false, "(ratio)");
-    if (d.law == ContactLawKind::Debris) {
-        const DebrisDef& b = d.debris;
-        if (!(b.youngs_modulus > 0.0 && b.youngs_modulus <= 1e12))
-            throw InputError("debris.youngs_modulus = " + format_number(b.youngs_modulus) + " Pa: must be in (0, 1e12]");
-        require_range("debris.mu", b.mu, 0.0, 1.0, false, "(coefficient)");
-        require_range("debris.eta", b.eta, 0.0, 1e12, false, "N s/m");
-        if (!(b.dt_max > 0.0 && b.dt_max <= 1.0))
-            throw InputError("debris.dt_max = " + format_number(b.dt_max) + " s: must be in (0, 1]");
-        // Mikhailov's particles do not rotate: the law has no torque to turn them
-        if (d.rotation.model != 1)
-            throw InputError("rotation.model = " + std::to_string(d.rotation.model) +
-                             ": contact.law = \"debris\" needs rotation.model = 1 (DEBRIS's discs do not rotate)");
-    }
+    with_contact_law(d.law, [&](auto law) {
+        using Law = decltype(law);
+        Law::validate(d.template law_def<Law>(), d);
+    });
 }
 
 World::World(const WorldDef& def)
@@ -262,12 +253,11 @@ void World::finalize() {
     for (size_t w = 0; w < nw; ++w)
         if (walls_[w].remove_at <= 0.0) wall_active_[w] = 0;
 
-    with_contact_law(def_.law, [&](auto law) { build_law_tables<decltype(law)>(); });
-    if (def_.law == ContactLawKind::Debris) {
-        // one modulus for every contact, the walls' too (Mikhailov: "E of particle i")
-        for (auto* table : {&tables<DebrisLaw>().disc_disc, &tables<DebrisLaw>().disc_wall})
-            for (DebrisLaw::Params& p : *table) p = {def_.debris.youngs_modulus, def_.debris.contact_area};
-    }
+    with_contact_law(def_.law, [&](auto law) {
+        using Law = decltype(law);
+        build_law_tables<Law>();
+        Law::fill_tables(tables<Law>(), def_.law_def<Law>());  // what the law takes from its own keys
+    });
     wall_reaction_.assign(n, Vec2::Zero());
     rr_factor_.assign(n, 0.0);
     if (def_.rotation.model >= 2 && def_.rotation.u_rr > 0.0)
@@ -283,9 +273,8 @@ void World::finalize() {
     // first time step: a force pass with dt = 0 (no shear increment, nothing dissipated)
     // counts the contacts the automatic rule needs
     if (def_.timestep.automatic) {
-        // (DEBRIS: its closing contacts look one step of the ceiling ahead; nothing else in its
-        // pass depends on the step)
-        dt_ = def_.law == ContactLawKind::Debris ? def_.debris.dt_max : 0.0;
+        // (a law whose closing contacts set the step looks one step ahead: law_part.h)
+        dt_ = with_contact_law(def_.law, [&](auto law) { return decltype(law)::first_dt(def_.law_def<decltype(law)>()); });
         compute_forces();
         speed_l1_ = 0.0;
         for (const Vec2& v : vel_) speed_l1_ = std::max(speed_l1_, std::abs(v.x()) + std::abs(v.y()));

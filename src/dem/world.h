@@ -60,7 +60,7 @@ enum class Prefetch { Auto, Off, On };
 size_t prefetch_threshold_bytes();
 
 struct WorldDef {
-    ContactLawKind law = ContactLawKind::Linear;  // the contact law of every contact (contact_laws.h)
+    ContactLawKind law = law_kind<LinearLaw>();  // the contact law of every contact (contact_laws.h)
     Vec2 gravity{0.0, -9.81};              // m/s2
     DampingDef damping;
     TimeStepDef timestep;
@@ -82,9 +82,15 @@ struct WorldDef {
                                            // when the CPU has AVX-512 (pair_kernel_avx512.cpp,
                                            // integrate_avx512.cpp); the same bits again
     BondDef bond;                          // the bonds' law (World::add_bond), if any bonds are added
-    DebrisDef debris;                      // law = Debris: its modulus, friction and step ceiling (debris_law.h)
+    AllLawDefs laws;                       // each registered law's own keys (DebrisLaw: its modulus,
+                                           // friction and step ceiling; law_def<Law>())
     Prefetch prefetch = Prefetch::Auto;    // the force pass asks for its arrays' lines ahead of use
                                            // (force_pass.cpp, kPrefetchContacts); never changes a result
+
+    template <typename Law>
+    typename Law::Def& law_def() { return std::get<size_t(law_kind<Law>())>(laws); }
+    template <typename Law>
+    const typename Law::Def& law_def() const { return std::get<size_t(law_kind<Law>())>(laws); }
 };
 
 void validate(const WorldDef& d, const std::string& where);
@@ -335,6 +341,8 @@ private:
     // centred dashpots (centred_dashpots.cpp): after a pass without integration, each touching
     // contact's dashpot force moved to the step's centre, then every range integrated
     bool centred_dashpots() const;
+    // the law applies its friction per disc in the integrator (DebrisLaw: integrate_debris.cpp)
+    bool disc_friction() const { return with_contact_law(def_.law, [](auto law) { return decltype(law)::kDiscFriction; }); }
     void centre_dashpots(const PairPassParams& pp, const IntegrateConsts& ic);
     bool centre_range(size_t t, const PairPassParams& pp);  // false: a wall contact's record is missing
     struct DashSum {  // a disc's shifts, added to its sums before it moves

@@ -72,7 +72,7 @@ Vec2 read_vec2(const toml::node& n, const std::string& where, const std::string&
 
 namespace {
 
-using DRef = double& (*)(Scenario&);
+using DRef = std::function<double&(Scenario&)>;
 using IRef = int& (*)(Scenario&);
 using BRef = bool& (*)(Scenario&);
 using SRef = std::string& (*)(Scenario&);
@@ -158,7 +158,7 @@ Key vec2(std::string name, std::string unit, std::string doc, VRef ref, double m
 
 // enum-valued keys stored in non-string fields
 template <typename E>
-Key choice(std::string name, std::string doc, E& (*ref)(Scenario&), std::vector<std::pair<std::string, E>> map) {
+Key choice(std::string name, std::string doc, std::function<E&(Scenario&)> ref, std::vector<std::pair<std::string, E>> map) {
     std::string acc = "one of";
     for (auto& [t, e] : map) acc += " \"" + t + "\"";
     Key k{name, "-", acc, std::move(doc), nullptr, nullptr};
@@ -183,6 +183,24 @@ Key choice(std::string name, std::string doc, E& (*ref)(Scenario&), std::vector<
 }
 
 Key polygon(std::string name, std::string accepted, std::string doc, std::vector<Vec2>& (*ref)(Scenario&));  // below
+
+// A law's keys (law_part.h: Law::keys), named [kSection].name, its Def's fields in WorldDef::laws.
+template <typename Law>
+struct LawKeys {
+    std::vector<Key>& k;
+    using Def = typename Law::Def;
+    static std::string key(const char* name) { return std::string(Law::kSection) + "." + name; }
+    void real(const char* name, const char* unit, const char* doc, double Def::*field, double lo, double hi, bool lo_open = false,
+              bool hi_open = false) {
+        k.push_back(keys::real(key(name), unit, doc, [field](Scenario& s) -> double& { return s.world.law_def<Law>().*field; }, lo,
+                               hi, lo_open, hi_open));
+    }
+    template <typename E>
+    void choice(const char* name, const char* doc, E Def::*field, std::vector<std::pair<std::string, E>> map) {
+        k.push_back(keys::choice<E>(key(name), doc, [field](Scenario& s) -> E& { return s.world.law_def<Law>().*field; }, std::move(map)));
+    }
+};
+
 
 void add_scenario_and_material_keys(std::vector<Key>& k) {
     // scenario
@@ -236,14 +254,16 @@ void add_dynamics_keys(std::vector<Key>& k) {
     k.push_back(polygon("world.domain", "[] or 2 points [[x_lo, y_lo], [x_hi, y_hi]], x_lo < x_hi, y_lo < y_hi, holding every disc at t = 0", "the domain's box: a disc whose centre leaves it is lost (world.lost_discs); [] = the box of the walls, the discs and the set-up padded by 0.5 m (give it where there are no walls to bound the flight)", [](Scenario& s) -> std::vector<Vec2>& { return s.domain; }));
     k.push_back(choice<LostDiscs>("world.lost_discs", "a disc whose centre leaves the domain (world.domain; by default the walls' box padded by 0.5 m: over a wall's free end, off a profile's end): remove (taken out, recorded in lost.csv, its energy booked in the ledger) or stop (the run ends with exit 3)", [](Scenario& s) -> LostDiscs& { return s.world.lost_discs; }, {{"remove", LostDiscs::Remove}, {"stop", LostDiscs::Stop}}));
     k.push_back(real("world.max_overlap_ratio", "-", "an overlap beyond this fraction of the smaller radius stops the run (blow-up)", [](Scenario& s) -> double& { return s.world.max_overlap_ratio; }, 0, 2, true));
-    k.push_back(choice<ContactLawKind>("contact.law", "the contact law of every contact: linear (PFC's linear model with dashpots, thesis 2.3.4-2.3.5) or debris (Mikhailov's DEBRIS: elastic force from Young's modulus and the contact's chord, one friction force per disc; [debris], docs/debris.md)", [](Scenario& s) -> ContactLawKind& { return s.world.law; }, {{"linear", ContactLawKind::Linear}, {"debris", ContactLawKind::Debris}}));
-    k.push_back(real("debris.youngs_modulus", "Pa", "E of the discs and of the bed (Mikhailov, Attabad: 40 GPa): F = E S delta / R (bed), E S delta / (Ri + Rj) (pair)", [](Scenario& s) -> double& { return s.world.debris.youngs_modulus; }, 0, 1e12, true));
-    k.push_back(real("debris.mu", "-", "dry friction coefficient of a disc's friction force mu (N + P) against its velocity (Attabad: 0.3); < 1 lets an impact rebound", [](Scenario& s) -> double& { return s.world.debris.mu; }, 0, 1));
-    k.push_back(real("debris.eta", "N s/m", "viscous friction eta v, per metre of thickness (Attabad: 0); a sphere's eta_3D maps to eta_3D 3t/(4R)", [](Scenario& s) -> double& { return s.world.debris.eta; }, 0, 1e12));
-    k.push_back(choice<DebrisArea>("debris.contact_area", "S of the elastic force: chord (2a t, the geometric section: grows with the overlap) or diameter (2R t: linear springs, for comparison)", [](Scenario& s) -> DebrisArea& { return s.world.debris.contact_area; }, {{"chord", DebrisArea::Chord}, {"diameter", DebrisArea::Diameter}}));
-    k.push_back(choice<DebrisNormal>("debris.friction_normal", "N and P of the friction: resultant (the moduli of the summed bed and pair forces, Mikhailov's \"modulus of the total elastic force\") or sum (the sums of their moduli)", [](Scenario& s) -> DebrisNormal& { return s.world.debris.friction_normal; }, {{"resultant", DebrisNormal::Resultant}, {"sum", DebrisNormal::Sum}}));
-    k.push_back(choice<DebrisDirection>("debris.friction_direction", "the friction against the velocity after the other forces (trial: static friction holds a disc at rest) or the last step's (previous: Mikhailov literally; jitters at rest)", [](Scenario& s) -> DebrisDirection& { return s.world.debris.friction_direction; }, {{"trial", DebrisDirection::Trial}, {"previous", DebrisDirection::Previous}}));
-    k.push_back(real("debris.dt_max", "s", "the automatic step's ceiling, and the step of a disc without contacts (Mikhailov's 0.01 s)", [](Scenario& s) -> double& { return s.world.debris.dt_max; }, 0, 1, true));
+    // contact.law names every registered law; each law adds its own section's keys (law_part.h)
+    {
+        std::vector<std::pair<std::string, ContactLawKind>> laws;
+        for_each_contact_law([&](auto law) { laws.emplace_back(decltype(law)::kName, law_kind<decltype(law)>()); });
+        k.push_back(choice<ContactLawKind>("contact.law", "the contact law of every contact: linear (PFC's linear model with dashpots, thesis 2.3.4-2.3.5), debris (Mikhailov's DEBRIS: elastic force from Young's modulus and the contact's chord, one friction force per disc; [debris], docs/debris.md) or hertz (PFC's simplified Hertz-Mindlin model: normal force from the shear modulus and Poisson's ratio, shear stiffness from the normal force; [hertz], docs/engine.md)", [](Scenario& s) -> ContactLawKind& { return s.world.law; }, laws));
+    }
+    for_each_contact_law([&](auto law) {
+        LawKeys<decltype(law)> add{k};
+        decltype(law)::keys(add);
+    });
 }
 
 // An array of points [[x, y], ...] (m).

@@ -540,26 +540,29 @@ void finish_lattice(Scenario& s) {
     if (s.terrain.enabled && l.top.empty()) require_above_ground(l.fill, s.terrain.points, 0.5 * l.r_min, where + "lattice_release.region");
 }
 
-// The keys the linear law reads and DEBRIS does not: set to anything but their defaults with
-// contact.law = "debris", they would be silently unused.
-static void refuse_linear_keys_with_debris(const Scenario& s) {
-    if (s.world.law != ContactLawKind::Debris) return;
-    const Scenario defaults;
-    for (const Key& k : registry()) {
-        const bool linear_only = k.name.rfind("damping.", 0) == 0 || k.name == "material.kn" || k.name == "material.ks" ||
-                                 k.name == "material.wall_kn" || k.name == "material.wall_ks" ||
-                                 k.name.rfind("material.friction_", 0) == 0 || k.name == "rotation.u_rr" ||
-                                 k.name == "rotation.mu_br";
-        if (linear_only && k.get(s) != k.get(defaults))
-            throw InputError(s.source + ": " + k.name + " = " + k.get(s) +
-                             ": not used by contact.law = \"debris\" (its elastic force comes from debris.youngs_modulus, "
-                             "its friction from debris.mu and debris.eta); remove it");
-    }
+// The shared keys the chosen law does not read (law_part.h, kUnusedKeys): set to anything but
+// their defaults they would be silently unused.
+static void refuse_keys_the_law_does_not_read(const Scenario& s) {
+    with_contact_law(s.world.law, [&](auto law) {
+        using Law = decltype(law);
+        if (Law::kUnusedKeys.empty()) return;
+        const Scenario defaults;
+        for (const Key& k : registry()) {
+            const bool unused = std::any_of(Law::kUnusedKeys.begin(), Law::kUnusedKeys.end(), [&](const char* u) {
+                const std::string p(u);
+                const bool prefix = p.back() == '.' || p.back() == '_';
+                return prefix ? k.name.rfind(p, 0) == 0 : k.name == p;
+            });
+            if (unused && k.get(s) != k.get(defaults))
+                throw InputError(s.source + ": " + k.name + " = " + k.get(s) + ": not used by contact.law = \"" + Law::kName +
+                                 "\" (" + Law::kUnusedWhy + "); remove it");
+        }
+    });
 }
 
 void finish_scenario(Scenario& s) {
     const std::string where = s.source + ": ";
-    refuse_linear_keys_with_debris(s);
+    refuse_keys_the_law_does_not_read(s);
     s.disc.friction = std::tan(deg_to_rad(s.disc_friction_deg));
     ReleaseDef& r = s.release;
     if (r.r_min == 0.0) r.r_min = scale_r_min(r.scale);
@@ -656,7 +659,14 @@ static bool section_in_use(const Scenario& s, const std::string& sec) {
     if (sec == "cohesion") return s.cohesion.given;
     if (sec == "lattice_release") return s.lattice_release.enabled;
     if (sec == "dan") return s.dan_given || s.solver == "dan";
-    if (sec == "debris") return s.world.law == ContactLawKind::Debris;
+    // a law's section, when it is the chosen law
+    bool law_section = false, chosen = false;
+    for_each_contact_law([&](auto law) {
+        if (sec != decltype(law)::kSection) return;
+        law_section = true;
+        chosen = chosen || s.world.law == law_kind<decltype(law)>();
+    });
+    if (law_section) return chosen;
     return true;
 }
 

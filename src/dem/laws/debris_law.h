@@ -18,10 +18,14 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <string>
 
 #include "dem/laws/contact_law.h"
+#include "dem/laws/law_part.h"
 #include "dem/laws/linear_law.h"
 #include "dem/material.h"
+#include "core/error.h"
+#include "core/validate.h"
 #include "geometry/wall.h"
 
 namespace demlab {
@@ -117,12 +121,58 @@ inline double energy(double E, DebrisArea area, double delta, double ri, double 
 
 }  // namespace debris
 
-struct DebrisLaw {
+struct DebrisLaw : LawDefaults {
     struct Params {
         double E = 0.0;  // Pa
         DebrisArea area = DebrisArea::Chord;
     };
+    using Def = DebrisDef;
     static constexpr const char* kName = "debris";
+    static constexpr const char* kSection = "debris";
+    template <typename Add>
+    static void keys(Add& add) {
+        add.real("youngs_modulus", "Pa", "E of the discs and of the bed (Mikhailov, Attabad: 40 GPa): F = E S delta / R (bed), E S delta / (Ri + Rj) (pair)", &Def::youngs_modulus, 0, 1e12, true);
+        add.real("mu", "-", "dry friction coefficient of a disc's friction force mu (N + P) against its velocity (Attabad: 0.3); < 1 lets an impact rebound", &Def::mu, 0, 1);
+        add.real("eta", "N s/m", "viscous friction eta v, per metre of thickness (Attabad: 0); a sphere's eta_3D maps to eta_3D 3t/(4R)", &Def::eta, 0, 1e12);
+        add.choice("contact_area", "S of the elastic force: chord (2a t, the geometric section: grows with the overlap) or diameter (2R t: linear springs, for comparison)", &Def::contact_area, {{"chord", DebrisArea::Chord}, {"diameter", DebrisArea::Diameter}});
+        add.choice("friction_normal", "N and P of the friction: resultant (the moduli of the summed bed and pair forces, Mikhailov's \"modulus of the total elastic force\") or sum (the sums of their moduli)", &Def::friction_normal, {{"resultant", DebrisNormal::Resultant}, {"sum", DebrisNormal::Sum}});
+        add.choice("friction_direction", "the friction against the velocity after the other forces (trial: static friction holds a disc at rest) or the last step's (previous: Mikhailov literally; jitters at rest)", &Def::friction_direction, {{"trial", DebrisDirection::Trial}, {"previous", DebrisDirection::Previous}});
+        add.real("dt_max", "s", "the automatic step's ceiling, and the step of a disc without contacts (Mikhailov's 0.01 s)", &Def::dt_max, 0, 1, true);
+    }
+    // the linear law's keys, which DEBRIS does not read
+    static constexpr std::array<const char*, 8> kUnusedKeys{"damping.", "material.kn", "material.ks", "material.wall_kn",
+                                                           "material.wall_ks", "material.friction_", "rotation.u_rr",
+                                                           "rotation.mu_br"};
+    static constexpr const char* kUnusedWhy =
+        "its elastic force comes from debris.youngs_modulus, its friction from debris.mu and debris.eta";
+    template <typename WorldDefT>
+    static void validate(const Def& b, const WorldDefT& d) {
+        if (!(b.youngs_modulus > 0.0 && b.youngs_modulus <= 1e12))
+            throw InputError("debris.youngs_modulus = " + format_number(b.youngs_modulus) + " Pa: must be in (0, 1e12]");
+        require_range("debris.mu", b.mu, 0.0, 1.0, false, "(coefficient)");
+        require_range("debris.eta", b.eta, 0.0, 1e12, false, "N s/m");
+        if (!(b.dt_max > 0.0 && b.dt_max <= 1.0))
+            throw InputError("debris.dt_max = " + format_number(b.dt_max) + " s: must be in (0, 1]");
+        // Mikhailov's particles do not rotate: the law has no torque to turn them
+        if (d.rotation.model != 1)
+            throw InputError("rotation.model = " + std::to_string(d.rotation.model) +
+                             ": contact.law = \"debris\" needs rotation.model = 1 (DEBRIS's discs do not rotate)");
+    }
+    // one modulus for every contact, the walls' too (Mikhailov: "E of particle i")
+    template <typename Tables>
+    static void fill_tables(Tables& t, const Def& b) {
+        for (auto* table : {&t.disc_disc, &t.disc_wall})
+            for (Params& p : *table) p = {b.youngs_modulus, b.contact_area};
+    }
+    static constexpr bool kTranslationOnly = true;  // no dashpots, rotation locked
+    // its closing contacts look one step of the ceiling ahead; nothing else in its pass
+    // depends on the step
+    static double first_dt(const Def& b) { return b.dt_max; }
+    // the rule capped by debris.dt_max, which a disc without contacts takes (D12), shrinking at
+    // once and growing slowly (kStepGrowth)
+    static double step_from_rule(const Def& b, double safety, double, double best_sq, double last_dt) {
+        return capped_growing_step(b.dt_max, kStepGrowth, safety, best_sq, last_dt);
+    }
     static constexpr bool kWideKernels = false;  // the scalar kernels only (no AVX2 / AVX-512 form yet)
     static constexpr bool kDiscFriction = true;  // friction per disc, by the integrator
     static constexpr bool kStepAhead = true;     // open contacts closing in count for the step (D12)

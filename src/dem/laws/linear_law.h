@@ -30,6 +30,7 @@
 #include <cmath>
 
 #include "dem/laws/contact_law.h"
+#include "dem/laws/law_part.h"
 #include "dem/material.h"
 #include "geometry/wall.h"
 
@@ -42,9 +43,10 @@ struct PairMaterial {
     double inv_ks;  // 1 / ks, m/N (a division per contact cost the force pass 10 %)
 };
 
-struct LinearLaw {
+struct LinearLaw : LawDefaults {
     using Params = PairMaterial;
     static constexpr const char* kName = "linear";
+    static constexpr bool kCentredDashpots = true;  // the dashpots at the step's centre when timestep.dashpots says so
     static constexpr bool kWideKernels = true;
     static constexpr bool kDiscFriction = false;  // friction at the contacts (DebrisLaw: per disc)
     static constexpr bool kStepAhead = false;     // open contacts add nothing to the step (DebrisLaw: they may)
