@@ -15,11 +15,12 @@
 #include <vector>
 
 #include "dem/laws/debris_law.h"
+#include "dem/laws/hertz_law.h"
 #include "dem/laws/linear_law.h"
 
 namespace demlab {
 
-using RegisteredLaws = std::tuple<LinearLaw, DebrisLaw>;
+using RegisteredLaws = std::tuple<LinearLaw, DebrisLaw, HertzLaw>;
 
 // A law's kind: its index in RegisteredLaws (the first, the linear law, is the default).
 enum class ContactLawKind : int {};
