@@ -2,7 +2,7 @@
 // the lanes of dem/lanes/ and compiled for each width by its own file: four discs in AVX2
 // registers (integrate_avx2.cpp, lane set lanes::Avx2) and eight in AVX-512 ones
 // (integrate_avx512.cpp, lanes::Avx512). The includer defines DEMLAB_WIDE_TARGET, the target
-// its functions are compiled for, before it includes this.
+// its functions are compiled for, before it includes this (lanes/wide_target.h).
 //
 // Same bits as the scalar loop at either width: each lane does its operations in its order (no
 // FMA, lanes_avx2.h), the conditions become selects, and the ledger's terms are added disc by
@@ -19,12 +19,7 @@
 
 #include "dem/integrate_kernel.h"
 #include "dem/lanes/lanes_avx2.h"
-
-#ifndef DEMLAB_WIDE_TARGET
-#error "define DEMLAB_WIDE_TARGET (the target string of the including file's width) first"
-#endif
-#define DEMLAB_WIDE [[gnu::target(DEMLAB_WIDE_TARGET), gnu::always_inline]] static inline
-#define DEMLAB_WIDE_LAMBDA __attribute__((target(DEMLAB_WIDE_TARGET), always_inline))
+#include "dem/lanes/wide_target.h"
 
 namespace demlab {
 namespace integrate_wide {
@@ -381,6 +376,4 @@ DEMLAB_WIDE IntegrateOut integrate(const IntegrateArrays& a, const IntegratePara
 }  // namespace integrate_wide
 }  // namespace demlab
 
-#undef DEMLAB_WIDE
-#undef DEMLAB_WIDE_LAMBDA
 #endif

@@ -2,8 +2,9 @@
 // dem/lanes/ and compiled for each width by its own file: four pairs in AVX2 registers
 // (pair_kernel_avx2.cpp, lane set lanes::Avx2) and eight in AVX-512 ones
 // (pair_kernel_avx512.cpp, lanes::Avx512). The includer defines DEMLAB_WIDE_TARGET, the target
-// its functions are compiled for, before it includes this; the selection stages before the law
-// are the AVX2 ones for both widths (pair_select_avx2.h), and the results go into one PairBatch.
+// its functions are compiled for, before it includes this (lanes/wide_target.h); the selection
+// stages before the law are the AVX2 ones for both widths (pair_select_avx2.h), and the results
+// go into one PairBatch.
 //
 // Same bits as disc_pair_force: every lane does the scalar kernel's operations in the scalar
 // kernel's order, and IEEE addition, multiplication, division and square root are correctly
@@ -24,11 +25,7 @@
 
 #include "dem/laws/pair_kernel.h"
 #include "dem/laws/pair_select_avx2.h"
-
-#ifndef DEMLAB_WIDE_TARGET
-#error "define DEMLAB_WIDE_TARGET (the target string of the including file's width) first"
-#endif
-#define DEMLAB_WIDE [[gnu::target(DEMLAB_WIDE_TARGET), gnu::always_inline]] static inline
+#include "dem/lanes/wide_target.h"
 
 namespace demlab {
 namespace pair_wide {
@@ -217,5 +214,4 @@ DEMLAB_WIDE size_t pair_law(const DiscArrays& d, const PairPassParams& p, DiscCo
 }  // namespace pair_wide
 }  // namespace demlab
 
-#undef DEMLAB_WIDE
 #endif
