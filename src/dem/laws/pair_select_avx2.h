@@ -1,7 +1,7 @@
 // The first stages of the disc-disc pass, shared by its AVX2 and AVX-512 kernels
-// (pair_kernel_avx2.cpp, pair_kernel_avx512.cpp): which of a batch's candidate pairs have
-// something to do this step. Internal to those two files; the functions ask for AVX2, which
-// the AVX-512 ones include.
+// (pair_kernel_wide.h, compiled by pair_kernel_avx2.cpp and pair_kernel_avx512.cpp): which of
+// a batch's candidate pairs have something to do this step, four at a time for both widths.
+// Internal to those files; the functions ask for AVX2, which the AVX-512 ones include.
 #pragma once
 #if defined(__GNUC__) && (defined(__x86_64__) || defined(__i386__))
 #include <immintrin.h>
@@ -10,24 +10,13 @@
 #include <cstdint>
 #include <cstring>
 
+#include "dem/lanes/lanes_avx2.h"
 #include "dem/laws/pair_kernel.h"
 
 namespace demlab {
 namespace pair_select {
 
 #define DEMLAB_AVX2 [[gnu::target("avx2"), gnu::always_inline]] static inline
-
-// Four (x, y) pairs from an array of Vec2 (two doubles each), as an x and a y register.
-DEMLAB_AVX2 void load_xy(const double* a, size_t i0, size_t i1, size_t i2, size_t i3, __m256d& x, __m256d& y) {
-    const __m256d a02 = _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(a + 2 * i0)), _mm_loadu_pd(a + 2 * i2), 1);
-    const __m256d a13 = _mm256_insertf128_pd(_mm256_castpd128_pd256(_mm_loadu_pd(a + 2 * i1)), _mm_loadu_pd(a + 2 * i3), 1);
-    x = _mm256_unpacklo_pd(a02, a13);  // x0 x1 x2 x3
-    y = _mm256_unpackhi_pd(a02, a13);  // y0 y1 y2 y3
-}
-
-DEMLAB_AVX2 __m256d load4(const double* a, size_t i0, size_t i1, size_t i2, size_t i3) {
-    return _mm256_set_pd(a[i3], a[i2], a[i1], a[i0]);
-}
 
 // For each 4-bit mask, its set lanes' numbers packed to the front (the rest: don't care).
 alignas(16) const __m128i kPackedLanes[16] = {
@@ -86,15 +75,18 @@ DEMLAB_AVX2 size_t select_pairs(const DiscArrays& d, DiscContact* c, size_t n, P
     for (size_t g = 0; g < mc; g += 4) {
         const uint32_t at[4] = {out.check[g], out.check[g + 1], out.check[g + 2], out.check[g + 3]};
         const DiscContact* const q[4] = {c + at[0], c + at[1], c + at[2], c + at[3]};
-        __m256d xi, yi, xj, yj;
-        load_xy(pos, size_t(q[0]->i), size_t(q[1]->i), size_t(q[2]->i), size_t(q[3]->i), xi, yi);
-        load_xy(pos, size_t(q[0]->j), size_t(q[1]->j), size_t(q[2]->j), size_t(q[3]->j), xj, yj);
-        const __m256d ri = load4(d.radius, size_t(q[0]->i), size_t(q[1]->i), size_t(q[2]->i), size_t(q[3]->i));
-        const __m256d rj = load4(d.radius, size_t(q[0]->j), size_t(q[1]->j), size_t(q[2]->j), size_t(q[3]->j));
-        const __m256d dxx = _mm256_sub_pd(xj, xi), dxy = _mm256_sub_pd(yj, yi);
-        const __m256d rsum = _mm256_add_pd(ri, rj);
-        const __m256d dist2 = _mm256_add_pd(_mm256_mul_pd(dxx, dxx), _mm256_mul_pd(dxy, dxy));
-        // the same test as below (NaN counts as touching)
+        using L = lanes::Avx2;
+        const size_t i[4] = {size_t(q[0]->i), size_t(q[1]->i), size_t(q[2]->i), size_t(q[3]->i)};
+        const size_t j[4] = {size_t(q[0]->j), size_t(q[1]->j), size_t(q[2]->j), size_t(q[3]->j)};
+        L::D xi, yi, xj, yj;
+        L::load_xy_at(pos, i, xi, yi);
+        L::load_xy_at(pos, j, xj, yj);
+        const L::D ri = L::gather([&](size_t l) { return d.radius[i[l]]; });
+        const L::D rj = L::gather([&](size_t l) { return d.radius[j[l]]; });
+        const L::D dxx = xj - xi, dxy = yj - yi;
+        const __m256d rsum = (ri + rj).v;
+        const __m256d dist2 = (dxx * dxx + dxy * dxy).v;
+        // the law's test (pair_kernel_wide.h; NaN counts as touching)
         const __m256d touching = _mm256_cmp_pd(dist2, _mm256_mul_pd(rsum, rsum), _CMP_NGE_UQ);
         uint64_t history = 0;  // per lane, a byte: any bit of the history set
         for (unsigned l = 0; l < 4; ++l) {
