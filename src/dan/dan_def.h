@@ -42,7 +42,7 @@ struct DanDef {
     // the bore's dissipation (dan_solver.cpp, D16): a mass block that is compressed
     // (v_{j+1} < v_j) pushes its boundary blocks apart with rho B h (c_quad dv^2 + c_lin a |dv|)
     double shock_viscosity = 1.0;          // -, c_quad (0: none)
-    double shock_viscosity_linear = 0.0;   // -, c_lin, a = sqrt(k g h cos alpha) (0: none)
+    double shock_viscosity_linear = 1.0;   // -, c_lin, a = sqrt(k g h cos alpha) (0: none)
     double dt = 1e-4;                      // s, the time step
     DanStep dt_mode = DanStep::Fixed;
     DanPosition position_update = DanPosition::Symplectic;  // D14 (dan_solver.cpp says why)

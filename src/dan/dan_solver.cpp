@@ -193,6 +193,16 @@ void DanSolver::step() {
     // dv ~ the jump over the two or three blocks it spans, loses its energy there at any n.
     // Explicitly it is a damping of rate 2 c |dv| / l on a block pair: within the CFL limit
     // (dt |dv| / l <= cfl_max = 0.5) the pair's relative speed is not reversed for c <= 1.
+    // The quadratic term alone leaves the bore ringing: its damping rate falls with the
+    // ringing's amplitude, so block-scale waves of a few cm/s stay behind the bore in the
+    // deposit. There k flips between its limits from one block to the next (D4-D6 see each
+    // block's own strain and surface slope), and DAN's pressure k dH/ds (D7), blind to dk/ds,
+    // feeds the waves: from about 600 blocks on they grow into pulses that remobilise the
+    // deposit at rest (A, without D12's smoothing or at 4,100 blocks: run-out 2.39 m against
+    // 2.16-2.19 m). The linear term damps a compressed pair at the rate 2 c_lin a / l, its own
+    // wave frequency, whatever the amplitude (Landshoff's linear viscosity): the ringing dies
+    // within a few steps, while in smooth flow it is c_lin a l du/ds per unit mass, which
+    // vanishes as the blocks are refined. Its stable range: 2 c_lin a dt / l <= 2 c_lin cfl_max <= 1.
     const bool viscous = d.shock_viscosity > 0.0 || d.shock_viscosity_linear > 0.0;
     if (viscous)
         for (size_t j = 0; j + 1 < n; ++j) {

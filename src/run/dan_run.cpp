@@ -435,57 +435,57 @@ RunSummary DanRun::finish(const std::vector<ScenarioInput>& inputs, double wall_
     return sum;
 }
 
+// DAN's run as the loop takes it (run_scenario): the solver at t = 0, the loop's view of it,
+// and its measures and files.
+class DanSolverRun final : public SolverRun {
+public:
+    DanSolverRun(const Scenario& s, const RunOptions& o, DanSolver dan)
+        : s_(s), dir_(o.out_dir), dan_(std::move(dan)), solver_(dan_), run_(s, dan_, dir_) {
+        run_.sum.n_discs = 0;
+        run_.sum.porosity_over_release_box = -1.0;
+        // DAN runs on a flume: its path, W3 the barrier, W2 the arc
+        run_.sum.has_path = run_.sum.has_barrier = run_.sum.has_barrier_forces = run_.sum.has_arc = true;
+        run_.sum.dt = run_.sum.dt_min = run_.sum.dt_max = dan_.dt();
+    }
+    Solver& solver() override { return solver_; }
+    RunParts parts(const RunOptions& o) override {
+        RunParts parts;
+        parts.sample = [this] { run_.sample(); };
+        if (s_.output.snapshot_interval > 0)
+            parts.snapshot = [this, on_snapshot = o.on_snapshot] {
+                run_.snapshot();
+                if (on_snapshot) on_snapshot(dir_ + "/blocks.csv.part", "", int(std::lround(dan_.time() / s_.output.snapshot_interval)));
+            };
+        parts.after_step = [this] { return run_.after_step(); };
+        return parts;
+    }
+    LoopClock clock() override { return LoopClock{run_.next_series, run_.next_snap, run_.peak_ke, run_.rest_since}; }
+    void open() override { run_.open(); }
+    void save(BinaryWriter& out, double elapsed) override { run_.save(out, elapsed); }
+    void load(BinaryReader& in, double& elapsed) override { run_.load(in, elapsed); }
+    RunSummary finish(const std::string& stop_reason, const std::vector<ScenarioInput>& inputs, double wall_seconds) override {
+        run_.sum.stop_reason = stop_reason;
+        return run_.finish(inputs, wall_seconds);
+    }
+
+private:
+    const Scenario& s_;
+    std::string dir_;
+    DanSolver dan_;
+    DanLoopSolver solver_;
+    DanRun run_;
+};
+
 }  // namespace
 
-RunSummary run_dan(const Scenario& s, const RunOptions& o) {
+std::unique_ptr<SolverRun> make_dan_run(const Scenario& s, const RunOptions& o) {
     const DanDef& d = s.dan;
     if (d.phi_basal_deg > d.phi_internal_deg)
         std::fprintf(stderr, "demlab: warning: dan.phi_basal_deg %.4g > dan.phi_internal_deg %.4g: the earth-pressure limits "
                              "(D5) are clamped to 2/cos^2(phi_i) - 1\n", d.phi_basal_deg, d.phi_internal_deg);
     DanSolver dan = dan_of_scenario(s);  // every refusal before the folder is touched
     if (!d.sync_front.empty()) read_front(d.sync_front);
-    const std::string dir = o.out_dir, checkpoint_path = dir + "/" + kCheckpointFile;
-    const std::string scenario_text = resolved_toml(s);
-    const std::vector<ScenarioInput> inputs = scenario_inputs(s);
-    std::unique_ptr<RunFolderLock> lock;
-    std::unique_ptr<BinaryReader> restore = open_run_folder(o, scenario_text, inputs, lock, run_inputs(s, o, inputs));
-    std::unique_ptr<InterruptScope> interrupts;
-    if (o.handle_signals) interrupts = std::make_unique<InterruptScope>();
-
-    DanLoopSolver solver(dan);
-    DanRun run(s, dan, dir);
-    run.sum.n_discs = 0;
-    run.sum.porosity_over_release_box = -1.0;
-    // DAN runs on a flume: its path, W3 the barrier, W2 the arc
-    run.sum.has_path = run.sum.has_barrier = run.sum.has_barrier_forces = run.sum.has_arc = true;
-    run.sum.dt = run.sum.dt_min = run.sum.dt_max = dan.dt();
-    double wall_seconds_before = 0.0;
-    if (restore) run.load(*restore, wall_seconds_before);
-    else run.open();
-    const auto t0 = std::chrono::steady_clock::now();
-    auto elapsed = [&] { return wall_seconds_before + std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(); };
-
-    RunParts parts;
-    parts.sample = [&] { run.sample(); };
-    if (s.output.snapshot_interval > 0)
-        parts.snapshot = [&] {
-            run.snapshot();
-            if (o.on_snapshot) o.on_snapshot(dir + "/blocks.csv.part", "", int(std::lround(dan.time() / s.output.snapshot_interval)));
-        };
-    parts.after_step = [&] { return run.after_step(); };
-    parts.write_checkpoint = [&] {
-        BinaryWriter out;
-        put_checkpoint_header(out, scenario_text, inputs, solver.time(), s.stop.t_max, solver.step_count(), o);
-        out.tag("RUN ");
-        run.save(out, elapsed());
-        write_file_atomic(checkpoint_path, seal_checkpoint(out.bytes()));
-    };
-    run.sum.stop_reason = run_loop(solver, parts, s, o, LoopClock{run.next_series, run.next_snap, run.peak_ke, run.rest_since});
-    const RunSummary sum = run.finish(inputs, elapsed());
-    std::filesystem::remove(checkpoint_path);  // the run is complete: nothing to resume
-    lock->release_and_remove();
-    remove_replaced_output(dir);  // a forced run's old folder, now that the new one is complete
-    return sum;
+    return std::make_unique<DanSolverRun>(s, o, std::move(dan));
 }
 
 }  // namespace demlab

@@ -4,14 +4,20 @@
 // forces.csv (the DEM's columns: the bed's load on slope, arc and barrier), energy.csv (t,
 // kinetic, potential, dissipated_friction, other, balance), blocks.csv (every block at each
 // snapshot interval), deposit.csv (s, height, block_height), front_synced.csv (with
-// dan.sync_front) and summary.json. A DAN run takes seconds: it writes no checkpoints.
+// dan.sync_front) and summary.json. run_scenario takes it through the folder, the run loop
+// and its checkpoints as it does the discs.
 #pragma once
 #include "dan/dan_solver.h"
+#include <memory>
+
 #include "run/run.h"
+#include "run/run_loop.h"
 
 namespace demlab {
 
-RunSummary run_dan(const Scenario& s, const RunOptions& o);
+// A DAN scenario's run for the loop, its set-up checked (every refusal here, before the
+// run folder is touched).
+std::unique_ptr<SolverRun> make_dan_run(const Scenario& s, const RunOptions& o);
 
 // The solver of a flume scenario's DAN run at t = 0 (its path from the world-joined walls, its
 // release from the release box), without a run folder: tests and scripting.

@@ -371,8 +371,43 @@ std::string setup_kind_of_run(const std::string& run_dir) {
     return make_setup(parse_scenario(read_input_file(path, kMaxScenarioBytes, "scenario file"), path))->kind();
 }
 
+namespace {
+
+// A solver's run whose set-up is checked: its folder, new or resumed from its checkpoint, the
+// one loop with its checkpoints (a signal, --checkpoint-every), and its files at the end.
+RunSummary run_through_loop(const Scenario& s, const RunOptions& o, SolverRun& run) {
+    const std::string dir = o.out_dir, checkpoint_path = dir + "/" + kCheckpointFile;
+    const std::string scenario_text = resolved_toml(s);
+    const std::vector<ScenarioInput> inputs = scenario_inputs(s);
+    std::unique_ptr<RunFolderLock> lock;
+    std::unique_ptr<BinaryReader> restore = open_run_folder(o, scenario_text, inputs, lock, run_inputs(s, o, inputs));
+    std::unique_ptr<InterruptScope> interrupts;
+    if (o.handle_signals) interrupts = std::make_unique<InterruptScope>();
+    double wall_seconds_before = 0.0;
+    if (restore) run.load(*restore, wall_seconds_before);
+    else run.open();
+    const auto t0 = std::chrono::steady_clock::now();
+    auto elapsed = [&] { return wall_seconds_before + std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count(); };
+    RunParts parts = run.parts(o);
+    parts.write_checkpoint = [&] {
+        BinaryWriter out;
+        put_checkpoint_header(out, scenario_text, inputs, run.solver().time(), s.stop.t_max, run.solver().step_count(), o);
+        out.tag("RUN ");
+        run.save(out, elapsed());
+        write_file_atomic(checkpoint_path, seal_checkpoint(out.bytes()));
+    };
+    const std::string stop = run_loop(run.solver(), parts, s, o, run.clock());
+    const RunSummary sum = run.finish(stop, inputs, elapsed());
+    std::filesystem::remove(checkpoint_path);  // the run is complete: nothing to resume
+    lock->release_and_remove();
+    remove_replaced_output(dir);  // a forced run's old folder, now that the new one is complete
+    return sum;
+}
+
+}  // namespace
+
 RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
-    if (s.solver == "dan") return run_dan(s, o);
+    if (s.solver == "dan") return run_through_loop(s, o, *make_dan_run(s, o));
     const std::string dir = o.out_dir;
     const std::string checkpoint_path = dir + "/" + kCheckpointFile;
     const std::string scenario_text = resolved_toml(s);

@@ -1,4 +1,4 @@
-// The run loop both solvers run through (the DEM's run_scenario, DAN's run_dan): it steps the
+// The run loop both solvers run through (run_scenario, run.cpp): it steps the
 // solver, samples the series and takes snapshots on their intervals, stops at stop.t_max,
 // stop.max_steps or rest, shows progress (and calls RunOptions::on_progress), and on a signal
 // or the checkpoint timer writes a checkpoint between two steps. What a solver measures and
@@ -6,9 +6,11 @@
 #pragma once
 #include <functional>
 #include <string>
+#include <vector>
 
 #include "run/run.h"
 #include "run/solver.h"
+#include "scenario/fingerprint.h"
 
 namespace demlab {
 
@@ -31,6 +33,23 @@ struct RunParts {
     // the rest watch and progress every this many steps (the DEM's kinetic energy is summed by
     // its integration: reading it every step would cost)
     int watch_steps = 1;
+};
+
+// One solver's run as the loop sees it: the solver, the parts the loop calls, the loop's
+// clock, the run's own state in a checkpoint, and its files at the end. A continuum solver's
+// run (DAN) is one; run_scenario takes it through the folder, the loop and its checkpoints.
+class SolverRun {
+public:
+    virtual ~SolverRun() = default;
+    virtual Solver& solver() = 0;
+    virtual RunParts parts(const RunOptions& o) = 0;  // (write_checkpoint is the caller's)
+    virtual LoopClock clock() = 0;
+    virtual void open() = 0;                           // a new run's files
+    // the run's state after the loop's clock in a checkpoint, and back (a resume: its files reopened)
+    virtual void save(BinaryWriter& out, double elapsed) = 0;
+    virtual void load(BinaryReader& in, double& elapsed) = 0;
+    // the files and the summary of the finished run
+    virtual RunSummary finish(const std::string& stop_reason, const std::vector<ScenarioInput>& inputs, double wall_seconds) = 0;
 };
 
 // Runs to the stop; returns its reason ("t_max", "max_steps", "rest" or one of after_step's).
