@@ -105,15 +105,9 @@ bool World::centre_range(size_t tr, const PairPassParams& pp) {
     const double dt = dt_;
     const double h = 0.5 * dt;
     const bool rotation_free = def_.rotation.model != 1;
-    const Vec2 g = def_.gravity;
     const Vec2* const pos = pos_.data();
-    const Vec2* const vel = vel_.data();
-    const double* const omega = omega_.data();
     const double* const radius = radius_.data();
-    const double* const inv_mass = inv_mass_.data();
-    const double* const inv_inertia = inv_inertia_.data();
     const int32_t* const material = material_.data();
-    const DiscLoad* const load = load_.data();
     DashSum* const dash = dash_.data();
     DiscContact* const dd = dd_.data();
     const DashpotMode mode = pp.mode;
@@ -121,8 +115,6 @@ bool World::centre_range(size_t tr, const PairPassParams& pp) {
     const bool no_shear_sliding =
         mode == DashpotMode::NoShearWhileSliding || mode == DashpotMode::NoTensionNoShearWhileSliding;
     const CentreConsts consts{dt, h, rotation_free, no_tension, no_shear_sliding};
-    auto centre_vel = [&](size_t d) { return vel[d] + (load[d].force * inv_mass[d] + g) * h; };
-    auto centre_omega = [&](size_t d) { return rotation_free ? omega[d] + load[d].torque * inv_inertia[d] * h : 0.0; };
     CentreBlock& b = *centre_blocks_[tr];
     const CentreDisc* const cd = centre_discs_.data();
     // a candidate pair into the block, kept if it touches
@@ -217,8 +209,27 @@ bool World::centre_range(size_t tr, const PairPassParams& pp) {
         if (b.count == CentreBlock::kSize) add_own();
     }
     if (b.count > 0) add_own();
-    // its wall contacts, with their records (WallSum: one per touching contact, in list
-    // order, among those of open contacts that still dissipate)
+    return centre_walls(tr, consts);
+}
+
+// One range's wall contacts (centre_range's last share): their shifts into dash_ and their
+// records (WallSum: one per touching contact, in list order, among those of open contacts
+// that still dissipate). False: a touching contact without its record.
+bool World::centre_walls(size_t tr, const CentreConsts& k) {
+    const double dt = k.dt, h = k.half_dt;
+    const bool rotation_free = k.rotation_free, no_tension = k.no_tension, no_shear_sliding = k.no_shear_sliding;
+    const Vec2 g = def_.gravity;
+    const Vec2* const pos = pos_.data();
+    const Vec2* const vel = vel_.data();
+    const double* const omega = omega_.data();
+    const double* const radius = radius_.data();
+    const double* const inv_mass = inv_mass_.data();
+    const double* const inv_inertia = inv_inertia_.data();
+    const int32_t* const material = material_.data();
+    const DiscLoad* const load = load_.data();
+    DashSum* const dash = dash_.data();
+    auto centre_vel = [&](size_t d) { return vel[d] + (load[d].force * inv_mass[d] + g) * h; };
+    auto centre_omega = [&](size_t d) { return rotation_free ? omega[d] + load[d].torque * inv_inertia[d] * h : 0.0; };
     const size_t nw = walls_.size();
     const auto& table = tables<LinearLaw>();
     WallSum* const sums = wall_sums_[tr].data();

@@ -345,6 +345,7 @@ private:
     bool disc_friction() const { return with_contact_law(def_.law, [](auto law) { return decltype(law)::kDiscFriction; }); }
     void centre_dashpots(const PairPassParams& pp, const IntegrateConsts& ic);
     bool centre_range(size_t t, const PairPassParams& pp);  // false: a wall contact's record is missing
+    bool centre_walls(size_t t, const CentreConsts& k);     // centre_range's wall contacts
     struct DashSum {  // a disc's shifts, added to its sums before it moves
         Vec2 force{0.0, 0.0};    // N/m
         double torque = 0.0;     // N m/m
