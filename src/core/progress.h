@@ -14,9 +14,10 @@ inline std::atomic<bool> g_progress_muted{false};
 class Progress {
 public:
     // done0, steps0: where a resumed run starts (the rate and ETA count from there)
-    explicit Progress(double total, const char* unit = "s", double done0 = 0.0, long steps0 = 0)
+    // (show: false keeps it silent, for a loop whose caller shows its own)
+    explicit Progress(double total, const char* unit = "s", double done0 = 0.0, long steps0 = 0, bool show = true)
         : total_(total), done0_(done0), steps0_(steps0), unit_(unit),
-          enabled_(isatty(STDERR_FILENO) != 0 && !g_progress_muted), start_(Clock::now()), last_(start_) {}
+          enabled_(show && isatty(STDERR_FILENO) != 0 && !g_progress_muted), start_(Clock::now()), last_(start_) {}
 
     void update(double done, long steps) {
         if (!enabled_) return;

@@ -11,7 +11,7 @@ namespace demlab {
 
 std::string run_loop(Solver& solver, RunParts& parts, const Scenario& s, const RunOptions& o, LoopClock c) {
     const long steps_start = solver.step_count();
-    Progress progress(s.stop.t_max, "s", solver.time(), steps_start);
+    Progress progress(s.stop.t_max, "s", solver.time(), steps_start, parts.show_progress);
     const auto t0 = std::chrono::steady_clock::now();
     // (the first progress call comes at once, at the first check: a script sees the run start,
     // and a run shorter than the call interval still reports while it runs)

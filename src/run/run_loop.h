@@ -33,6 +33,8 @@ struct RunParts {
     // the rest watch and progress every this many steps (the DEM's kinetic energy is summed by
     // its integration: reading it every step would cost)
     int watch_steps = 1;
+    // the loop's progress line on a terminal (a generator settling its mass shows its own)
+    bool show_progress = true;
 };
 
 // One solver's run as the loop sees it: the solver, the parts the loop calls, the loop's

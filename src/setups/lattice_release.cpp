@@ -10,7 +10,7 @@
 #include "core/progress.h"
 #include "core/validate.h"
 #include "dem/world.h"
-#include "setups/settle_chunk.h"
+#include "setups/settle_loop.h"
 #include "setups/release.h"
 
 namespace demlab {
@@ -108,17 +108,14 @@ void settle_lattice(const Scenario& s, const std::vector<WallDef>& walls, Releas
     }
     w.finalize();
     Progress progress(rd.settle_max_time, "s of settling");
-    bool done = false;
-    while (w.time() < rd.settle_max_time) {
-        w.run(settle_chunk(w, rd.settle_max_time));
-        if (pending_interrupt()) throw Interrupted("stopped while the lattice settled, which is not checkpointed");
-        m.settle_ratio = w.unbalanced_force_ratio();
-        progress.update(w.time(), w.step_count());
-        if (w.time() > 0.02 && m.settle_ratio < rd.settle_ratio) {
-            done = true;
-            break;
-        }
-    }
+    SettleRule rule;
+    rule.t_end = rd.settle_max_time;
+    rule.ratio = rd.settle_ratio;
+    rule.interrupted = "stopped while the lattice settled, which is not checkpointed";
+    rule.on_check = [&](double t, long steps, double) { progress.update(t, steps); };
+    const SettleResult settled = settle_through_loop(w, s, rule);
+    m.settle_ratio = settled.ratio;
+    const bool done = settled.settled;
     progress.finish();
     if (!done)
         throw RunError(s.source + ": lattice_release.settle: the lattice did not settle within release.settle_max_time = " +

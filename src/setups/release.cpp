@@ -15,7 +15,7 @@
 #include "core/progress.h"
 #include "core/validate.h"
 #include "dem/world.h"
-#include "setups/settle_chunk.h"
+#include "setups/settle_loop.h"
 
 namespace demlab {
 
@@ -230,24 +230,23 @@ void settle_release(const Scenario& s, const ReleaseBox& box, std::vector<Vec2>&
         }
         w.finalize();
         const double t_phase = 0.5 * rd.settle_max_time;
-        bool done = false;
-        while (w.time() < t_phase) {
-            w.run(settle_chunk(w, t_phase));
-            throw_if_interrupted_in_generation();
+        SettleRule rule;
+        rule.t_end = t_phase;
+        // the frictionless phase only compacts: it may stop at ten times the final ratio
+        rule.ratio = (phase == 0 ? 10.0 : 1.0) * rd.settle_ratio;
+        rule.interrupted = "stopped during the release generation, which is not checkpointed";
+        rule.on_check = [&](double t, long steps, double) {
             // a step so small that settling would not end in any time (an absurd stiffness or
             // density) is refused at once instead of running for ever
-            if (w.step_count() <= 200 && (t_phase - w.time()) / w.dt() > kMaxSettleSteps)
-                throw RunError(s.source + ": settling the release would take " + format_number((t_phase - w.time()) / w.dt()) +
+            if (steps <= 200 && (t_phase - t) / w.dt() > kMaxSettleSteps)
+                throw RunError(s.source + ": settling the release would take " + format_number((t_phase - t) / w.dt()) +
                                " steps of " + format_number(w.dt()) + " s (more than " + format_number(kMaxSettleSteps) +
                                "): material.kn / ks and material.density give an absurdly small time step");
-            m.settle_ratio = w.unbalanced_force_ratio();
-            progress.update(0.5 + 0.25 * phase + 0.25 * std::min(1.0, w.time() / t_phase), w.step_count());
-            // the frictionless phase only compacts: it may stop at ten times the final ratio
-            if (w.time() > 0.02 && m.settle_ratio < (phase == 0 ? 10.0 : 1.0) * rd.settle_ratio) {
-                done = true;
-                break;
-            }
-        }
+            progress.update(0.5 + 0.25 * phase + 0.25 * std::min(1.0, t / t_phase), steps);
+        };
+        const SettleResult settled = settle_through_loop(w, s, rule);
+        m.settle_ratio = settled.ratio;
+        const bool done = settled.settled;
         if (phase == 0) {
             double weight = 0;
             for (double mi : w.masses()) weight += mi * s.world.gravity.norm();
