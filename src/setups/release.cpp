@@ -145,10 +145,8 @@ void refuse_mass_outside_box(const Scenario& s, const ReleaseBox& box, const Pol
                      " at [" + format_number(pos[first].x()) + ", " + format_number(pos[first].y()) + "])" + lid);
 }
 
-void throw_if_interrupted_in_generation() {
-    if (pending_interrupt())
-        throw Interrupted("stopped during the release generation, which is not checkpointed");
-}
+// an interrupt during the generation ends it (not checkpointed)
+const char* const kGenerationInterrupted = "stopped during the release generation, which is not checkpointed";
 }  // namespace
 
 // The radius expansion: the placed discs grown from s0 of their radii to their full size in
@@ -176,16 +174,24 @@ std::vector<Vec2> expand_to_size(const Scenario& s, const ReleaseBox& box, const
         expand.add_wall(w);
     }
     expand.finalize();
-    const int stages = 60, steps_per_stage = 150;
-    for (int k = 1; k <= stages; ++k) {
-        const double sk = s0 + (1.0 - s0) * double(k) / stages;
+    // through the run loop: each stage's radii set before its steps, then 3000 steps to relax
+    // at full size
+    const int stages = 60, steps_per_stage = 150, relax_steps = 3000;
+    int stage = 1;
+    auto grow = [&] {
+        const double sk = s0 + (1.0 - s0) * double(stage) / stages;
         for (size_t i = 0; i < radius.size(); ++i) expand.set_radius(int(i), sk * radius[i]);
         expand.refresh_dashpots();
-        expand.run(steps_per_stage);
-        throw_if_interrupted_in_generation();
-        progress.update(0.5 * double(k) / stages, expand.step_count());
-    }
-    expand.run(3000);  // relax at full size
+    };
+    grow();
+    step_through_loop(expand, s, kGenerationInterrupted, [&]() -> std::string {
+        const long n = expand.step_count();
+        if (n == long(stages) * steps_per_stage + relax_steps) return "expanded";
+        if (stage > stages || n != long(stage) * steps_per_stage) return "";
+        progress.update(0.5 * double(stage) / stages, n);
+        if (++stage <= stages) grow();
+        return "";
+    });
     return expand.positions();
 }
 
@@ -234,7 +240,7 @@ void settle_release(const Scenario& s, const ReleaseBox& box, std::vector<Vec2>&
         rule.t_end = t_phase;
         // the frictionless phase only compacts: it may stop at ten times the final ratio
         rule.ratio = (phase == 0 ? 10.0 : 1.0) * rd.settle_ratio;
-        rule.interrupted = "stopped during the release generation, which is not checkpointed";
+        rule.interrupted = kGenerationInterrupted;
         rule.on_check = [&](double t, long steps, double) {
             // a step so small that settling would not end in any time (an absurd stiffness or
             // density) is refused at once instead of running for ever

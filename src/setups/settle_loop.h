@@ -1,6 +1,6 @@
-// Settling a mass before t = 0 (the release's two phases, the lattice) through the run loop
-// (run/run_loop.h): settling is a stop rule there, checked between chunks of steps, with the
-// loop's stepping, interruption and the generator's progress.
+// Generating and settling a mass before t = 0 (the release's radius expansion and its two
+// settling phases, the lattice) through the run loop (run/run_loop.h): each is a stop rule
+// there, with the loop's stepping and interruption and the generator's progress.
 #pragma once
 #include <functional>
 #include <string>
@@ -24,6 +24,12 @@ struct SettleResult {
     bool settled = false;
     double ratio = 0.0;  // the last check's
 };
+
+// Steps w (finalized) through the run loop until after_step, called after every step, names a
+// stop; the loop's own stops (time, rest, series) out of the way. An interrupt ends it with
+// Interrupted(interrupted): a generation is not checkpointed.
+std::string step_through_loop(World& w, const Scenario& s, const std::string& interrupted,
+                              const std::function<std::string()>& after_step);
 
 // Steps w through the run loop until the rule's ratio or t_end, checking every chunk of
 // steps (settle_chunk: the last chunk no longer than t_end asks), as the generators' own loops
