@@ -82,8 +82,8 @@ inline DashpotWatch pressed_pair(DashpotScheme scheme, long steps) {
     w.add_disc({Vec2(xa, 0.0), r, Vec2::Zero(), 5.0, 0.0, m});
     w.add_disc({Vec2(xb, 0.0), r, Vec2::Zero(), 0.0, 0.0, m});
     for (double x : {xa - r + wall_press, xb + r - wall_press}) {
-        WallDef wall = segment(Vec2(x, -0.1), Vec2(x, 0.1), 0.5);  // the pair rolls along them
-        wall.kn = wall.ks = 1e6;
+        WallDef wall = segment(Vec2(x, -0.1), Vec2(x, 0.1));  // the pair rolls along them
+        wall.material = wall_material(w, 0.5, 1e6);
         w.add_wall(wall);
     }
     w.finalize();
@@ -100,9 +100,9 @@ inline DashpotWatch settling_pack(DashpotScheme scheme, long steps) {
     for (double y = pitch / 2; row < 42; y += pitch * 0.866, ++row)
         for (double x = pitch / 2 + (row % 2) * pitch / 2; x + pitch / 2 < width; x += pitch)
             w.add_disc({Vec2(x, y), 0.0025 + 0.0005 * std::sin(x * 1000 + y * 777), Vec2::Zero(), 0, 0, m});
-    w.add_wall(segment(Vec2(-0.01, 0), Vec2(width + 0.01, 0), 0.5, SegmentSolid::Right));
-    w.add_wall(segment(Vec2(0, 0.4), Vec2(0, -0.01), 0.5, SegmentSolid::Right));
-    w.add_wall(segment(Vec2(width, -0.01), Vec2(width, 0.4), 0.5, SegmentSolid::Right));
+    w.add_wall(segment(w, Vec2(-0.01, 0), Vec2(width + 0.01, 0), 0.5, SegmentSolid::Right));
+    w.add_wall(segment(w, Vec2(0, 0.4), Vec2(0, -0.01), 0.5, SegmentSolid::Right));
+    w.add_wall(segment(w, Vec2(width, -0.01), Vec2(width, 0.4), 0.5, SegmentSolid::Right));
     w.finalize();
     return watch(w, steps, 1000);
 }

@@ -11,18 +11,17 @@
 
 namespace demlab::test {
 
-inline WallDef segment(Vec2 p0, Vec2 p1, double friction = 0.0, SegmentSolid solid = SegmentSolid::Both) {
+// A wall's geometry only (no material: for make_geom, or to be given one).
+inline WallDef segment(Vec2 p0, Vec2 p1, SegmentSolid solid = SegmentSolid::Both) {
     WallDef w;
     w.shape = WallShape::Segment;
     w.p0 = p0;
     w.p1 = p1;
-    w.friction = friction;
     w.segment_solid = solid;
     return w;
 }
 
-inline WallDef arc(Vec2 centre, double radius, double a0_deg, double a1_deg, ArcSolid solid = ArcSolid::Outside,
-                   double friction = 0.0) {
+inline WallDef arc(Vec2 centre, double radius, double a0_deg, double a1_deg, ArcSolid solid = ArcSolid::Outside) {
     WallDef w;
     w.shape = WallShape::Arc;
     w.centre = centre;
@@ -30,7 +29,30 @@ inline WallDef arc(Vec2 centre, double radius, double a0_deg, double a1_deg, Arc
     w.angle_start_deg = a0_deg;
     w.angle_end_deg = a1_deg;
     w.arc_solid = solid;
-    w.friction = friction;
+    return w;
+}
+
+// A wall material of world w: stiffnesses k (a wall's default, 1e8 N/m) and a friction
+// coefficient; its index.
+inline int wall_material(World& w, double friction, double k = 1e8) {
+    MaterialDef m;
+    m.kn = k;
+    m.ks = k;
+    m.friction = friction;
+    return w.add_material(m);
+}
+
+// The same walls with a material of their own added to world w (add the discs' materials first).
+inline WallDef segment(World& world, Vec2 p0, Vec2 p1, double friction = 0.0, SegmentSolid solid = SegmentSolid::Both) {
+    WallDef w = segment(p0, p1, solid);
+    w.material = wall_material(world, friction);
+    return w;
+}
+
+inline WallDef arc(World& world, Vec2 centre, double radius, double a0_deg, double a1_deg, ArcSolid solid = ArcSolid::Outside,
+                   double friction = 0.0) {
+    WallDef w = arc(centre, radius, a0_deg, a1_deg, solid);
+    w.material = wall_material(world, friction);
     return w;
 }
 

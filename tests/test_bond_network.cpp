@@ -99,8 +99,10 @@ Block square_block(bool bonded) {
     floor.p0 = Vec2(-5.0, 0.0);
     floor.p1 = Vec2(50.0, 0.0);
     floor.segment_solid = SegmentSolid::Right;
-    floor.kn = floor.ks = 1e6;
-    floor.friction = 0.32492;
+    MaterialDef sheet;
+    sheet.kn = sheet.ks = 1e6;
+    sheet.friction = 0.32492;
+    floor.material = b.w->add_material(sheet);
     b.w->add_wall(floor);
     std::vector<Vec2> p;
     for (int j = 0; j < 6; ++j)

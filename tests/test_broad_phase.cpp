@@ -71,9 +71,9 @@ std::unique_ptr<World> random_flying_world(unsigned seed, size_t count, double r
         radii.push_back(r);
         w->add_disc({p, r, Vec2(uniform(rng, -v_max, v_max), uniform(rng, -v_max, v_max)), 0, 0, m});
     }
-    w->add_wall(segment(Vec2(-0.05, 0.02), Vec2(0.3, 0.0), 0.3, SegmentSolid::Right));
-    w->add_wall(arc(Vec2(0.075, 0.35), 0.34, 200, 340, ArcSolid::Outside, 0.3));
-    w->add_wall(segment(Vec2(0.0, 0.3), Vec2(0.0, -0.1), 0.3, SegmentSolid::Right));
+    w->add_wall(segment(*w, Vec2(-0.05, 0.02), Vec2(0.3, 0.0), 0.3, SegmentSolid::Right));
+    w->add_wall(arc(*w, Vec2(0.075, 0.35), 0.34, 200, 340, ArcSolid::Outside, 0.3));
+    w->add_wall(segment(*w, Vec2(0.0, 0.3), Vec2(0.0, -0.1), 0.3, SegmentSolid::Right));
     w->finalize();
     return w;
 }
@@ -206,7 +206,7 @@ TEST(BroadPhase, WallPiecesOfThreeDiametersKeepFewDiscWallCandidates) {
         const int m = w->add_material(material(0.3));
         const double slope = 29.0 * M_PI / 180.0, r = 0.0015;
         const Vec2 down(std::cos(slope), -std::sin(slope)), up(std::sin(slope), std::cos(slope));
-        w->add_wall(segment(Vec2(0, 0), 2.0 * down, 0.3, SegmentSolid::Right));
+        w->add_wall(segment(*w, Vec2(0, 0), 2.0 * down, 0.3, SegmentSolid::Right));
         for (int row = 0; row < 6; ++row)
             for (int k = 0; k < 200; ++k)
                 w->add_disc({(0.1 + 0.0031 * k) * down + (r + 0.0031 * row) * up, r, Vec2::Zero(), 0, 0, m});
@@ -343,7 +343,7 @@ TEST(BroadPhase, GroupedQueriesGiveTheSameCandidateLists) {
         radius.push_back(uniform(rng, 0.001, r_max));
         vel.emplace_back(uniform(rng, -3.0, 3.0), uniform(rng, -3.0, 3.0));
     }
-    const std::vector<WallGeom> walls = {make_geom(segment(Vec2(-0.01, -0.002), Vec2(0.17, -0.002), 0.3, SegmentSolid::Right))};
+    const std::vector<WallGeom> walls = {make_geom(segment(Vec2(-0.01, -0.002), Vec2(0.17, -0.002), SegmentSolid::Right))};
     const std::vector<uint8_t> active = {1}, moving = {0};
     BroadPhase one, grouped;
     one.set_query_group(1);

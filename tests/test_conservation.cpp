@@ -67,10 +67,10 @@ World box_of_discs(int n, double beta, double mu, unsigned seed, bool gravity, b
         w.add_disc({p, r, Vec2(uniform(rng, -1, 1), uniform(rng, -1, 1)), uniform(rng, -50, 50), 0.0, m});
     }
     if (walls) {
-        w.add_wall(segment(Vec2(0, 0), Vec2(0.2, 0), mu, SegmentSolid::Right));
-        w.add_wall(segment(Vec2(0.2, 0), Vec2(0.2, 0.2), mu, SegmentSolid::Right));
-        w.add_wall(segment(Vec2(0.2, 0.2), Vec2(0, 0.2), mu, SegmentSolid::Right));
-        w.add_wall(segment(Vec2(0, 0.2), Vec2(0, 0), mu, SegmentSolid::Right));
+        w.add_wall(segment(w, Vec2(0, 0), Vec2(0.2, 0), mu, SegmentSolid::Right));
+        w.add_wall(segment(w, Vec2(0.2, 0), Vec2(0.2, 0.2), mu, SegmentSolid::Right));
+        w.add_wall(segment(w, Vec2(0.2, 0.2), Vec2(0, 0.2), mu, SegmentSolid::Right));
+        w.add_wall(segment(w, Vec2(0, 0.2), Vec2(0, 0), mu, SegmentSolid::Right));
     }
     w.set_dt(2e-6);
     w.finalize();

@@ -25,7 +25,7 @@ double wall_restitution(double beta) {
     const int m = w.add_material(material(0.3));
     const double r = 0.0015;
     w.add_disc({Vec2(0.0, r + 1e-6), r, Vec2(0.0, -1.0), 0.0, 0.0, m});
-    w.add_wall(segment(Vec2(-0.1, 0.0), Vec2(0.1, 0.0)));
+    w.add_wall(segment(w, Vec2(-0.1, 0.0), Vec2(0.1, 0.0)));
     // contact duration pi sqrt(m / k); resolve it with ~2000 steps
     const double mass = 2672.0 * kPi * r * r;
     const double duration = kPi * std::sqrt(mass / 5e7);

@@ -40,7 +40,7 @@ double wall_restitution(double beta, DashpotScheme scheme, double steps_per_cont
     const int m = w.add_material(material(0.3, kK, kRho));
     const double r = 0.0015;
     w.add_disc({Vec2(0.0, r + 1e-6), r, Vec2(0.0, -1.0), 0.0, 0.0, m});
-    w.add_wall(segment(Vec2(-0.1, 0.0), Vec2(0.1, 0.0)));
+    w.add_wall(segment(w, Vec2(-0.1, 0.0), Vec2(0.1, 0.0)));
     const double mass = kRho * kPi * r * r;
     const double k = 0.5 * kK;  // disc and wall in series
     if (steps_per_contact > 0) w.set_dt(kPi * std::sqrt(mass / k) / steps_per_contact);

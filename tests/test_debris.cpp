@@ -54,6 +54,7 @@ void floor_wall(World& w, double x0 = -50.0, double x1 = 500.0) {
     WallDef f;
     f.p0 = Vec2(x0, 0.0);
     f.p1 = Vec2(x1, 0.0);
+    f.material = demlab::test::wall_material(w, 0.39789);  // unused by the DEBRIS law, as any wall's
     w.add_wall(f);
 }
 
@@ -293,6 +294,7 @@ void box_walls(World& w) {
         WallDef wd;
         wd.p0 = a;
         wd.p1 = b;
+        wd.material = demlab::test::wall_material(w, 0.39789);
         w.add_wall(wd);
     }
 }
@@ -651,6 +653,7 @@ double piston_ledger_error(double dt) {
     piston.p0 = Vec2(-1.05, -5.0);
     piston.p1 = Vec2(-1.05, 5.0);
     piston.velocity = Vec2(2.0, 0.0);
+    piston.material = demlab::test::wall_material(w, 0.39789);
     w.add_wall(piston);
     w.finalize();
     w.set_dt(dt);

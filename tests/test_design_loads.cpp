@@ -54,7 +54,7 @@ double every_step_peak(double beta, double steps_per_contact, double& expected) 
     const double kn = 1e8, rho = 2672.0, r = 0.002, v0 = 2.0;
     const int mat = w.add_material(material(0.0, kn, rho));
     w.add_disc({Vec2(r + 1e-6, 0.0), r, Vec2(-v0, 0.0), 0.0, 0.0, mat});
-    w.add_wall(segment(Vec2(0.0, 0.1), Vec2(0.0, -0.1)));
+    w.add_wall(segment(w, Vec2(0.0, 0.1), Vec2(0.0, -0.1)));
     const double m = rho * kPi * r * r, k = 0.5 * kn;  // disc and wall in series
     w.set_dt(kPi * std::sqrt(m / k) / steps_per_contact);
     w.finalize();

@@ -55,7 +55,7 @@ void floor_wall(World& w, double friction = 0.3) {
     WallDef f;
     f.p0 = Vec2(-5.0, 0.0);
     f.p1 = Vec2(5.0, 0.0);
-    f.friction = friction;
+    f.material = test::wall_material(w, friction);
     w.add_wall(f);
 }
 
@@ -203,7 +203,7 @@ TEST(Hertz, UndampedGasKeepsItsEnergy) {
             WallDef wd;
             wd.p0 = a;
             wd.p1 = b;
-            wd.friction = 0.0;
+            wd.material = test::wall_material(w, 0.0);
             w.add_wall(wd);
         }
         w.finalize();

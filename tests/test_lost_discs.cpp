@@ -37,8 +37,10 @@ void add_ledge(World& w) {
     WallDef floor;
     floor.p0 = Vec2(0, 0);
     floor.p1 = Vec2(1, 0);
-    floor.kn = floor.ks = 1e6;
-    floor.friction = 0.3;
+    MaterialDef sheet;
+    sheet.kn = sheet.ks = 1e6;
+    sheet.friction = 0.3;
+    floor.material = w.add_material(sheet);
     w.add_wall(floor);
 }
 

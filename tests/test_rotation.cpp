@@ -28,7 +28,7 @@ World spinning_disc(int model, RollingForm form, double omega0, double r, double
     const double mass = 2672.0 * kPi * r * r;
     const double overlap = mass * 9.81 / 5e7;
     w.add_disc({Vec2(0.0, r - overlap), r, Vec2::Zero(), omega0, 0.0, m});
-    w.add_wall(segment(Vec2(-1, 0), Vec2(1, 0), 0.0, SegmentSolid::Right));
+    w.add_wall(segment(w, Vec2(-1, 0), Vec2(1, 0), 0.0, SegmentSolid::Right));
     w.set_dt(1e-6);
     w.finalize();
     return w;
@@ -113,7 +113,7 @@ TEST(RotationModels, Model1KeepsOmegaZero) {
     World w(def);
     const int m = w.add_material(material(0.5));
     w.add_disc({Vec2(0, 0.001), 0.001, Vec2(1.0, 0.0), 50.0, 0.0, m});
-    w.add_wall(segment(Vec2(-1, 0), Vec2(1, 0), 0.5));
+    w.add_wall(segment(w, Vec2(-1, 0), Vec2(1, 0), 0.5));
     w.finalize();
     w.run(2000);
     EXPECT_EQ(w.omegas()[0], 0.0);

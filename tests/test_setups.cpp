@@ -36,7 +36,7 @@ using demlab::test::temp_dir;
 namespace fs = std::filesystem;
 
 namespace {
-WallGeom seg(Vec2 a, Vec2 b) { return make_geom(test::segment(a, b, 0.0, SegmentSolid::Right)); }
+WallGeom seg(Vec2 a, Vec2 b) { return make_geom(test::segment(a, b, SegmentSolid::Right)); }
 
 // removed when the test's variable goes out of scope
 test::TempFile write_temp(const std::string& name, const std::string& text) { return test::TempFile(name, text); }
@@ -265,7 +265,7 @@ TEST(TerrainProfile, BarrierStandsOnTheProfile) {
     EXPECT_EQ(setup->force_walls().slope, (std::vector<int>{0, 1}));
     WorldDef d;
     World w(d);
-    w.add_material(MaterialDef{});
+    for (const MaterialDef& m : scenario_materials(s)) w.add_material(m);
     for (const WallDef& wd : setup->walls()) w.add_wall(wd);
     w.add_disc({{0.2, 0.9}, 0.05, Vec2::Zero(), 0.0, 0.0, 0});
     w.finalize();

@@ -35,7 +35,7 @@ InclineResult incline(double theta_deg, double mu, int model, DashpotMode mode =
     // start at the static overlap, so the normal spring starts in equilibrium
     const double overlap = mass * 9.81 * std::cos(th) / 5e7;
     w.add_disc({normal * (r - overlap), r, Vec2::Zero(), 0.0, 0.0, m});
-    WallDef slope = segment(-2.0 * down, 3.0 * down, mu, SegmentSolid::Right);
+    WallDef slope = segment(w, -2.0 * down, 3.0 * down, mu, SegmentSolid::Right);
     w.add_wall(slope);
     w.set_dt(2e-6);
     w.finalize();

@@ -47,7 +47,7 @@ TEST(TimeStep, SumsTheStiffnessOfCurrentContacts) {
     // the big disc rests on the floor beside the small one, overlapping it by 0.1 um
     const double dy = (big - 1e-7) - (r - 1e-7), reach = r + big - 1e-7;
     w.add_disc({Vec2(std::sqrt(reach * reach - dy * dy), big - 1e-7), big, Vec2::Zero(), 0, 0, m});
-    w.add_wall(segment(Vec2(-1, 0), Vec2(1, 0), 0.3));
+    w.add_wall(segment(w, Vec2(-1, 0), Vec2(1, 0), 0.3));
     w.finalize();
     const double m_small = 2672.0 * kPi * r * r;
     const double m_big = 2672.0 * kPi * big * big;
@@ -79,8 +79,8 @@ TEST(TimeStep, ThesisDampingIsStableWithFreeRotation) {
     for (double y = pitch / 2; y < 0.1; y += pitch * 0.866, ++row)
         for (double x = pitch / 2 + (row % 2) * pitch / 2; x + pitch / 2 < 0.06; x += pitch)
             w.add_disc({Vec2(x, y), 0.0025 + 0.0005 * std::sin(x * 1000 + y * 777), Vec2::Zero(), 0, 0, m});
-    w.add_wall(segment(Vec2(-0.01, 0), Vec2(0.3, 0), 0.4, SegmentSolid::Right));
-    w.add_wall(segment(Vec2(0, 0.2), Vec2(0, -0.01), 0.4, SegmentSolid::Right));
+    w.add_wall(segment(w, Vec2(-0.01, 0), Vec2(0.3, 0), 0.4, SegmentSolid::Right));
+    w.add_wall(segment(w, Vec2(0, 0.2), Vec2(0, -0.01), 0.4, SegmentSolid::Right));
     w.finalize();
     EXPECT_NO_THROW(while (w.time() < 0.15) w.step());
     const EnergyReport e = w.energy();

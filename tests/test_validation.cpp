@@ -59,15 +59,17 @@ TEST(Validation, DiscsAndMaterials) {
 
 TEST(Validation, Walls) {
     World w;
-    expect_refused([&] { w.add_wall(segment(Vec2(1, 1), Vec2(1, 1))); }, {"zero-length segment"});
-    expect_refused([&] { w.add_wall(arc(Vec2(0, 0), 0.0, 0, 90)); }, {"radius", "> 0"});
-    expect_refused([&] { w.add_wall(arc(Vec2(0, 0), 1.0, 30, 30)); }, {"zero extent", "(0, 360]"});
+    expect_refused([&] { w.add_wall(segment(w, Vec2(1, 1), Vec2(1, 1))); }, {"zero-length segment"});
+    expect_refused([&] { w.add_wall(arc(w, Vec2(0, 0), 0.0, 0, 90)); }, {"radius", "> 0"});
+    expect_refused([&] { w.add_wall(arc(w, Vec2(0, 0), 1.0, 30, 30)); }, {"zero extent", "(0, 360]"});
+    // a wall's stiffness and friction are its material's, checked as a disc's
     WallDef bad = segment(Vec2(0, 0), Vec2(1, 0));
-    bad.kn = 0.0;
-    expect_refused([&] { w.add_wall(bad); }, {"kn", "> 0"});
-    bad = segment(Vec2(0, 0), Vec2(1, 0), -0.2);
-    expect_refused([&] { w.add_wall(bad); }, {"friction", ">= 0"});
-    bad = segment(Vec2(0, 0), Vec2(1, kNaN));
+    expect_refused([&] { w.add_wall(bad); }, {"material = -1", "no such material"});
+    bad.material = 99;
+    expect_refused([&] { w.add_wall(bad); }, {"material = 99", "no such material"});
+    expect_refused([&] { wall_material(w, 0.3, 0.0); }, {"kn", "> 0"});
+    expect_refused([&] { wall_material(w, -0.2); }, {"friction", ">= 0"});
+    bad = segment(w, Vec2(0, 0), Vec2(1, kNaN));
     expect_refused([&] { w.add_wall(bad); }, {"p1", "finite"});
 }
 
@@ -155,7 +157,7 @@ TEST(BlowUp, TooLargeATimeStepStopsWithADiagnosis) {
     const int m = w.add_material(material(0.3));
     w.add_disc({Vec2(0, 0.0011), 0.001, Vec2(0, -2.0), 0, 0, m});
     w.add_disc({Vec2(0, 0.0035), 0.001, Vec2(0, -2.0), 0, 0, m});
-    w.add_wall(segment(Vec2(-1, 0), Vec2(1, 0), 0.3, SegmentSolid::Right));
+    w.add_wall(segment(w, Vec2(-1, 0), Vec2(1, 0), 0.3, SegmentSolid::Right));
     w.finalize();
     try {
         w.run(1000);

@@ -15,7 +15,7 @@ TEST(ArcWall, DiscAtTheBottomCarriesExactlyItsWeight) {
     World w(def);
     const int m = w.add_material(material(0.4));
     const double R = 0.1, r = 0.003;
-    w.add_wall(arc(Vec2(0, R), R, 200, 340, ArcSolid::Outside, 0.4));
+    w.add_wall(arc(w, Vec2(0, R), R, 200, 340, ArcSolid::Outside, 0.4));
     // a little off the bottom, so it has to roll back and settle
     w.add_disc({Vec2(0.01, R - std::sqrt((R - r) * (R - r) - 0.0001)), r, Vec2::Zero(), 0, 0, m});
     w.finalize();
@@ -40,9 +40,9 @@ TEST(ArcWall, SlidingAcrossTangentJointsHasNoForceSpike) {
     const Vec2 a_end = c + R * Vec2(std::cos(deg_to_rad(300)), std::sin(deg_to_rad(300)));
     const Vec2 down(std::cos(th), -std::sin(th)), up(std::cos(th), std::sin(th));
     // the slope's end 0.3 mm off the arc's start: joined (snapped) by the joint tolerance
-    w.add_wall(segment(a_start - 0.3 * down, a_start + Vec2(0.0003, 0), 0.0, SegmentSolid::Right));
-    w.add_wall(arc(c, R, 240, 300));
-    w.add_wall(segment(a_end, a_end + 0.3 * up, 0.0, SegmentSolid::Right));
+    w.add_wall(segment(w, a_start - 0.3 * down, a_start + Vec2(0.0003, 0), 0.0, SegmentSolid::Right));
+    w.add_wall(arc(w, c, R, 240, 300));
+    w.add_wall(segment(w, a_end, a_end + 0.3 * up, 0.0, SegmentSolid::Right));
     const double r = 0.003, mass = 2672.0 * kPi * r * r, g = 9.81;
     const Vec2 nrm_slope(std::sin(th), std::cos(th));
     const double overlap = mass * g * std::cos(th) / 5e7;
@@ -121,10 +121,10 @@ TEST(MovingWalls, RemovedGateReleasesAndLiftedGateMoves) {
     World w(def);
     const int m = w.add_material(material(0.3));
     w.add_disc({Vec2(0.0, 0.0), 0.005, Vec2(1.0, 0.0), 0, 0, m});
-    WallDef gate = segment(Vec2(0.0052, -0.1), Vec2(0.0052, 0.1));
+    WallDef gate = segment(w, Vec2(0.0052, -0.1), Vec2(0.0052, 0.1));
     gate.remove_at = 0.001;
     w.add_wall(gate);
-    WallDef lifter = segment(Vec2(-0.5, -0.1), Vec2(-0.5, 0.1));
+    WallDef lifter = segment(w, Vec2(-0.5, -0.1), Vec2(-0.5, 0.1));
     lifter.velocity = Vec2(0.0, 2.25);
     w.add_wall(lifter);
     w.set_gravity(Vec2::Zero());
@@ -137,6 +137,7 @@ TEST(MovingWalls, RemovedGateReleasesAndLiftedGateMoves) {
     const int m2 = w2.add_material(material(0.3));
     w2.add_disc({Vec2(0.0, 0.0), 0.005, Vec2(1.0, 0.0), 0, 0, m2});
     gate.remove_at = 0.0;
+    gate.material = wall_material(w2, 0.0);
     w2.add_wall(gate);
     w2.set_gravity(Vec2::Zero());
     w2.finalize();

@@ -22,7 +22,7 @@ EnergyReport World::energy_with() const {
     const size_t blocks = disc_blocks + (nc + kEnergyBlock - 1) / kEnergyBlock;
     energy_blocks_.assign(blocks, EnergyBlock{});
     const Vec2 g = def_.gravity;
-    const size_t nm = materials_.size(), nw = walls_.size();
+    const size_t nm = disc_materials_, nw = walls_.size();
     // Where the contacts' elastic energy is taken. The kinetic energy is that of v(t - dt/2);
     // U at x(t) differs from U at t - dt/2 by (dt/2) dU/dt, first order in the step: the
     // undamped DEBRIS box of Debris.ConservesEnergy with fixed steps of 2e-4 and 1e-4 s drifted

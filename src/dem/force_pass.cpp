@@ -161,7 +161,7 @@ void World::compute_forces_with(bool then_integrate) {
     const bool centred = then_integrate && centred_dashpots();
     const bool fused = then_integrate && !centred;
     const PassContext<Law> ctx{DiscArrays{pos_.data(), vel_.data(), radius_.data(), omega_.data(), material_.data()},
-                          PairPassParamsT<typename Law::Params>{tables<Law>().disc_disc.data(), materials_.size(),
+                          PairPassParamsT<typename Law::Params>{tables<Law>().disc_disc.data(), disc_materials_,
                                                                 def_.damping.dp_mode, dt_, last_dt_, def_.max_overlap_ratio},
                           fused ? integrate_prepare() : IntegrateConsts{},
                           fused,

@@ -85,7 +85,7 @@ void World::integrate_discs(size_t begin, size_t end, int chunk, const Integrate
                                      mass_.data(),     inv_mass_.data(),     inertia_.data(),     inv_inertia_.data(),
                                      radius_.data(),   rr_factor_.data(),    material_.data(),    load_.data(),
                                      broad_.fat_lo_data(), broad_.fat_hi_data(), default_k_tran_.data(),
-                                     default_k_rot_.data(), materials_.size()};
+                                     default_k_rot_.data(), disc_materials_};
         const RotationDef& rot = def_.rotation;
         const IntegrateParams params{k.dt,          k.g,          k.alpha,      k.g_abs,         rot.model, rot.rolling_form == RollingForm::Literal,
                                      rot.mu_br,     k.auto_dt,    k.dtf.rotation_free, k.dtf.phi_sq, k.dtf.phi_t_sq,

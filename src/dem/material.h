@@ -1,14 +1,19 @@
-// Disc material and the rules that combine two bodies' properties into one contact.
+// A material (of discs or of walls) and the rules that combine two bodies' properties into
+// one contact.
 #pragma once
 #include <string>
 
 namespace demlab {
 
-// A disc material. Discs have unit thickness (1 m, as PFC2D): m = rho pi r^2, I = m r^2 / 2.
+// A material. Discs and walls both refer to one by its index in the world (World::add_material;
+// DiscDef::material, WallDef::material). Discs have unit thickness (1 m, as PFC2D):
+// m = rho pi r^2, I = m r^2 / 2. A wall's material gives the wall's own stiffnesses, in series
+// with the disc's, and its friction coefficient; its density is not used (a wall is of
+// infinite mass), though it is validated as a disc's.
 struct MaterialDef {
-    double density = 2672.0;        // kg/m3, quartz sand (Table 15)
-    double kn = 1.0e8;              // N/m, the disc's own normal stiffness (two in series per contact)
-    double ks = 1.0e8;              // N/m, the disc's own shear stiffness
+    double density = 2672.0;        // kg/m3, quartz sand (Table 15); not used for a wall
+    double kn = 1.0e8;              // N/m, the body's own normal stiffness (two in series per contact)
+    double ks = 1.0e8;              // N/m, the body's own shear stiffness
     double friction = 0.27732;      // -, Coulomb coefficient; tan(15.5 deg), the calibrated disc-disc angle
 };
 

@@ -88,7 +88,11 @@ int World::add_disc(const DiscDef& d) {
 }
 
 int World::add_wall(const WallDef& w) {
-    validate(w, w.name.empty() ? "wall[" + std::to_string(walls_.size()) + "]" : "wall '" + w.name + "'");
+    const std::string where = w.name.empty() ? "wall[" + std::to_string(walls_.size()) + "]" : "wall '" + w.name + "'";
+    validate(w, where);
+    if (w.material < 0 || size_t(w.material) >= materials_.size())
+        throw InputError(where + ".material = " + std::to_string(w.material) + ": no such material (" +
+                         std::to_string(materials_.size()) + " defined; a wall refers to one added by add_material)");
     if (finalized_) throw InputError("walls must be added before finalize()");
     walls_.push_back(w);
     return int(walls_.size()) - 1;
@@ -123,7 +127,7 @@ void World::refresh_dashpots() {
 
 template <typename Law>
 void World::refresh_dashpots_with() {
-    const size_t nm = materials_.size(), nw = walls_.size();
+    const size_t nm = disc_materials_, nw = walls_.size();
     cross_copies_stale_ = true;
     const double beta_n = def_.damping.beta_n, beta_s = def_.damping.beta_s;
     for (DiscContact& c : dd_) {
@@ -216,7 +220,7 @@ void World::join_wall_ends() {
 // stiffness a disc without contacts takes for its step.
 template <typename Law>
 void World::build_law_tables() {
-    const size_t nw = walls_.size(), nm = materials_.size();
+    const size_t nw = walls_.size(), nm = disc_materials_;
     LawTables<Law>& t = tables<Law>();
     t.disc_disc.resize(nm * nm);
     for (size_t a = 0; a < nm; ++a)
@@ -225,7 +229,8 @@ void World::build_law_tables() {
     t.disc_wall.resize(nm * nw);
     for (size_t a = 0; a < nm; ++a)
         for (size_t w = 0; w < nw; ++w)
-            t.disc_wall[a * nw + w] = Law::wall_params(materials_[a], walls_[w], def_.friction_rule_disc_wall);
+            t.disc_wall[a * nw + w] =
+                Law::wall_params(materials_[a], materials_[size_t(walls_[w].material)], def_.friction_rule_disc_wall);
     default_k_tran_.resize(nm);
     default_k_rot_.resize(nm);
     for (size_t m = 0; m < nm; ++m) {
@@ -238,6 +243,8 @@ void World::finalize() {
     if (finalized_) return;
     validate(def_, "world");
     if (materials_.empty()) add_material(MaterialDef{});
+    disc_materials_ = 1;
+    for (const int32_t m : material_) disc_materials_ = std::max(disc_materials_, size_t(m) + 1);
     const size_t n = pos_.size();
     double r_min = 0.0;
     if (n > 0) r_min = *std::min_element(radius_.begin(), radius_.end());
@@ -312,7 +319,7 @@ void World::refresh_contacts() {
 
 template <typename Law>
 void World::refresh_contacts_with() {
-    const size_t nm = materials_.size(), nw = walls_.size();
+    const size_t nm = disc_materials_, nw = walls_.size();
     const auto& keys = broad_.disc_pairs();
     // The new list has one contact per key, in key order: contact m is key m's, so the
     // threads can each take a part of the keys and find where to read the old list by a

@@ -147,6 +147,10 @@ public:
     ~World();
     World(World&&) noexcept;
 
+    // A material of discs or of walls; its index is what DiscDef::material and
+    // WallDef::material refer to. Add the discs' materials first: the disc-disc tables cover
+    // the materials up to the last one a disc has (disc_materials_), a wall's material after
+    // them only its disc-wall entries.
     int add_material(const MaterialDef& m);
     int add_disc(const DiscDef& d);
     int add_wall(const WallDef& w);
@@ -424,6 +428,11 @@ private:
     long steps_ = 0;
 
     std::vector<MaterialDef> materials_;
+    // The materials the discs may have: [0, disc_materials_), from finalize() (1 + the
+    // largest a disc has, at least 1). The disc-disc tables are disc_materials_ square, the
+    // disc-wall tables disc_materials_ rows of a wall each, and the kernels' n_materials is
+    // it (1: every disc reads entry 0, whatever the walls' materials).
+    size_t disc_materials_ = 1;
     // every registered law's parameter tables; the chosen law's are filled by finalize()
     AllLawTables law_tables_;
     template <typename Law>

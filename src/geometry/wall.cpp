@@ -15,9 +15,6 @@ static double arc_extent_rad(double start_deg, double end_deg) {
 }
 
 void validate(const WallDef& w, const std::string& where) {
-    require_positive(where + ".kn", w.kn, "N/m");
-    require_positive(where + ".ks", w.ks, "N/m");
-    require_non_negative(where + ".friction", w.friction, "(coefficient)");
     require_finite(where + ".velocity", w.velocity, "m/s");
     require_finite(where + ".move_from", w.move_from, "s");
     if (std::isnan(w.move_until)) throw InputError(where + ".move_until: must be a time in s or never");

@@ -40,10 +40,10 @@ struct WallDef {
     double angle_start_deg = 0.0;           // deg
     double angle_end_deg = 0.0;             // deg, the arc's extent is (end - start) mod 360, in (0, 360]
     ArcSolid arc_solid = ArcSolid::Outside;
-    // material
-    double kn = 1.0e8;                      // N/m, the wall's own normal stiffness (in series with the disc's)
-    double ks = 1.0e8;                      // N/m, the wall's own shear stiffness
-    double friction = 0.39789;              // -, tan(21.7 deg): sand on the zinc-coated sheet
+    // the wall's material: its index in the world (World::add_material), as a disc's; its
+    // kn, ks and friction are the wall's own (in series with, and combined with, the disc's).
+    // -1: none given, refused by World::add_wall.
+    int material = -1;
     // motion
     Vec2 velocity{0.0, 0.0};                // m/s, prescribed translation velocity
     double move_from = 0.0;                 // s, the velocity applies from this time ...
@@ -53,8 +53,8 @@ struct WallDef {
     EndCap cap_end = EndCap::Auto;
 };
 
-// Refuses a zero-length segment, an arc of zero radius or zero extent, non-finite numbers,
-// non-positive stiffness, negative friction.
+// Refuses a zero-length segment, an arc of zero radius or zero extent, non-finite numbers.
+// (The wall's material is checked by the world it is added to.)
 void validate(const WallDef& w, const std::string& where);
 
 // The wall's geometry as the contact loop uses it (all derived from WallDef and the wall's

@@ -39,7 +39,7 @@ DanPath flume_dan_path(const Scenario& s) {
     WorldDef def = s.world;
     def.threads = 1;
     World w(def);
-    w.add_material(s.disc);
+    for (const MaterialDef& m : scenario_materials(s)) w.add_material(m);
     const std::vector<WallDef> walls = setup->walls();
     for (int k = 0; k <= kW3; ++k) w.add_wall(walls[size_t(k)]);
     // one disc far above the slope's start, so the world finalizes; it takes no part

@@ -178,7 +178,8 @@ World build_world(const Scenario& s, const Setup& setup, const ReleaseMass& mass
                                  format_number(p.y()) + "] lies outside it: the domain must hold every disc at t = 0");
     }
     World w(def);
-    const int mat = w.add_material(s.disc);
+    for (const MaterialDef& m : scenario_materials(s)) w.add_material(m);
+    const int mat = kDiscMaterial;
     for (size_t i = 0; i < mass.pos.size(); ++i) {
         w.add_disc({mass.pos[i], mass.radius[i], Vec2::Zero(), 0.0, 0.0, mat});
         layer.push_back(mass.layer[i]);

@@ -223,8 +223,8 @@ void add_scenario_and_material_keys(std::vector<Key>& k) {
     k.push_back(real("material.ks", "N/m", "disc shear stiffness (Table 15: 1e8)", [](Scenario& s) -> double& { return s.disc.ks; }, 0, 1e15, true));
     k.push_back(real("material.friction_disc_deg", "deg", "disc-disc friction angle (calibrated on the dam break: 15.5)", [](Scenario& s) -> double& { return s.disc_friction_deg; }, 0, 89));
     k.push_back(real("material.friction_wall_deg", "deg", "disc-wall friction angle (basal angle on the zinc-coated sheet: 21.7)", [](Scenario& s) -> double& { return s.wall_friction_deg; }, 0, 89));
-    k.push_back(real("material.wall_kn", "N/m", "wall normal stiffness (same as discs unless set)", [](Scenario& s) -> double& { return s.wall_kn; }, 0, 1e15, true));
-    k.push_back(real("material.wall_ks", "N/m", "wall shear stiffness", [](Scenario& s) -> double& { return s.wall_ks; }, 0, 1e15, true));
+    k.push_back(real("material.wall_kn", "N/m", "wall normal stiffness (same as discs unless set)", [](Scenario& s) -> double& { return s.wall.kn; }, 0, 1e15, true));
+    k.push_back(real("material.wall_ks", "N/m", "wall shear stiffness", [](Scenario& s) -> double& { return s.wall.ks; }, 0, 1e15, true));
     k.push_back(choice<FrictionRule>("material.friction_rule_disc_disc", "which coefficient a disc-disc contact takes (PFC: min)", [](Scenario& s) -> FrictionRule& { return s.world.friction_rule_disc_disc; }, {{"min", FrictionRule::Min}, {"max", FrictionRule::Max}}));
     k.push_back(choice<FrictionRule>("material.friction_rule_disc_wall", "which coefficient a disc-wall contact takes (thesis 4.3.2: max)", [](Scenario& s) -> FrictionRule& { return s.world.friction_rule_disc_wall; }, {{"min", FrictionRule::Min}, {"max", FrictionRule::Max}}));
 }

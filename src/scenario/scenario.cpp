@@ -42,8 +42,10 @@ Vec2 read_bounded_vec2(const toml::node& n, const std::string& where, const std:
 
 // ---------------------------------------------------------------- [[walls]] and [[discs]]
 
-WallDef read_wall(const toml::table& t, const std::string& file, size_t index) {
+// A [[walls]] entry and its own material (kn, ks, friction_deg as a coefficient).
+WallDef read_wall(const toml::table& t, const std::string& file, size_t index, MaterialDef& mat) {
     WallDef w;
+    mat = MaterialDef{};
     w.name = "walls[" + std::to_string(index) + "]";
     const std::vector<std::string> names = {"name", "type", "start", "end", "solid", "centre", "radius", "start_deg",
                                             "end_deg", "kn", "ks", "friction_deg", "velocity", "move_from",
@@ -92,8 +94,8 @@ WallDef read_wall(const toml::table& t, const std::string& file, size_t index) {
         }
         else if (key == "start_deg") w.angle_start_deg = num("deg", -360, 720, false);
         else if (key == "end_deg") w.angle_end_deg = num("deg", -360, 720, false);
-        else if (key == "kn") w.kn = num("N/m", 0, 1e15, true);
-        else if (key == "ks") w.ks = num("N/m", 0, 1e15, true);
+        else if (key == "kn") mat.kn = num("N/m", 0, 1e15, true);
+        else if (key == "ks") mat.ks = num("N/m", 0, 1e15, true);
         else if (key == "friction_deg") friction_deg = num("deg", 0, 89, false);
         else if (key == "velocity") w.velocity = read_bounded_vec2(node, where, "m/s", kMaxSpeed);
         else if (key == "move_from") w.move_from = num("s", 0, 1e9, false);
@@ -106,7 +108,8 @@ WallDef read_wall(const toml::table& t, const std::string& file, size_t index) {
         } else unknown_key(where, key, names);
     }
     w.shape = type == "arc" ? WallShape::Arc : WallShape::Segment;
-    w.friction = std::tan(deg_to_rad(friction_deg));
+    mat.friction = std::tan(deg_to_rad(friction_deg));  // the angle's one conversion
+    w.material = kFirstWallEntryMaterial + int(index);
     const std::string where = file + ": walls[" + std::to_string(index) + "]";
     // a point left out is refused, as a disc's position is: it would silently be (0, 0)
     auto require = [&](bool given, const char* key, const char* what) {
@@ -124,6 +127,7 @@ WallDef read_wall(const toml::table& t, const std::string& file, size_t index) {
         w.arc_solid = solid == "inside" ? ArcSolid::Inside : ArcSolid::Outside;
     }
     validate(w, where);
+    validate(mat, where);
     return w;
 }
 
@@ -168,8 +172,11 @@ void read_table(Scenario& s, const toml::table& t, const std::string& prefix, co
                 throw InputError(where_of(file, node, key) + ": must be an array of tables ([[" + key + "]])");
             size_t i = 0;
             for (const auto& e : *arr) {
-                if (key == "walls") s.walls.push_back(read_wall(*e.as_table(), file, i++));
-                else s.discs.push_back(read_disc(*e.as_table(), file, i++));
+                if (key == "walls") {
+                    MaterialDef mat;
+                    s.walls.push_back(read_wall(*e.as_table(), file, i++, mat));
+                    s.wall_entry_materials.push_back(mat);
+                } else s.discs.push_back(read_disc(*e.as_table(), file, i++));
             }
             continue;
         }
@@ -563,7 +570,9 @@ static void refuse_keys_the_law_does_not_read(const Scenario& s) {
 void finish_scenario(Scenario& s) {
     const std::string where = s.source + ": ";
     refuse_keys_the_law_does_not_read(s);
+    // the keys' friction angles become their materials' coefficients here, once
     s.disc.friction = std::tan(deg_to_rad(s.disc_friction_deg));
+    s.wall.friction = std::tan(deg_to_rad(s.wall_friction_deg));
     ReleaseDef& r = s.release;
     if (r.r_min == 0.0) r.r_min = scale_r_min(r.scale);
     if (r.r_max == 0.0) r.r_max = scale_r_max(r.scale);
@@ -686,7 +695,9 @@ std::string resolved_toml(const Scenario& s) {
         if (!section_in_use(s, sec)) continue;
         o << k.name.substr(dot + 1) << " = " << k.get(s) << "\n";
     }
-    for (const WallDef& w : s.walls) {
+    for (size_t i = 0; i < s.walls.size(); ++i) {
+        const WallDef& w = s.walls[i];
+        const MaterialDef& m = s.wall_entry_materials[i];
         o << "\n[[walls]]\nname = " << toml_string(w.name) << "\n";
         if (w.shape == WallShape::Segment) {
             o << "type = \"segment\"\nstart = [" << toml_number(w.p0.x()) << ", " << toml_number(w.p0.y()) << "]\nend = ["
@@ -698,8 +709,8 @@ std::string resolved_toml(const Scenario& s) {
               << "\nend_deg = " << toml_number(w.angle_end_deg) << "\nsolid = \""
               << (w.arc_solid == ArcSolid::Outside ? "outside" : "inside") << "\"\n";
         }
-        o << "kn = " << toml_number(w.kn) << "\nks = " << toml_number(w.ks) << "\nfriction_deg = "
-          << toml_number(std::atan(w.friction) * 180.0 / kPi) << "\nvelocity = [" << toml_number(w.velocity.x()) << ", "
+        o << "kn = " << toml_number(m.kn) << "\nks = " << toml_number(m.ks) << "\nfriction_deg = "
+          << toml_number(std::atan(m.friction) * 180.0 / kPi) << "\nvelocity = [" << toml_number(w.velocity.x()) << ", "
           << toml_number(w.velocity.y()) << "]\nmove_from = " << toml_number(w.move_from) << "\nmove_until = "
           << toml_number(w.move_until) << "\nremove_at = " << toml_number(w.remove_at) << "\n";
     }

@@ -132,10 +132,17 @@ struct Scenario {
     // m, the domain's box [[x_lo, y_lo], [x_hi, y_hi]] (world.domain): a disc whose centre leaves
     // it is lost; empty: the box of the walls, the discs and the set-up, padded by 0.5 m
     std::vector<Vec2> domain;
-    MaterialDef disc;                      // disc material (friction as a coefficient)
+    // The materials, resolved by finish_scenario: the friction angles (deg) are the keys'; each
+    // becomes its material's coefficient there, once, tan(angle). A world built from the
+    // scenario adds scenario_materials(s) in their order, so kDiscMaterial, kWallMaterial and
+    // the walls' WallDef::material index it.
+    MaterialDef disc;                      // the discs' material (density, kn, ks; friction from disc_friction_deg)
+    MaterialDef wall;                      // the set-up's walls' (kn, ks; friction from wall_friction_deg; no density)
     double disc_friction_deg = 15.5;
     double wall_friction_deg = 21.7;
-    double wall_kn = 1.0e8, wall_ks = 1.0e8;
+    // [[walls]]: each entry's own material (its kn, ks and friction_deg, tan'd when read),
+    // walls[i].material = kFirstWallEntryMaterial + i
+    std::vector<MaterialDef> wall_entry_materials;
     std::string solver = "dem";            // "dem" (discs) or "dan" (the continuum model, dan/)
     DanDef dan;                            // the continuum model's parameters ([dan])
     bool dan_given = false;                // a [dan] table was given (it is then written back)
@@ -150,6 +157,16 @@ struct Scenario {
     std::vector<WallDef> walls;            // [[walls]]: explicit walls
     std::vector<DiscDef> discs;            // [[discs]]: explicit discs
 };
+
+// The materials of a scenario's world, in the order it adds them (World::add_material): the
+// discs' first (so the disc-disc tables hold that one only), the set-up's walls', then one of
+// each [[walls]] entry.
+constexpr int kDiscMaterial = 0, kWallMaterial = 1, kFirstWallEntryMaterial = 2;
+inline std::vector<MaterialDef> scenario_materials(const Scenario& s) {
+    std::vector<MaterialDef> m{s.disc, s.wall};
+    m.insert(m.end(), s.wall_entry_materials.begin(), s.wall_entry_materials.end());
+    return m;
+}
 
 // Reads a scenario file. Throws InputError "FILE:LINE: key ...: message" on any problem.
 Scenario load_scenario(const std::string& path);

@@ -69,8 +69,10 @@ void build_db9k(World& world, const std::vector<XyrDisc>& discs, int copies) {
     floor.p0 = Vec2(0.0, 0.0);
     floor.p1 = Vec2(1.5 + kCopySpacing * (copies - 1), 0.0);
     floor.segment_solid = SegmentSolid::Right;  // free side up
-    floor.kn = floor.ks = 2.0e8;
-    floor.friction = 0.3979;
+    MaterialDef sheet;  // the walls' (a wall's density is not used)
+    sheet.kn = sheet.ks = 2.0e8;
+    sheet.friction = 0.3979;
+    floor.material = world.add_material(sheet);
     WallDef left = floor;
     left.name = "left";
     left.p0 = Vec2(0.0, 0.6);

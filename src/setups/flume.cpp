@@ -9,11 +9,8 @@ static void open_gate(const Scenario& s, WallDef& gate);
 
 std::vector<WallDef> flume_walls(const Scenario& s, bool for_release) {
     const FlumeDef& f = s.flume;
-    const double mu = std::tan(deg_to_rad(s.wall_friction_deg));
     WallDef base;
-    base.kn = s.wall_kn;
-    base.ks = s.wall_ks;
-    base.friction = mu;
+    base.material = kWallMaterial;
     std::vector<WallDef> w(kFlumeWalls, base);
     // W1 runs down to the right: the flow is on its left, the solid on its right
     w[kW1].name = "W1_slope";
@@ -67,9 +64,7 @@ static void open_gate(const Scenario& s, WallDef& gate) {
 std::vector<WallDef> dam_break_walls(const Scenario& s, bool for_release) {
     const DamBreakDef& d = s.dam_break;
     WallDef base;
-    base.kn = s.wall_kn;
-    base.ks = s.wall_ks;
-    base.friction = std::tan(deg_to_rad(s.wall_friction_deg));
+    base.material = kWallMaterial;
     std::vector<WallDef> w(4, base);
     w[kFloor].name = "floor";
     w[kFloor].p0 = Vec2(0.0, 0.0);

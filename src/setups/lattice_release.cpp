@@ -99,7 +99,8 @@ void settle_lattice(const Scenario& s, const std::vector<WallDef>& walls, Releas
     def.damping.local_alpha = rd.settle_alpha;
     def.damping.dp_mode = DashpotMode::NoTension;
     World w(def);
-    const int mat = w.add_material(s.disc);
+    for (const MaterialDef& mt : scenario_materials(s)) w.add_material(mt);
+    const int mat = kDiscMaterial;
     for (size_t i = 0; i < m.pos.size(); ++i) w.add_disc({m.pos[i], m.radius[i], Vec2::Zero(), 0, 0, mat});
     for (WallDef wd : walls) {
         wd.remove_at = kNever;  // a gate holds the mass while it settles

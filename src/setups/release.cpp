@@ -164,15 +164,13 @@ std::vector<Vec2> expand_to_size(const Scenario& s, const ReleaseBox& box, const
     gen.max_overlap_ratio = 2.0;
     gen.timestep.safety = 0.8;
     World expand(gen);
-    MaterialDef slick = s.disc;
-    slick.friction = 0.0;
-    const int mat = expand.add_material(slick);
-    for (size_t i = 0; i < radius.size(); ++i) expand.add_disc({start[i], s0 * radius[i], Vec2::Zero(), 0, 0, mat});
-    std::vector<WallDef> walls = box.walls;
-    for (WallDef& w : walls) {
-        w.friction = 0.0;
-        expand.add_wall(w);
+    for (MaterialDef slick : scenario_materials(s)) {  // the discs' and the walls', frictionless
+        slick.friction = 0.0;
+        expand.add_material(slick);
     }
+    const int mat = kDiscMaterial;
+    for (size_t i = 0; i < radius.size(); ++i) expand.add_disc({start[i], s0 * radius[i], Vec2::Zero(), 0, 0, mat});
+    for (const WallDef& w : box.walls) expand.add_wall(w);
     expand.finalize();
     // through the run loop: each stage's radii set before its steps, then 3000 steps to relax
     // at full size
@@ -217,17 +215,18 @@ void settle_release(const Scenario& s, const ReleaseBox& box, std::vector<Vec2>&
         // on the dashpots alone
         settle.damping.local_alpha = phase == 0 ? rd.settle_alpha : 0.0;
         World w(settle);
-        MaterialDef mat_phase = s.disc;
-        if (phase == 0) mat_phase.friction = 0.0;
-        const int mat2 = w.add_material(mat_phase);
+        for (MaterialDef mat_phase : scenario_materials(s)) {  // the discs' and the walls'
+            if (phase == 0) mat_phase.friction = 0.0;
+            w.add_material(mat_phase);
+        }
+        const int mat2 = kDiscMaterial;
         for (size_t i = 0; i < radius.size(); ++i) w.add_disc({positions[i], radius[i], Vec2::Zero(), 0, 0, mat2});
-        std::vector<WallDef> walls = box.walls;
+        const std::vector<WallDef>& walls = box.walls;
         // the lid only holds the mass while it compacts; the second phase goes without it, so
         // prestress locked in by the lid (a small mass of large discs jams looser than the
         // generated density) is released gently here rather than at the release
         int lid_index = -1;
         for (int k = 0; k < int(walls.size()); ++k) {
-            if (phase == 0) walls[size_t(k)].friction = 0.0;
             if (k == box.lid) {
                 if (phase != 0) continue;
                 lid_index = int(w.wall_count());

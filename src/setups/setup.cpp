@@ -74,9 +74,7 @@ public:
     std::string kind() const override { return "terrain"; }
     std::vector<WallDef> walls() const override {
         WallDef base;
-        base.kn = s_.wall_kn;
-        base.ks = s_.wall_ks;
-        base.friction = std::tan(deg_to_rad(s_.wall_friction_deg));
+        base.material = kWallMaterial;
         base.segment_solid = SegmentSolid::Right;
         std::vector<WallDef> w;
         // a wall per segment of a polyline: the profile's, then the barrier's
@@ -112,9 +110,7 @@ public:
             d.name = "release[" + std::to_string(k) + "]";
             d.p0 = b.polygon[k];
             d.p1 = b.polygon[(k + 1) % n];
-            d.kn = s_.wall_kn;
-            d.ks = s_.wall_ks;
-            d.friction = std::tan(deg_to_rad(s_.wall_friction_deg));
+            d.material = kWallMaterial;
             d.cap_start = d.cap_end = EndCap::Capped;
             const Vec2 along = d.p1 - d.p0;
             const double up = -orient * along.x() / along.norm();  // the outward unit normal's y

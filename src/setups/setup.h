@@ -61,7 +61,8 @@ class Setup {
 public:
     virtual ~Setup() = default;
     virtual std::string kind() const = 0;
-    // The set-up's walls for the run, in the order the world numbers them ([[walls]] follow).
+    // The set-up's walls for the run, in the order the world numbers them ([[walls]] follow),
+    // of the scenario's wall material (kWallMaterial: a world adds scenario_materials).
     virtual std::vector<WallDef> walls() const = 0;
     // Whether the discs are generated in a release box (and its box).
     virtual bool has_release() const { return false; }

@@ -52,7 +52,8 @@ inline const char* law_name(ContactLawKind kind) {
     return with_contact_law(kind, [](auto law) { return decltype(law)::kName; });
 }
 
-// A law's parameters per pair of materials ([mi * nm + mj]) and per material and wall ([mi * nw + w]).
+// A law's parameters per pair of the discs' materials ([mi * nm + mj], nm: World::disc_materials_)
+// and per disc material and wall ([mi * nw + w], from the wall's own material).
 template <typename Law>
 struct LawTables {
     std::vector<typename Law::Params> disc_disc, disc_wall;

@@ -217,7 +217,7 @@ struct DebrisLaw : LawDefaults {
     // E is the scenario's [debris] modulus for every contact, walls included (Mikhailov: the
     // bed's reaction with "E of the material of particle i"): set by the world after the tables
     static Params pair_params(const MaterialDef&, const MaterialDef&, FrictionRule) { return {}; }
-    static Params wall_params(const MaterialDef&, const WallDef&, FrictionRule) { return {}; }
+    static Params wall_params(const MaterialDef&, const MaterialDef&, FrictionRule) { return {}; }
 
     // no history: every field of DiscContact / WallContact stays 0
     template <typename Contact>

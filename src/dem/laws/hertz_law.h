@@ -110,7 +110,7 @@ struct HertzLaw : LawDefaults {
     static Params pair_params(const MaterialDef& a, const MaterialDef& b, FrictionRule rule) {
         return {0.0, 0.0, combine_friction(rule, a.friction, b.friction)};
     }
-    static Params wall_params(const MaterialDef& a, const WallDef& w, FrictionRule rule) {
+    static Params wall_params(const MaterialDef& a, const MaterialDef& w, FrictionRule rule) {
         return {0.0, 0.0, combine_friction(rule, a.friction, w.friction)};
     }
     template <typename Tables>

@@ -56,11 +56,11 @@ struct LinearLaw : LawDefaults {
 
     // kn, ks: the series stiffnesses (N/m); mu: the combined friction coefficient
     static Params params(double kn, double ks, double mu) { return {kn, ks, mu, std::max(kn, ks), 1.0 / ks}; }
-    // A pair of discs (eq. 2.59, 2.61: springs in series) and a disc with a wall.
+    // A pair of discs (eq. 2.59, 2.61: springs in series) and a disc with a wall (the wall's material).
     static Params pair_params(const MaterialDef& a, const MaterialDef& b, FrictionRule rule) {
         return params(series_stiffness(a.kn, b.kn), series_stiffness(a.ks, b.ks), combine_friction(rule, a.friction, b.friction));
     }
-    static Params wall_params(const MaterialDef& a, const WallDef& w, FrictionRule rule) {
+    static Params wall_params(const MaterialDef& a, const MaterialDef& w, FrictionRule rule) {
         return params(series_stiffness(a.kn, w.kn), series_stiffness(a.ks, w.ks), combine_friction(rule, a.friction, w.friction));
     }
 
