@@ -8,6 +8,7 @@
 #include "core/error.h"
 #include "helpers.h"
 #include "setups/release.h"
+#include "setups/setup.h"
 #include "scenario/scenario.h"
 
 using namespace demlab;
@@ -46,6 +47,39 @@ TEST(Scenario, OverridesSetKeysAndAreChecked) {
     expect_refused([&] { apply_override(s, "material.frction_disc_deg=16"); }, {"unknown key", "material.friction_disc_deg"});
     expect_refused([&] { apply_override(s, "damping.beta_n=2"); }, {"damping.beta_n", "[0.0, 1.0)"});
     expect_refused([&] { apply_override(s, "novalue"); }, {"expected key=value"});
+}
+
+// The friction angles become coefficients once, when the scenario is read, into its materials;
+// the set-up's walls and the [[walls]] entries name their material by index.
+TEST(Scenario, WallsCarryMaterialsByIndex) {
+    Scenario s = parse_scenario("[material]\nfriction_disc_deg = 16\nfriction_wall_deg = 25\nwall_kn = 5e7\nwall_ks = 4e7\n"
+                                "[dam_break]\n"
+                                "[[walls]]\nstart = [0, 0]\nend = [1, 0]\nkn = 3e7\nks = 2e7\nfriction_deg = 30\n"
+                                "[[walls]]\nstart = [0, 1]\nend = [1, 1]\n",
+                                "m.toml");
+    finish_scenario(s);
+    const std::vector<MaterialDef> m = scenario_materials(s);
+    ASSERT_EQ(m.size(), 4u);
+    EXPECT_EQ(m[kDiscMaterial].friction, std::tan(deg_to_rad(16.0)));
+    EXPECT_EQ(m[kWallMaterial].friction, std::tan(deg_to_rad(25.0)));
+    EXPECT_EQ(m[kWallMaterial].kn, 5e7);
+    EXPECT_EQ(m[kWallMaterial].ks, 4e7);
+    ASSERT_EQ(s.walls.size(), 2u);
+    EXPECT_EQ(s.walls[0].material, kFirstWallEntryMaterial);
+    EXPECT_EQ(s.walls[1].material, kFirstWallEntryMaterial + 1);
+    const MaterialDef& w0 = m[size_t(s.walls[0].material)];
+    EXPECT_EQ(w0.kn, 3e7);
+    EXPECT_EQ(w0.ks, 2e7);
+    EXPECT_EQ(w0.friction, std::tan(deg_to_rad(30.0)));
+    // an entry without its own keys: a wall's defaults, not the set-up's wall material
+    const MaterialDef& w1 = m[size_t(s.walls[1].material)];
+    EXPECT_EQ(w1.kn, 1e8);
+    EXPECT_EQ(w1.friction, std::tan(deg_to_rad(21.7)));
+    for (const WallDef& w : make_setup(s)->walls()) EXPECT_EQ(w.material, kWallMaterial);
+    for (const WallDef& w : make_setup(s)->release_box().walls) EXPECT_EQ(w.material, kWallMaterial);
+    // the resolved scenario gives the entries' angles back
+    const std::string text = resolved_toml(s);
+    EXPECT_NE(text.find("kn = 3e+07\nks = 2e+07\nfriction_deg = 29.999999999999996\n"), std::string::npos) << text;
 }
 
 TEST(Scenario, ReleaseBoxMustClose) {
