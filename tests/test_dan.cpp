@@ -477,7 +477,10 @@ TEST(Dan, RefinementConverges) {
             if (g == 'B' || (g == 'A' && k >= 4)) {
                 EXPECT_TRUE(shrinks(&Landmarks::runout)) << geometry << " run-out, refinement " << k;
             }
-            if (g == 'A' && k >= 4) {
+            // C's run-up (the surface at the barrier's foot) over 41-328 blocks; beyond, the
+            // wedge on its 61-degree face freezes in one of many equilibria, which moves in steps
+            // with the blocks (docs/dan.md, "Refinement"), and so does C's run-out throughout
+            if ((g == 'A' && k >= 4) || (g == 'C' && k <= 3)) {
                 EXPECT_TRUE(shrinks(&Landmarks::runup)) << geometry << " run-up, refinement " << k;
             }
         }
