@@ -38,6 +38,7 @@
 #include "core/validate.h"
 #include "dem/laws/contact_law.h"
 #include "dem/laws/law_part.h"
+#include "dem/laws/linear_law.h"
 #include "dem/material.h"
 #include "geometry/wall.h"
 
@@ -138,11 +139,7 @@ struct HertzLaw : LawDefaults {
     }
     template <typename Fn, typename... Contact>
     static void for_each_history_field(Fn fn, Contact&... c) {
-        fn(c.fs...);
-        fn(c.cn...);
-        fn(c.cs...);
-        fn(c.damp_n...);
-        fn(c.damp_s...);
+        LinearLaw::for_each_history_field(fn, c...);
     }
 
     // One step of a touching contact (ri, rj: the radii; rj = 0 for a wall): the linear law's
@@ -157,27 +154,23 @@ struct HertzLaw : LawDefaults {
         const LinearContactParams lp{kn_secant, ks, p.mu, c.cn * std::sqrt(kn_tangent), c.cs * std::sqrt(ks), mode, 1.0 / ks};
         HertzContactForce f;
         static_cast<LinearContactForce&>(f) = linear_contact(lp, overlap, vn, vs, dt, c.fs);
-        c.fs = f.fs_spring;
-        dissipated =
-            f.slip_work - 0.5 * ((f.damp_n * dt + c.damp_n * last_dt) * vn + (f.damp_s * dt + c.damp_s * last_dt) * vs);
-        c.damp_n = float(f.damp_n);
-        c.damp_s = float(f.damp_s);
+        dissipated = LinearLaw::keep_history(f, c, vn, vs, dt, last_dt);
         f.k = std::max(hertz::normal_stiffness(p.a, r, overlap + kAheadSteps * dt * std::abs(vn)), ks);
         f.ks = ks;
         return f;
     }
+    // an opening contact: as the linear law's (its last dashpot forces' second half)
     template <typename Contact>
     static bool open_work_due(const Contact& c) {
-        return c.damp_n != 0.0f || c.damp_s != 0.0f;
+        return LinearLaw::open_work_due(c);
     }
     template <typename Contact>
     static double open_work(const Contact& c, double vn, double vs, double last_dt) {
-        return -0.5 * last_dt * (c.damp_n * vn + c.damp_s * vs);
+        return LinearLaw::open_work(c, vn, vs, last_dt);
     }
     template <typename Contact>
     static void clear_history(Contact& c) {
-        c.fs = 0.0;
-        c.damp_n = c.damp_s = 0.0f;
+        LinearLaw::clear_history(c);
     }
 
     // stored energy: the normal force's integral 2/5 K_n U^2 and the shear spring's F_s^2 / (2 k_s)

@@ -103,12 +103,19 @@ struct LinearLaw : LawDefaults {
                                    double /*rj: 0 for a wall*/ = 0.0) {
         const LinearContactParams p{pm.kn, pm.ks, pm.mu, c.cn, c.cs, mode, pm.inv_ks};
         const LinearContactForce f = linear_contact(p, overlap, vn, vs, dt, c.fs);
+        dissipated = keep_history(f, c, vn, vs, dt, last_dt);
+        return f;
+    }
+    // The history after a step of linear_contact (any law built on it, HertzLaw too): the
+    // capped shear spring and the dashpot forces; returns the energy the step took out.
+    template <typename Contact>
+    static double keep_history(const LinearContactForce& f, Contact& c, double vn, double vs, double dt, double last_dt) {
         c.fs = f.fs_spring;
-        dissipated =
+        const double dissipated =
             f.slip_work - 0.5 * ((f.damp_n * dt + c.damp_n * last_dt) * vn + (f.damp_s * dt + c.damp_s * last_dt) * vs);
         c.damp_n = float(f.damp_n);
         c.damp_s = float(f.damp_s);
-        return f;
+        return dissipated;
     }
 
     // A contact that opened: PFC deletes it, so its history starts again at zero; its last
