@@ -257,8 +257,15 @@ void add_dynamics_keys(std::vector<Key>& k) {
     // contact.law names every registered law; each law adds its own section's keys (law_part.h)
     {
         std::vector<std::pair<std::string, ContactLawKind>> laws;
-        for_each_contact_law([&](auto law) { laws.emplace_back(decltype(law)::kName, law_kind<decltype(law)>()); });
-        k.push_back(choice<ContactLawKind>("contact.law", "the contact law of every contact: linear (PFC's linear model with dashpots, thesis 2.3.4-2.3.5), debris (Mikhailov's DEBRIS: elastic force from Young's modulus and the contact's chord, one friction force per disc; [debris], docs/debris.md) or hertz (PFC's simplified Hertz-Mindlin model: normal force from the shear modulus and Poisson's ratio, shear stiffness from the normal force; [hertz], docs/engine.md)", [](Scenario& s) -> ContactLawKind& { return s.world.law; }, laws));
+        std::vector<std::string> texts;
+        for_each_contact_law([&](auto law) {
+            using Law = decltype(law);
+            laws.emplace_back(Law::kName, law_kind<Law>());
+            texts.push_back(std::string(Law::kName) + " (" + Law::kSummary + ")");
+        });
+        std::string doc = "the contact law of every contact: ";
+        for (size_t n = 0; n < texts.size(); ++n) doc += (n == 0 ? "" : n + 1 == texts.size() ? " or " : ", ") + texts[n];
+        k.push_back(choice<ContactLawKind>("contact.law", doc, [](Scenario& s) -> ContactLawKind& { return s.world.law; }, laws));
     }
     for_each_contact_law([&](auto law) {
         LawKeys<decltype(law)> add{k};

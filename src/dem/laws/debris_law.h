@@ -128,6 +128,8 @@ struct DebrisLaw : LawDefaults {
     };
     using Def = DebrisDef;
     static constexpr const char* kName = "debris";
+    static constexpr const char* kSummary =  // contact.law's text
+        "Mikhailov's DEBRIS: elastic force from Young's modulus and the contact's chord, one friction force per disc; [debris], docs/debris.md";
     static constexpr const char* kSection = "debris";
     template <typename Add>
     static void keys(Add& add) {

@@ -77,6 +77,8 @@ struct HertzLaw : LawDefaults {
     };
     using Def = HertzDef;
     static constexpr const char* kName = "hertz";
+    static constexpr const char* kSummary =  // contact.law's text
+        "PFC's simplified Hertz-Mindlin model: normal force from the shear modulus and Poisson's ratio, shear stiffness from the normal force; [hertz], docs/engine.md";
     static constexpr const char* kSection = "hertz";
     static constexpr bool kWideKernels = false;   // the scalar kernels
     static constexpr bool kDiscFriction = false;  // friction at the contacts

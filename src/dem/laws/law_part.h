@@ -2,6 +2,7 @@
 // nothing of its own to say (LinearLaw takes them all). The engine asks the chosen law
 // (contact_laws.h's dispatch) and never branches on which law it is.
 //
+//   kName, kSummary  its contact.law name and the key's text for it (every law says its own)
 //   Def              the law's own keys' values ([kSection] of a scenario; WorldDef::law_def)
 //   kSection         the scenario section of its keys ("" : none)
 //   keys(add)        its keys, with unit, default (Def's), range and text, added to the

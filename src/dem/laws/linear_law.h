@@ -46,6 +46,8 @@ struct PairMaterial {
 struct LinearLaw : LawDefaults {
     using Params = PairMaterial;
     static constexpr const char* kName = "linear";
+    static constexpr const char* kSummary =  // contact.law's text
+        "PFC's linear model with dashpots, thesis 2.3.4-2.3.5";
     static constexpr bool kCentredDashpots = true;  // the dashpots at the step's centre when timestep.dashpots says so
     static constexpr bool kWideKernels = true;
     static constexpr bool kDiscFriction = false;  // friction at the contacts (DebrisLaw: per disc)
