@@ -67,8 +67,7 @@ struct Impact {
 // at a fixed step of 1/steps of the contact time, until the contact has ended.
 Impact impact(bool pair, double v0, double beta_n, int steps_per_contact) {
     const double m_eff = pair ? 0.5 * kMass : kMass;
-    const double r_eff = pair ? kR : kR;  // 2 R R / (R + R) = R, and R for a wall
-    const double k = hertz_a() * std::sqrt(r_eff);
+    const double k = hertz_a() * std::sqrt(kR);  // R~ = 2 R R / (R + R) = R for the pair, R for the wall
     const double u_max = std::pow(5.0 * m_eff * v0 * v0 / (4.0 * k), 0.4);
     WorldDef def = hertz_world(beta_n);
     def.timestep.automatic = false;

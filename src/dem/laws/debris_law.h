@@ -200,15 +200,10 @@ struct DebrisLaw : LawDefaults {
         const double ahead = -gap + kAheadSteps * dt * std::max(0.0, -vn);
         return ahead > 0.0 ? stiffness_at(p, ahead, ri, rj) : 0.0;
     }
-    // The same for an open pair from its squared distance: most open candidates are farther
-    // apart than they can close in kAheadSteps steps, which a bound without a square root or
-    // a division shows (|vn| <= |vrel| <= |vx| + |vy|); they have k = 0 without the normal.
+    // the same for an open pair from its squared distance (law_part.h)
     static double pair_k_ahead(const Params& p, double dist2, double rsum, const Vec2& dx, const Vec2& vrel, double dt,
                                double ri, double rj) {
-        const double reach = rsum + kAheadSteps * dt * (std::abs(vrel.x()) + std::abs(vrel.y()));
-        if (dist2 >= reach * reach) return 0.0;
-        const double dist = std::sqrt(dist2);
-        return k_ahead(p, dist - rsum, vrel.dot(dx) / dist, dt, ri, rj);
+        return closing_pair_stiffness<DebrisLaw>(p, dist2, rsum, dx, vrel, dt, ri, rj);
     }
     // the tangent stiffness at an overlap ahead, kept below the smaller radius (the chord's
     // half-width is not defined past it)

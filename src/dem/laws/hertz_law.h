@@ -194,12 +194,9 @@ struct HertzLaw : LawDefaults {
         const double ahead = -gap + kAheadSteps * dt * std::max(0.0, -vn);
         return ahead > 0.0 ? hertz::normal_stiffness(p.a, hertz::contact_radius(ri, rj), ahead) : 0.0;
     }
-    static double pair_k_ahead(const Params& p, double dist2, double rsum, const Vec2& dx, const Vec2& vrel, double dt, double ri,
-                               double rj) {
-        const double reach = rsum + kAheadSteps * dt * (std::abs(vrel.x()) + std::abs(vrel.y()));
-        if (dist2 >= reach * reach) return 0.0;
-        const double dist = std::sqrt(dist2);
-        return k_ahead(p, dist - rsum, vrel.dot(dx) / dist, dt, ri, rj);
+    static double pair_k_ahead(const Params& p, double dist2, double rsum, const Vec2& dx, const Vec2& vrel, double dt,
+                               double ri, double rj) {
+        return closing_pair_stiffness<HertzLaw>(p, dist2, rsum, dx, vrel, dt, ri, rj);
     }
 };
 

@@ -20,6 +20,8 @@
 #include <array>
 #include <cmath>
 
+#include "core/vec2.h"
+
 namespace demlab {
 
 struct LawDefaults {
@@ -54,6 +56,19 @@ struct LawDefaults {
 inline double capped_growing_step(double ceiling, double growth, double safety, double best_sq, double last_dt) {
     const double rule = std::isfinite(best_sq) ? safety * std::sqrt(best_sq) : INFINITY;
     return std::min({ceiling, rule, last_dt > 0.0 ? growth * last_dt : INFINITY});
+}
+
+// For a law whose open contacts closing in count for the step (kStepAhead): an open pair's
+// stiffness ahead from its squared distance. Most open candidates are farther apart than they
+// can close in Law::kAheadSteps steps, which a bound without a square root or a division
+// shows (|vn| <= |vrel| <= |vx| + |vy|); they have k = 0 without the normal.
+template <typename Law>
+double closing_pair_stiffness(const typename Law::Params& p, double dist2, double rsum, const Vec2& dx, const Vec2& vrel,
+                              double dt, double ri, double rj) {
+    const double reach = rsum + Law::kAheadSteps * dt * (std::abs(vrel.x()) + std::abs(vrel.y()));
+    if (dist2 >= reach * reach) return 0.0;
+    const double dist = std::sqrt(dist2);
+    return Law::k_ahead(p, dist - rsum, vrel.dot(dx) / dist, dt, ri, rj);
 }
 
 }  // namespace demlab
