@@ -156,10 +156,9 @@ double DanSolver::stability_rate() const {
 
 double DanSolver::cfl_now() const { return def_.dt * stability_rate(); }
 
-void DanSolver::step() {
-    const size_t n = s_.size();
+// The step: fixed (refused past the stability limit) or the largest the limit allows.
+double DanSolver::choose_step() {
     const DanDef& d = def_;
-    // the step: fixed (refused past the stability limit) or the largest the limit allows
     const double rate = stability_rate();
     double dt = d.dt;
     if (d.dt_mode == DanStep::Auto && rate > 0.0) dt = std::min(d.dt, d.cfl_max / rate);
@@ -175,6 +174,13 @@ void DanSolver::step() {
         throw RunError("dan: the step " + format_number(dt) + " s is beyond the stability limit at t = " + format_number(time_) +
                        " s (CFL " + format_number(cfl) + " > dan.cfl_max = " + format_number(d.cfl_max) +
                        "): lower dan.dt, or dan.dt_mode = \"auto\"");
+    return dt;
+}
+
+// The bore's artificial viscosity on each compressed block pair (q_); false when it is off.
+bool DanSolver::bore_viscosity() {
+    const size_t n = s_.size();
+    const DanDef& d = def_;
     // D16: the bore's dissipation, an artificial viscosity (von Neumann & Richtmyer 1950) on
     // the compressed mass blocks. Where the arriving flow meets the mass that has stopped at
     // the barrier, the depth-averaged equations (D0) have a bore: h and u jump, and the jump
@@ -214,6 +220,13 @@ void DanSolver::step() {
             const double a = std::sqrt(std::max(0.0, k_[j] * g_ * cos_mid_[j] * h_[j]));
             q_[j] = d.density * d.width * h_[j] * (d.shock_viscosity * dv * dv + d.shock_viscosity_linear * a * -dv);
         }
+    return viscous;
+}
+
+// The blocks' accelerations and their friction-limited velocities v+ (D7, D10, D11, D15, D16).
+void DanSolver::accelerate(double dt, bool viscous) {
+    const size_t n = s_.size();
+    const DanDef& d = def_;
     // D7: the pressure acceleration at each boundary block
     const bool half = d.end_height == DanEndHeight::Half;
     for (size_t i = 0; i < n; ++i) {
@@ -246,6 +259,12 @@ void DanSolver::step() {
         bed_force_[i] = -normal_force * q.normal() - friction_force * q.tangent();
         dissipated_ += 0.5 * m_[i] * (v_star_[i] * v_star_[i] - v_plus_[i] * v_plus_[i]);
     }
+}
+
+// v-hat from v+: the smoothing and the momentum it moved (D12, D13).
+void DanSolver::smooth(double dt) {
+    const size_t n = s_.size();
+    const DanDef& d = def_;
     // D12: the thesis' smoothing, a Jacobi sweep from v+ (c scaled to the reference step)
     if (d.smoothing) {
         const double scale = d.smoothing_dt_ref > 0.0 ? dt / d.smoothing_dt_ref : 1.0;
@@ -275,6 +294,12 @@ void DanSolver::step() {
             momentum_corrected_ += std::abs(before - after);
         }
     }
+}
+
+// The blocks moved by v-hat, and checked (D14).
+void DanSolver::move(double dt) {
+    const size_t n = s_.size();
+    const DanDef& d = def_;
     // D14. The thesis' form (2.31), S += dt (v + v-hat) / 2, takes the pressure at the old
     // positions with weight dt into the velocity but dt^2 / 2 into the position: for a mode of
     // frequency w (the pressure's stiffness between neighbouring blocks, w ~ 2 sqrt(k g h) / l)
@@ -302,6 +327,13 @@ void DanSolver::step() {
     if (s_[n - 1] > s_max || s_[0] < -d.path_extension)
         throw RunError("dan: the flow left the path and its extension (dan.path_extension = " + format_number(d.path_extension) +
                        " m) at t = " + format_number(time_ + dt) + " s");
+}
+
+void DanSolver::step() {
+    const double dt = choose_step();
+    accelerate(dt, bore_viscosity());
+    smooth(dt);
+    move(dt);
     update_geometry();
     update_k(l_before_);
     time_ += dt;

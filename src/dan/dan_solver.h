@@ -75,6 +75,12 @@ private:
     void update_geometry();                // alpha, kappa, x at the blocks; l, h, H
     void update_k(const std::vector<double>& l_before);
     double stability_rate() const;         // max_j (sqrt(k g cos a h) + |dv|) / l, 1/s
+    // one step's stages, in order
+    double choose_step();                  // s, this step's dt (throws when it collapses or breaks the limit)
+    bool bore_viscosity();                 // q_ (D16); false when it is off
+    void accelerate(double dt, bool viscous);  // v_star_, v_plus_, the bed's load (D7, D10, D11, D15)
+    void smooth(double dt);                // v_hat_ (D12, D13)
+    void move(double dt);                  // s_ and v_ (D14)
     DanDef def_;
     DanPath path_;
     double g_;                             // m/s2, |gravity| (along -y)
