@@ -433,3 +433,20 @@ TEST(Calibration, RerunAfterTheScenarioIsEditedRunsAgain) {
     EXPECT_NE(timings.find(",1\nsweep,"), std::string::npos) << timings;
     fs::remove_all(dir);
 }
+
+// the known deposit moved 0.2 m out behind a level plateau: sections from 0.2 m find its angles
+double shifted_surface(double x) { return x < 0.2 ? known_surface(0.0) : known_surface(x - 0.2); }
+
+TEST(Envelope, SectionsStartWhereTheScenarioSays) {
+    std::vector<Vec2> pos;
+    std::vector<double> rad;
+    stack_under(shifted_surface, 0.001, 0.7, pos, rad);
+    const auto conn = connected_discs(pos, rad, 0.001);
+    const Envelope e = upper_envelope(pos, rad, conn, 0.0, 1.0, 0.0005);
+    const SlopeAngles a = slope_angles(e, 0.1, 0.0, 0.2);
+    for (int i = 0; i < 5; ++i) EXPECT_NEAR(a.gamma[i], kAngles[i], 0.5) << "section " << i + 1;
+    EXPECT_NEAR(a.toe_x, 0.7, 0.002);
+    EXPECT_NEAR(a.gamma_ges, std::atan(known_surface(0.0) / 0.5) * 180 / kPi, 0.5);
+    EXPECT_NEAR(a.h_start, a.h_wall, 0.002);                                 // (level between)
+    EXPECT_LT(slope_angles(e).gamma[4], 1.0);                                // from the wall: the plateau
+}

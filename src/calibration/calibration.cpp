@@ -146,7 +146,7 @@ double objective_of(const std::map<std::string, double>& r, const CalibrationCon
 }
 
 // the deposit with its envelope, the 10 cm sections, their fitted lines and angles
-void render_deposit(const std::string& run_dir, const std::map<std::string, double>& summary, double wall_gap) {
+void render_deposit(const std::string& run_dir, const std::map<std::string, double>& summary, double wall_gap, double start) {
     const auto snaps = list_snapshots(run_dir);
     Frame f = read_frame(snaps.back().discs, snaps.back().walls);
     const Envelope e = read_envelope_csv(run_dir + "/envelope.csv");
@@ -156,7 +156,7 @@ void render_deposit(const std::string& run_dir, const std::map<std::string, doub
     if (env.empty()) return;
     f.overlays.push_back({env, 0.85, 0.1, 0.1});
     for (int i = 1; i <= 5; ++i) {
-        const double lo = (5 - i) * 0.1, hi = (6 - i) * 0.1;
+        const double lo = start + (5 - i) * 0.1, hi = start + (6 - i) * 0.1;
         f.overlays.push_back({{Vec2(lo, 0.0), Vec2(lo, 0.45)}, 0.5, 0.5, 0.5});
         double slope = 0, icpt = 0;
         if (!fit_line(e, std::max(lo, wall_gap), hi, slope, icpt)) continue;
@@ -258,12 +258,13 @@ std::vector<AngleResult> evaluate_angles(const CalibrationConfig& c, const Calib
         scenarios.push_back(std::move(s));
     }
     std::map<std::pair<double, int>, std::map<std::string, double>> done;
+    const double sections_start = load_scenario(c.scenario).dam_break.sections_start;  // m (the scenario's sections)
     auto dir_of = [&](const Job& job) { return o.out + "/runs/" + calibration_run_name(job.angle, job.seed); };
     // a run's figures: its summary and the angles of its saved envelope with this
     // configuration's sections (changing them needs no rerun)
     auto figures_of = [&](const std::string& dir) {
         auto summary = read_summary(dir + "/summary.json");
-        const SlopeAngles a = slope_angles(read_envelope_csv(dir + "/envelope.csv"), 0.1, c.wall_gap);
+        const SlopeAngles a = slope_angles(read_envelope_csv(dir + "/envelope.csv"), 0.1, c.wall_gap, sections_start);
         summary["gamma_ges"] = a.gamma_ges;
         for (int i = 0; i < 5; ++i) summary["gamma_" + std::to_string(i + 1)] = a.gamma[i];
         return summary;
@@ -285,7 +286,7 @@ std::vector<AngleResult> evaluate_angles(const CalibrationConfig& c, const Calib
         const Job& job = todo[k];
         const std::string dir = dir_of(job);
         const auto summary = figures_of(dir);
-        if (!fs::exists(dir + "/deposit.png")) render_deposit(dir, summary, c.wall_gap);
+        if (!fs::exists(dir + "/deposit.png")) render_deposit(dir, summary, c.wall_gap, sections_start);
         char line[96];
         std::snprintf(line, sizeof line, "%s seed %d: objective %.2f deg", angle_tag(job.angle).c_str(), job.seed + 1,
                       objective_of(summary, c));

@@ -83,21 +83,38 @@ bool fit_line(const Envelope& e, double lo, double hi, double& slope, double& in
     return true;
 }
 
-SlopeAngles slope_angles(const Envelope& e, double w, double wall_gap) {
+SlopeAngles slope_angles(const Envelope& e, double w, double wall_gap, double start) {
     SlopeAngles a;
+    // past the toe the surface is the floor (y = 0): a section the deposit does not reach is
+    // level, and one it half reaches is fitted through the floor beyond its toe, as the
+    // laboratory's surface measured every 10 cm would be
+    Envelope surface = e;
+    size_t last = surface.y.size();
+    for (size_t k = 0; k < surface.y.size(); ++k)
+        if (!std::isnan(surface.y[k])) last = k;
+    if (last < surface.y.size()) {
+        // (an envelope read back from envelope.csv ends at its toe)
+        const double reach = start + 5.0 * w;
+        if (surface.dx > 0.0 && surface.x(surface.y.size() - 1) < reach)
+            surface.y.resize(size_t(std::ceil((reach - surface.x0) / surface.dx)) + 1, NAN);
+        for (size_t k = last + 1; k < surface.y.size(); ++k) surface.y[k] = 0.0;
+    }
     for (int i = 1; i <= 5; ++i) {
         double slope = 0, intercept = 0;
-        const double lo = std::max((5 - i) * w, wall_gap);
-        a.gamma[i - 1] = fit_line(e, lo, (6 - i) * w, slope, intercept) ? std::atan(-slope) * 180.0 / kPi : NAN;
+        const double lo = std::max(start + (5 - i) * w, wall_gap);
+        a.gamma[i - 1] = fit_line(surface, lo, start + (6 - i) * w, slope, intercept) ? std::atan(-slope) * 180.0 / kPi : NAN;
     }
     a.toe_x = NAN;
     a.h_wall = NAN;
+    a.h_start = NAN;
+    const double from = std::max(start, wall_gap);
     for (size_t k = 0; k < e.y.size(); ++k)
         if (!std::isnan(e.y[k])) {
             if (std::isnan(a.h_wall) && e.x(k) >= e.x0 + wall_gap) a.h_wall = e.y[k];
+            if (std::isnan(a.h_start) && e.x(k) >= e.x0 + from) a.h_start = e.y[k];
             a.toe_x = e.x(k);
         }
-    a.gamma_ges = std::isnan(a.toe_x) ? NAN : std::atan(a.h_wall / std::max(a.toe_x - e.x0 - wall_gap, 1e-9)) * 180.0 / kPi;
+    a.gamma_ges = std::isnan(a.toe_x) || std::isnan(a.h_start) ? NAN : std::atan(a.h_start / std::max(a.toe_x - e.x0 - from, 1e-9)) * 180.0 / kPi;
     return a;
 }
 

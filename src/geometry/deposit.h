@@ -30,10 +30,11 @@ Envelope upper_envelope(const std::vector<Vec2>& pos, const std::vector<double>&
 
 // Slope angles of the surface, degrees (positive: falling towards +x).
 struct SlopeAngles {
-    double gamma[5];   // gamma[i - 1]: section i spans x in [(5 - i) w, (6 - i) w] from the back wall
-    double gamma_ges;  // the line from the surface at the back wall to the toe
+    double gamma[5];   // gamma[i - 1]: section i spans x in [start + (5 - i) w, start + (6 - i) w] from the back wall
+    double gamma_ges;  // the line from the surface at the sections' start to the toe
     double toe_x;      // m, the last x the envelope covers
     double h_wall;     // m, surface height at the back wall
+    double h_start;    // m, surface height where the sections start (gamma_ges' top; h_wall unless moved)
 };
 
 // Least-squares line y = intercept + slope x through the envelope points in [lo, hi];
@@ -41,9 +42,11 @@ struct SlopeAngles {
 bool fit_line(const Envelope& e, double lo, double hi, double& slope, double& intercept);
 
 // Least-squares line through the envelope points of each section (NaN if the section is empty).
-// wall_gap (m): section 5 and the surface height for gamma_ges start this far from the back
-// wall, leaving out discs that cling to the wall above the deposit (0: the thesis' sections).
-SlopeAngles slope_angles(const Envelope& e, double section_width = 0.1, double wall_gap = 0.0);
+// start (m from the back wall): section 5 spans [start, start + w], section 1
+// [start + 4 w, start + 5 w], and gamma_ges runs from the surface at start to the toe.
+// wall_gap (m): nothing is measured closer than this to the back wall, leaving out discs that
+// cling to the wall above the deposit (0: the thesis' sections).
+SlopeAngles slope_angles(const Envelope& e, double section_width = 0.1, double wall_gap = 0.0, double start = 0.0);
 
 // An envelope written as "x_m,surface_m" rows (envelope.csv of a dam-break run), on its 1 mm grid.
 Envelope read_envelope_csv(const std::string& path);

@@ -414,10 +414,10 @@ void write_deposit(const World& w, const MeasureContext& m, const std::string& d
     write_file_atomic(dir + "/deposit.csv", d.str());
 }
 
-SlopeAngles write_envelope(const World& w, double gap, double length, const std::string& dir, RunSummary& sum) {
+SlopeAngles write_envelope(const World& w, double gap, double length, double sections_start, const std::string& dir, RunSummary& sum) {
     const auto conn = connected_discs(w.positions(), w.radii(), gap);
     const Envelope env = upper_envelope(w.positions(), w.radii(), conn, 0.0, length, 0.001);
-    const SlopeAngles angles = slope_angles(env);
+    const SlopeAngles angles = slope_angles(env, 0.1, 0.0, sections_start);
     sum.runout_s = angles.toe_x;
     // the deposit over the floor: its thickest point and its length from the first sample
     // with mass to the toe (the envelope's, in place of deposit.csv's bins along the floor)
@@ -592,6 +592,7 @@ SummaryJson summary_json(const Scenario& s, const RunSummary& sum, const Release
         for (int i = 0; i < 5; ++i) j.number("gamma_" + std::to_string(i + 1), angles->gamma[i], "deg");
         j.number("toe_x", angles->toe_x, "m");
         j.number("surface_at_back_wall", angles->h_wall, "m");
+        if (s.dam_break.sections_start > 0.0) j.number("surface_at_sections_start", angles->h_start, "m");
     }
     return j;
 }

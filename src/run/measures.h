@@ -158,7 +158,7 @@ double energy_put_in(const EnergyReport& e, double e0);
 // final run-up into the summary.
 void write_deposit(const World& w, const MeasureContext& m, const std::string& dir, RunSummary& sum);
 // envelope.csv and the slope angles of a dam break's deposit over [0, length].
-SlopeAngles write_envelope(const World& w, double gap, double length, const std::string& dir, RunSummary& sum);
+SlopeAngles write_envelope(const World& w, double gap, double length, double sections_start, const std::string& dir, RunSummary& sum);
 
 // summary.json's landmarks of a flow, the same keys for DEM and DAN runs (`demlab compare`):
 // run-up, arrival at the barrier, the force peaks and their times

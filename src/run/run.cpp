@@ -318,7 +318,7 @@ void write_results(const Scenario& s, const Setup& setup, const World& w, const 
                    const std::function<void(RunSummary&)>& design_figures) {
     if (measure.path) write_deposit(w, measure, dir, sum);
     SlopeAngles angles{};
-    if (setup.measures_envelope()) angles = write_envelope(w, measure.front_gap, setup.envelope_length(), dir, sum);
+    if (setup.measures_envelope()) angles = write_envelope(w, measure.front_gap, setup.envelope_length(), s.dam_break.sections_start, dir, sum);
     write_lost_discs(w, dir);
     sum.lost_discs = long(w.lost_discs().size());
     if (measure.path) {

@@ -357,6 +357,7 @@ void add_setups_keys(std::vector<Key>& k) {
     // dam break
     k.push_back(real("dam_break.width", "m", "column width: back wall at x = 0, gate at x = width (assumed: 0.20)", [](Scenario& s) -> double& { return s.dam_break.width; }, 0, 10, true));
     k.push_back(real("dam_break.height", "m", "column height (assumed: 0.40; 0.08 m2 holds the thesis' 9,439 discs)", [](Scenario& s) -> double& { return s.dam_break.height; }, 0, 10, true));
+    k.push_back(real("dam_break.sections_start", "m", "where the five 10 cm sections of the deposit's surface begin, from the back wall: section 5 (gamma_5) spans [start, start + 0.1], section 1 [start + 0.4, start + 0.5]; gamma_ges runs from the surface at start to the toe (0: at the back wall; data/dam_break_geometry.md)", [](Scenario& s) -> double& { return s.dam_break.sections_start; }, 0, 10, false));
     k.push_back(real("dam_break.floor_length", "m", "length of the floor from the back wall", [](Scenario& s) -> double& { return s.dam_break.floor_length; }, 0, 100, true));
     // terrain
     k.push_back(text("terrain.profile", "CSV file of the ground's profile (a relative path is taken from the scenario file's folder): rows x,y in m with x increasing (a header line and # comments allowed); a wall per segment, the ground below, friction and stiffness from material.friction_wall_deg, wall_kn, wall_ks", [](Scenario& s) -> std::string& { return s.terrain.profile; }));

@@ -611,6 +611,10 @@ void finish_scenario(Scenario& s) {
         if (d.floor_length <= d.width)
             throw InputError(where + "dam_break.floor_length = " + format_number(d.floor_length) +
                              " m must exceed dam_break.width = " + format_number(d.width) + " m");
+        if (d.sections_start + 0.5 > d.floor_length)
+            throw InputError(where + "dam_break.sections_start = " + format_number(d.sections_start) +
+                             " m leaves the five 10 cm sections past the floor's end (dam_break.floor_length = " +
+                             format_number(d.floor_length) + " m): at most " + format_number(d.floor_length - 0.5) + " m");
         if (s.world.rotation.model >= 2 && !(s.world.rotation.u_rr < 0.6 * r.r_min * (1.0 - r.radius_reduction)))
             throw InputError(where + "rotation.u_rr = " + format_number(s.world.rotation.u_rr) +
                              " m must be < 0.6 times the smallest radius after the reduction");

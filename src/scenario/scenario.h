@@ -33,6 +33,7 @@ struct DamBreakDef {
     double width = 0.20;                   // m, back wall to gate
     double height = 0.40;                  // m, height of the column (the lid while it is generated)
     double floor_length = 1.5;             // m, floor from the back wall
+    double sections_start = 0.0;           // m, from the back wall to where section 5 (gamma_5) begins
 };
 
 // A terrain profile (setups/setup.h): walls along a polyline read from a CSV file, the ground
