@@ -1,6 +1,7 @@
 // Small 3-D vector math on Eigen, for the 3-D solver (src/dem3/) and its terrain.
 #pragma once
 #include <Eigen/Core>
+#include <Eigen/Geometry>  // cross products
 
 namespace demlab {
 

@@ -17,3 +17,11 @@ void write_png(const std::string& path, const Image& img);  // atomic: temporary
 Image read_png(const std::string& path);
 
 }  // namespace demlab
+
+namespace demlab {
+
+// An RGBA frame buffer of w x h pixels, bottom row first (OpenGL's), box-filtered down by ss
+// in each direction to an Image of (w / ss) x (h / ss), top row first.
+Image box_filter_down(const uint8_t* rgba, int w, int h, int ss);
+
+}  // namespace demlab

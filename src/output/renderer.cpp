@@ -15,14 +15,11 @@
 #include <mutex>
 
 #include "core/error.h"
+#include "output/colour_map.h"
 
 namespace demlab {
 
 namespace {
-struct Rgb {
-    double r, g, b;
-};
-
 const Rgb kBackground{1.0, 1.0, 1.0};
 const Rgb kWall{0.16, 0.16, 0.16};
 const Rgb kLayerA{0.84, 0.55, 0.24};  // sand
@@ -42,16 +39,7 @@ Rgb bond_colour(int intact, int broken) {
     return {lo.r + q * (hi.r - lo.r), lo.g + q * (hi.g - lo.g), lo.b + q * (hi.b - lo.b)};
 }
 
-// viridis, five stops
-Rgb speed_colour(double v, double vmax) {
-    static const Rgb stops[5] = {{0.267, 0.005, 0.329}, {0.231, 0.322, 0.545}, {0.129, 0.569, 0.549},
-                                 {0.369, 0.788, 0.384}, {0.993, 0.906, 0.144}};
-    double t = std::clamp(v / vmax, 0.0, 1.0) * 4.0;
-    const int k = std::min(3, int(t));
-    t -= k;
-    return {stops[k].r + t * (stops[k + 1].r - stops[k].r), stops[k].g + t * (stops[k + 1].g - stops[k].g),
-            stops[k].b + t * (stops[k + 1].b - stops[k].b)};
-}
+Rgb speed_colour(double v, double vmax) { return viridis(v, vmax); }
 
 const char* kFonts[] = {"/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf",
                         "/usr/share/fonts/truetype/dejavu/DejaVuSans-Bold.ttf"};
@@ -343,39 +331,7 @@ std::vector<std::pair<Vec2, std::string>> Renderer::draw_flume_marks(const Frame
 
 Image Renderer::read_back_downsampled() {
     Impl& im = *impl_;
-    // box filter down to the output size; OpenGL rows run bottom to top. The ss rows of an
-    // output row are summed first, byte by byte along the whole row (a loop the compiler
-    // vectorises), then each pixel's ss columns; the rounded means come from a table. Per
-    // pixel with a division for each colour, this was a fifth of rendering a frame.
-    Image img;
-    img.width = style_.width;
-    img.height = style_.height;
-    img.rgb.resize(size_t(img.width) * size_t(img.height) * 3);
-    const int ss = style_.supersample, n = ss * ss;
-    std::vector<uint8_t> mean(size_t(255 * n + 1));
-    for (size_t s = 0; s < mean.size(); ++s) mean[s] = uint8_t((int(s) + n / 2) / n);
-    const size_t row_bytes = size_t(im.w) * 4;
-    std::vector<uint16_t> column_sums(row_bytes);  // at most 4 * 255 per byte
-    for (int y = 0; y < img.height; ++y) {
-        std::fill(column_sums.begin(), column_sums.end(), uint16_t(0));
-        for (int j = 0; j < ss; ++j) {
-            const uint8_t* p = &im.buffer[size_t(im.h - 1 - (y * ss + j)) * row_bytes];
-            for (size_t b = 0; b < row_bytes; ++b) column_sums[b] = uint16_t(column_sums[b] + p[b]);
-        }
-        uint8_t* q = img.at(0, y);
-        const uint16_t* c = column_sums.data();
-        for (int x = 0; x < img.width; ++x, q += 3) {
-            int sum[3] = {0, 0, 0};
-            for (int i = 0; i < ss; ++i, c += 4) {
-                sum[0] += c[0];
-                sum[1] += c[1];
-                sum[2] += c[2];
-            }
-            for (int k = 0; k < 3; ++k) q[k] = mean[size_t(sum[k])];
-        }
-    }
-
-    return img;
+    return box_filter_down(im.buffer.data(), im.w, im.h, style_.supersample);
 }
 
 // The labels, notes, time and speed bar, in pixels.
