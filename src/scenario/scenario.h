@@ -85,6 +85,7 @@ struct ReleaseDef {
     std::string variant = "II";            // I: gate deleted at t = 0; II: gate lifted at gate_speed
     double gate_speed = 2.25;              // m/s, Variant II
     double settle_alpha = 0.7;             // local damping while settling (frictionless phase)
+    double settle_stiffness_factor = 1.0;  // the stiffnesses while the mass compacts without friction, as a fraction of theirs
     double settle_ratio = 5e-4;            // settled when mean |unbalanced force| / mean |contact force| < this
     bool accept_unsettled = false;         // run a mass that did not reach settle_ratio (else refused, exit 3)
     double settle_max_time = 1.5;          // s of simulated settling at most
