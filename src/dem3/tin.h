@@ -19,9 +19,9 @@ namespace demlab {
 
 // One touch of a sphere on the terrain: the closest point of one feature.
 struct TinContact {
-    Vec3 normal;             // unit, from the closest point towards the sphere's centre
+    Vec3 normal = Vec3::UnitZ();  // unit, from the closest point towards the sphere's centre
     double distance = 0.0;   // m, centre to the closest point (DEBRIS' d_i); < the radius
-    Vec3 point;              // m, the closest point on the terrain
+    Vec3 point = Vec3::Zero();    // m, the closest point on the terrain
     std::uint32_t feature = 0;  // the feature's id: faces [0, F), edges [F, F + E), vertices after; stable for a TIN
 };
 
@@ -49,10 +49,21 @@ public:
     Vec3 upper_corner() const { return upper_; }
 
 private:
+    // edges, adjacency and the map-view search; after vertices_ and triangles_ are set
+    void build();
+    // the triangles whose map-view boxes meet [x0, x1] x [y0, y1], ascending (out is cleared)
+    void triangles_near(double x0, double y0, double x1, double y1, std::vector<std::uint32_t>& out) const;
+
     std::vector<Vec3> vertices_;
     std::vector<std::array<std::uint32_t, 3>> triangles_;  // counter-clockwise seen from above
+    std::vector<std::array<std::uint32_t, 3>> triangle_edges_;  // edge k joins corners k and k + 1
+    std::vector<std::array<std::uint32_t, 2>> edge_faces_;     // the one or two faces of an edge (a lone face: twice)
+    std::vector<std::uint32_t> vertex_face_start_, vertex_faces_;  // the faces around each vertex (CSR)
+    // map-view buckets of side bucket_ over the box, each listing the triangles meeting it (CSR)
+    double bucket_ = 1.0;
+    int buckets_x_ = 1, buckets_y_ = 1;
+    std::vector<std::uint32_t> bucket_start_, bucket_items_;
     Vec3 lower_ = Vec3::Zero(), upper_ = Vec3::Zero();
-    // the implementation adds its edges, adjacency and search structure here
 };
 
 // An "x y z" point file (DEBRIS' input: the bed and the level surface), one point a row,

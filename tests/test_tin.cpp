@@ -1,0 +1,165 @@
+// The terrain as a TIN (src/dem3/tin.h): a sphere feels one contact on a plane made of many
+// triangles wherever it is, one across a convex fold with a continuous distance, one on each
+// face of a concave fold, the same from scattered points as from a grid; bad files refused.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <random>
+
+#include "core/error.h"
+#include "dem3/tin.h"
+#include "files.h"
+
+using namespace demlab;
+
+namespace {
+constexpr double kDeg = 3.14159265358979323846 / 180.0;
+
+// a grid of n x n cells of side `cell` with z = f(x, y) at its nodes
+template <class F>
+EsriGrid grid_of(int n, double cell, F f) {
+    EsriGrid g;
+    g.ncols = g.nrows = n + 1;
+    g.cellsize = cell;
+    g.x0 = 0.0;
+    g.y0 = 0.0;
+    for (int r = 0; r <= n; ++r)
+        for (int c = 0; c <= n; ++c) g.z.push_back(f(c * cell, r * cell));
+    return g;
+}
+
+// the plane of slope 20 deg falling along a direction 17 deg off the grid's x axis
+const double kSlope = std::tan(20 * kDeg), kCos = std::cos(17 * kDeg), kSin = std::sin(17 * kDeg);
+double plane(double x, double y) { return kSlope * (x * kCos + y * kSin); }
+const Vec3 kPlaneNormal = Vec3(-kSlope * kCos, -kSlope * kSin, 1.0).normalized();
+}  // namespace
+
+TEST(Tin, OneContactOnAPlaneOfManyTrianglesAndNoJumpAcrossEdges) {
+    const Tin tin = Tin::from_grid(grid_of(20, 1.0, plane), "plane.asc");
+    EXPECT_EQ(tin.triangles().size(), 800u);
+    const double R = 1.0, h = 0.7;
+    std::vector<TinContact> out;
+    double f_min = INFINITY, f_max = -INFINITY;
+    // a straight line across the grid at 31 deg, through edges, diagonals and corners
+    for (int k = 0; k <= 4000; ++k) {
+        const double s = 2.0 + 14.0 * k / 4000.0;
+        const double x = s * std::cos(31 * kDeg) + 1.5, y = s * std::sin(31 * kDeg) + 1.0;
+        const Vec3 foot(x, y, plane(x, y));
+        const Vec3 centre = foot + h * kPlaneNormal;
+        out.clear();
+        tin.sphere_contacts(centre, R, out);
+        ASSERT_EQ(out.size(), 1u) << "at s = " << s;
+        EXPECT_NEAR(out[0].distance, h, 1e-12 * h) << "at s = " << s;
+        EXPECT_LT((out[0].normal - kPlaneNormal).norm(), 1e-12) << "at s = " << s;
+        const double force = kPi * (R * R - out[0].distance * out[0].distance) * (R - out[0].distance) / R;  // E = 1
+        f_min = std::min(f_min, force);
+        f_max = std::max(f_max, force);
+    }
+    EXPECT_LT((f_max - f_min) / f_max, 1e-6);
+    // exactly above a grid node and on an edge: still one
+    for (const Vec3& p : {Vec3(5, 5, plane(5, 5)), Vec3(5.5, 5, plane(5.5, 5)), Vec3(5.5, 5.5, plane(5.5, 5.5))}) {
+        out.clear();
+        tin.sphere_contacts(p + h * kPlaneNormal, R, out);
+        ASSERT_EQ(out.size(), 1u);
+        EXPECT_NEAR(out[0].distance, h, 1e-12);
+    }
+}
+
+TEST(Tin, OneContactAcrossAConvexFoldWithAContinuousDistance) {
+    // a ridge along x = 10: z = -0.1 |x - 10|, about 5.7 deg either side
+    const Tin tin = Tin::from_grid(grid_of(20, 1.0, [](double x, double) { return -0.1 * std::abs(x - 10.0); }), "ridge.asc");
+    auto exact = [](const Vec3& c) {
+        // the distance to the profile's two half-lines in the x-z plane
+        double best = INFINITY;
+        for (double side : {-1.0, 1.0}) {
+            const Vec2 a(10, 0), dir = Vec2(side, -0.1).normalized();
+            const Vec2 p(c.x(), c.z());
+            const double t = std::max(0.0, (p - a).dot(dir));
+            best = std::min(best, (p - (a + t * dir)).norm());
+        }
+        return best;
+    };
+    std::vector<TinContact> out;
+    for (int k = 0; k <= 2000; ++k) {
+        const double x = 8.0 + 4.0 * k / 2000.0, y = 7.3;
+        const Vec3 c(x, y, -0.1 * std::abs(x - 10.0) + 0.6);
+        out.clear();
+        tin.sphere_contacts(c, 1.0, out);
+        ASSERT_EQ(out.size(), 1u) << "at x = " << x;
+        EXPECT_NEAR(out[0].distance, exact(c), 1e-12) << "at x = " << x;
+    }
+}
+
+TEST(Tin, ConcaveFoldTouchesBothFaces) {
+    const double s = 0.3;  // a valley along x = 10
+    const Tin tin = Tin::from_grid(grid_of(20, 1.0, [s](double x, double) { return s * std::abs(x - 10.0); }), "valley.asc");
+    std::vector<TinContact> out;
+    tin.sphere_contacts(Vec3(10.0, 6.4, 0.5), 1.0, out);
+    ASSERT_EQ(out.size(), 2u);
+    for (const TinContact& c : out) {
+        EXPECT_NEAR(c.distance, 0.5 / std::sqrt(1 + s * s), 1e-12);
+        EXPECT_NEAR(std::abs(c.normal.x()), s / std::sqrt(1 + s * s), 1e-12);
+    }
+    EXPECT_LT(out[0].normal.x() * out[1].normal.x(), 0.0);  // one from each side
+}
+
+TEST(Tin, ScatteredPointsGiveThePlaneAndItsHeights) {
+    std::mt19937_64 rng(3);
+    std::uniform_real_distribution<double> u(0.0, 20.0);
+    std::vector<Vec3> pts;
+    for (double x : {0.0, 20.0})
+        for (double y : {0.0, 20.0}) pts.emplace_back(x, y, plane(x, y));
+    for (int i = 0; i < 300; ++i) {
+        const double x = u(rng), y = u(rng);
+        pts.emplace_back(x, y, plane(x, y));
+    }
+    const Tin tin = Tin::from_points(pts, "points.xyz");
+    std::vector<TinContact> out;
+    for (int k = 0; k < 500; ++k) {
+        const double x = 2 + 16 * (k % 23) / 22.0, y = 2 + 16 * (k / 23) / 21.0;
+        out.clear();
+        tin.sphere_contacts(Vec3(x, y, plane(x, y)) + 0.4 * kPlaneNormal, 1.0, out);
+        ASSERT_EQ(out.size(), 1u);
+        EXPECT_NEAR(out[0].distance, 0.4, 1e-9);
+        double z = 0;
+        ASSERT_TRUE(tin.height_at(x, y, z));
+        EXPECT_NEAR(z, plane(x, y), 1e-9);
+    }
+    double z = 0;
+    EXPECT_FALSE(tin.height_at(-1.0, 5.0, z));
+    // the grid's own nodes and the plane between them
+    const Tin g = Tin::from_grid(grid_of(4, 2.5, [](double x, double y) { return x * x + y; }), "bowl.asc");
+    ASSERT_TRUE(g.height_at(5.0, 7.5, z));
+    EXPECT_NEAR(z, 25.0 + 7.5, 1e-12);
+}
+
+TEST(Tin, BadFilesAreRefusedWithTheirNames) {
+    auto refused = [](const std::string& text, const std::string& needle) {
+        test::TempFile f("terrain.xyz", text);
+        try {
+            const std::vector<Vec3> p = read_xyz_points(f.path());
+            (void)Tin::from_points(p, f.path());
+        } catch (const InputError& e) {
+            const std::string what = e.what();
+            EXPECT_NE(what.find(f.path()), std::string::npos) << what;
+            EXPECT_NE(what.find(needle), std::string::npos) << what;
+            return;
+        }
+        ADD_FAILURE() << "not refused: " << text;
+    };
+    refused("0 0 0\n1 0 x\n0 1 0\n", "'x' is not a finite number");
+    refused("0 0 0\n1 0\n0 1 0\n", "2 values");
+    refused("0 0 0\n1 0 nan\n0 1 0\n", "not a finite number");
+    refused("# a comment\n0 0 0\n1 0 1\n0 1 0\n1 0 2\n", "the same x and y");
+    refused("0 0 0\n1 1 0\n2 2 5\n", "one line");
+    refused("0 0 0\n1 1 0\n", "at least 3");
+    EsriGrid g = grid_of(3, 1.0, [](double, double) { return -9999.0; });
+    g.has_nodata = true;
+    try {
+        (void)Tin::from_grid(g, "holes.asc");
+        ADD_FAILURE() << "an all-NODATA grid was not refused";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("holes.asc"), std::string::npos);
+    }
+}
