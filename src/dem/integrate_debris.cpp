@@ -13,6 +13,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "dem/laws/debris_law.h"
 #include "dem/world.h"
 
 namespace demlab {
@@ -62,11 +63,7 @@ void World::integrate_discs_debris(size_t begin, size_t end, int chunk, const In
             const double normal = resultant ? (l.n_wall > 0 ? wall_reaction[i].norm() : 0.0) + (l.force - wall_reaction[i]).norm()
                                             : l.wall_normal + l.k_rot;
             if (trial) {
-                const double j = h * dd.mu * normal * inv_mass[i];
-                const double speed = v_star.norm();
-                // one division: (speed - j)/speed/(1 + h eta/m), the same bits when eta = 0
-                v_new = speed <= j ? Vec2::Zero()
-                                   : Vec2(v_star * ((speed - j) / (speed * (1.0 + h * dd.eta * inv_mass[i]))));
+                v_new = debris::friction_trial(v_star, h * dd.mu * normal * inv_mass[i], h * dd.eta * inv_mass[i]);
             } else {
                 const double speed = v_old.norm();
                 if (speed > 0.0) v_new = v_star - (h * inv_mass[i] * (dd.mu * normal + dd.eta * speed) / speed) * v_old;

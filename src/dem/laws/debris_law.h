@@ -83,27 +83,35 @@ inline double force(double E, DebrisArea area, double delta, double ri, double r
 //   k = 2E (a + a c/q)/(Ri + Rj) = 2E a (q + c)/(q (Ri + Rj)),
 // one square root and one division (two for a pair, with 1/(2d)), as force() takes: the step
 // needs it for every contact in every step.
-inline double stiffness(double E, DebrisArea area, double delta, double ri, double rj) {
-    const double rsum = rj > 0.0 ? ri + rj : ri;
-    if (area == DebrisArea::Diameter) return E * 2.0 * (rj > 0.0 ? std::min(ri, rj) : ri) / rsum;
-    if (!(delta > 0.0)) return 0.0;
-    double q, c;
+// The chord's terms of a^2 = delta q, with c = a da/d delta (so delta dq/d delta = 2c - q):
+// bed q = 2R - delta, c = R - delta; pair q as half_width_sq's, c = x (1 - x/d). The same in
+// 2-D and 3-D: the section's half-width a is the same.
+inline void chord_terms(double delta, double ri, double rj, double& q, double& c) {
     if (rj <= 0.0) {
         q = 2.0 * ri - delta;
         c = ri - delta;
     } else {
-        const double d = rsum - delta;
+        const double d = ri + rj - delta;
         const double inv_2d = 0.5 / d;
         const double x = (d * d + ri * ri - rj * rj) * inv_2d;
         q = (rj + d - ri) * (ri + x) * inv_2d;
         c = x * (1.0 - 2.0 * x * inv_2d);
     }
+}
+
+inline double stiffness(double E, DebrisArea area, double delta, double ri, double rj) {
+    const double rsum = rj > 0.0 ? ri + rj : ri;
+    if (area == DebrisArea::Diameter) return E * 2.0 * (rj > 0.0 ? std::min(ri, rj) : ri) / rsum;
+    if (!(delta > 0.0)) return 0.0;
+    double q, c;
+    chord_terms(delta, ri, rj, q, c);
     const double a = std::sqrt(delta * q);
     return 2.0 * E * a * (q + c) / (q * rsum);
 }
 
-// U(delta) = int_0^delta F, J/m: 8-point Gauss-Legendre over w in [0, sqrt(delta)], F(w^2) 2w dw
-inline double energy(double E, DebrisArea area, double delta, double ri, double rj) {
+// U(delta) = int_0^delta F: 8-point Gauss-Legendre over w in [0, sqrt(delta)], F(w^2) 2w dw
+template <typename Force>
+double gauss_energy(Force force_at, double delta) {
     if (!(delta > 0.0)) return 0.0;
     static constexpr std::array<double, 4> x = {0.1834346424956498, 0.5255324099163290, 0.7966664774136267,
                                                 0.9602898564975363};
@@ -114,9 +122,51 @@ inline double energy(double E, DebrisArea area, double delta, double ri, double 
     for (size_t k = 0; k < 4; ++k)
         for (const double sgn : {-1.0, 1.0}) {
             const double w = h * (1.0 + sgn * x[k]);
-            u += wt[k] * force(E, area, w * w, ri, rj) * 2.0 * w;
+            u += wt[k] * force_at(w * w) * 2.0 * w;
         }
     return h * u;
+}
+
+// J/m (t = 1 m)
+inline double energy(double E, DebrisArea area, double delta, double ri, double rj) {
+    return gauss_energy([&](double s) { return force(E, area, s, ri, rj); }, delta);
+}
+
+// --- the 3-D forms (DEBRIS.md D1-D3: spheres, S = pi a^2), for the 3-D solver (src/dem3/)
+
+// N: F = E pi a^2 delta / (Ri + Rj) (bed: / R)
+inline double sphere_force(double E, double delta, double ri, double rj) {
+    if (!(delta > 0.0)) return 0.0;
+    const double rsum = rj > 0.0 ? ri + rj : ri;
+    return E * kPi * half_width_sq(delta, ri, rj) * delta / rsum;
+}
+
+// N/m: dF/d delta = E pi (a^2 + delta d(a^2)/d delta)/(Ri + Rj) = E pi delta (q + 2c)/(Ri + Rj)
+// (a^2 = delta q, d(a^2)/d delta = 2c); bed E pi delta (4R - 3 delta)/R. It vanishes at first
+// touch (Hertz's exponent: F ~ delta^2 in 3-D), so the step is set by the overlap ahead.
+inline double sphere_stiffness(double E, double delta, double ri, double rj) {
+    if (!(delta > 0.0)) return 0.0;
+    const double rsum = rj > 0.0 ? ri + rj : ri;
+    double q, c;
+    chord_terms(delta, ri, rj, q, c);
+    return E * kPi * delta * (q + 2.0 * c) / rsum;
+}
+
+// J: int_0^delta F (bed: E pi (2R delta^3/3 - delta^4/4)/R, which the quadrature gives to
+// rounding: F(w^2) 2w is a polynomial of degree 7 in w)
+inline double sphere_energy(double E, double delta, double ri, double rj) {
+    return gauss_energy([&](double s) { return sphere_force(E, s, ri, rj); }, delta);
+}
+
+// The disc's or sphere's friction, "trial" (DEBRIS.md sec. 4.2): the velocity after the other
+// forces, v*, slowed by the Coulomb impulse j (m/s) explicitly and the viscous part
+// implicitly (h_eta_m = h eta / m), never reversed; static friction holds it at rest when
+// |v*| <= j. Vec2 or Vec3.
+template <typename V>
+V friction_trial(const V& v_star, double j, double h_eta_m) {
+    const double speed = v_star.norm();
+    // one division: (speed - j)/speed/(1 + h eta/m), the same bits when eta = 0
+    return speed <= j ? V(V::Zero()) : V(v_star * ((speed - j) / (speed * (1.0 + h_eta_m))));
 }
 
 }  // namespace debris
