@@ -1,0 +1,233 @@
+#include "dem3/world3.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/error.h"
+#include "dem/laws/law_part.h"
+
+namespace demlab {
+
+namespace {
+constexpr double kGrowth = DebrisLaw::kStepGrowth;  // the 2-D law's rule and its reasons
+constexpr double kAhead = DebrisLaw::kAheadSteps;
+constexpr std::uint64_t kCellBias = std::uint64_t(1) << 20;
+
+std::uint64_t cell_key(std::int64_t x, std::int64_t y, std::int64_t z) {
+    return (std::uint64_t(x + std::int64_t(kCellBias)) << 42) | (std::uint64_t(y + std::int64_t(kCellBias)) << 21) |
+           std::uint64_t(z + std::int64_t(kCellBias));
+}
+}  // namespace
+
+World3::World3(const Dem3Def& def, std::shared_ptr<const Tin> terrain) : def_(def), tin_(std::move(terrain)) {
+    pool_ = std::make_unique<ThreadPool>(def.threads);
+}
+
+void World3::add_sphere(const Vec3& position, const Vec3& velocity, double radius, double density) {
+    if (!(radius > 0.0) || !(density > 0.0)) throw InputError("a sphere needs a positive radius and density");
+    pos_.push_back(position);
+    vel_.push_back(velocity);
+    radius_.push_back(radius);
+    mass_.push_back(4.0 / 3.0 * kPi * radius * radius * radius * density);  // D1
+    lost_.push_back(0);
+    r_max_ = std::max(r_max_, radius);
+}
+
+size_t World3::lost_count() const {
+    size_t n = 0;
+    for (std::uint8_t l : lost_) n += l;
+    return n;
+}
+
+double World3::kinetic_energy() const {
+    double e = 0.0;
+    for (size_t i = 0; i < pos_.size(); ++i)
+        if (!lost_[i]) e += 0.5 * mass_[i] * vel_[i].squaredNorm();
+    return e;
+}
+
+void World3::build_cells() {
+    // cells two largest radii and a margin wide: a sphere's contacts and the pairs closing in
+    // within the look-ahead lie in its own and the 26 cells around it
+    double v_max = 0.0;
+    for (size_t i = 0; i < pos_.size(); ++i)
+        if (!lost_[i]) v_max = std::max(v_max, vel_[i].norm());
+    const double ahead = kAhead * (dt_ > 0.0 ? dt_ : def_.dt_max) * 2.0 * v_max;
+    cell_ = std::max(2.0 * r_max_ + ahead, 1e-9);
+    cells_.clear();
+    for (size_t i = 0; i < pos_.size(); ++i) {
+        if (lost_[i]) continue;
+        const Vec3& p = pos_[i];
+        cells_.emplace_back(cell_key(std::int64_t(std::floor(p.x() / cell_)), std::int64_t(std::floor(p.y() / cell_)),
+                                     std::int64_t(std::floor(p.z() / cell_))),
+                            std::uint32_t(i));
+    }
+    std::sort(cells_.begin(), cells_.end());
+}
+
+void World3::gather(size_t i, double ahead_dt, Load& l, std::vector<TinContact>& bed) const {
+    l = Load{};
+    const double E = def_.youngs_modulus, ri = radius_[i];
+    const Vec3 &p = pos_[i], &v = vel_[i];
+    // the bed: the features within the radius, and those the sphere may reach in the look-ahead
+    const double reach = kAhead * ahead_dt * v.norm();
+    bed.clear();
+    tin_->sphere_contacts(p, ri + reach, bed);
+    for (const TinContact& c : bed) {
+        const double delta = ri - c.distance, vn = v.dot(c.normal);
+        const double ahead = delta + kAhead * ahead_dt * std::max(0.0, -vn);
+        if (ahead > 0.0) l.k += debris::sphere_stiffness(E, std::min(ahead, 0.999 * ri), ri, 0.0);
+        if (!(delta > 0.0)) continue;
+        const double f = debris::sphere_force(E, delta, ri, 0.0);
+        l.bed += f * c.normal;
+        l.moduli += f;
+        l.elastic += debris::sphere_energy(E, delta, ri, 0.0);
+        ++l.touching;
+    }
+    // the pairs, from the 27 cells around
+    const std::int64_t cx = std::int64_t(std::floor(p.x() / cell_)), cy = std::int64_t(std::floor(p.y() / cell_)),
+                       cz = std::int64_t(std::floor(p.z() / cell_));
+    for (std::int64_t dx = -1; dx <= 1; ++dx)
+        for (std::int64_t dy = -1; dy <= 1; ++dy)
+            for (std::int64_t dz = -1; dz <= 1; ++dz) {
+                const std::uint64_t key = cell_key(cx + dx, cy + dy, cz + dz);
+                auto it = std::lower_bound(cells_.begin(), cells_.end(), std::make_pair(key, std::uint32_t(0)));
+                for (; it != cells_.end() && it->first == key; ++it) {
+                    const size_t j = it->second;
+                    if (j == i) continue;
+                    const double rj = radius_[j], rsum = ri + rj;
+                    const Vec3 d = pos_[j] - p;
+                    const Vec3 vrel = vel_[j] - v;
+                    const double reach_ij = rsum + kAhead * ahead_dt * vrel.norm();
+                    const double dist2 = d.squaredNorm();
+                    if (dist2 >= reach_ij * reach_ij) continue;
+                    const double dist = std::sqrt(dist2);
+                    const Vec3 n = d / dist;  // from i to j
+                    const double delta = rsum - dist, vn = vrel.dot(n);
+                    const double ahead = delta + kAhead * ahead_dt * std::max(0.0, -vn);
+                    if (ahead > 0.0) l.k += debris::sphere_stiffness(E, std::min(ahead, 0.999 * std::min(ri, rj)), ri, rj);
+                    if (!(delta > 0.0)) continue;
+                    const double f = debris::sphere_force(E, delta, ri, rj);
+                    l.pairs -= f * n;
+                    l.moduli += f;
+                    l.elastic += 0.5 * debris::sphere_energy(E, delta, ri, rj);
+                    ++l.touching;
+                }
+            }
+}
+
+void World3::step() {
+    const size_t n = pos_.size();
+    load_.resize(n);
+    build_cells();
+    const double ahead_dt = dt_ > 0.0 ? dt_ : def_.dt_max;
+    pool_->parallel_for(n, [&](size_t begin, size_t end, int) {
+        thread_local std::vector<TinContact> bed;
+        for (size_t i = begin; i < end; ++i)
+            if (!lost_[i]) gather(i, ahead_dt, load_[i], bed);
+    });
+    // the step (D12): the smallest m / K over the spheres
+    double best_sq = INFINITY, elastic = 0.0, potential = 0.0;
+    long touching = 0;
+    for (size_t i = 0; i < n; ++i) {
+        if (lost_[i]) continue;
+        if (load_[i].k > 0.0) best_sq = std::min(best_sq, mass_[i] / load_[i].k);
+        elastic += load_[i].elastic;
+        potential += mass_[i] * def_.gravity * pos_[i].z();
+        touching += load_[i].touching;
+    }
+    contacts_ = touching;
+    const double dt = def_.dt_fixed > 0.0 ? def_.dt_fixed : capped_growing_step(def_.dt_max, kGrowth, def_.safety, best_sq, dt_);
+    energy_.elastic = elastic;
+    energy_.potential = potential;
+    integrate(dt);
+    time_ += dt;
+    dt_ = dt;
+    ++steps_;
+}
+
+void World3::integrate(double dt) {
+    // a force at x_n acts from t_n - dt_(n-1)/2 to t_n + dt_n/2 (variable-step Stormer-Verlet,
+    // as the 2-D law: integrate_debris.cpp)
+    const double h = dt_ > 0.0 ? 0.5 * (dt_ + dt) : dt;
+    const Vec3 g(0.0, 0.0, -def_.gravity);
+    const bool resultant = def_.friction_normal == DebrisNormal::Resultant;
+    const bool trial = def_.friction_direction == DebrisDirection::Trial;
+    const Vec3 lo = tin_->lower_corner(), hi = tin_->upper_corner();
+    const double margin = std::max(hi.z() - lo.z(), 10.0 * r_max_);
+    double kinetic = 0.0, friction = 0.0, lost_energy = 0.0;
+    for (size_t i = 0; i < pos_.size(); ++i) {
+        if (lost_[i]) continue;
+        const Load& l = load_[i];
+        const double m = mass_[i], inv_m = 1.0 / m;
+        const Vec3 v_old = vel_[i];
+        const Vec3 v_star = v_old + (l.bed + l.pairs + m * g) * (inv_m * h);
+        Vec3 v_new = v_star;
+        if (l.touching > 0) {
+            const double normal = resultant ? l.bed.norm() + l.pairs.norm() : l.moduli;  // N + P (D4)
+            if (trial) {
+                v_new = debris::friction_trial(v_star, h * def_.mu * normal * inv_m, h * def_.eta * inv_m);
+            } else {
+                const double speed = v_old.norm();
+                if (speed > 0.0) v_new = v_star - (h * inv_m * (def_.mu * normal + def_.eta * speed) / speed) * v_old;
+            }
+            // the friction impulse's work over the step's mean velocity (centred)
+            friction -= 0.5 * m * (v_new - v_star).dot(v_old + v_new);
+        }
+        kinetic += 0.5 * m * v_old.dot(v_new);
+        vel_[i] = v_new;
+        pos_[i] += dt * v_new;
+        const Vec3& p = pos_[i];
+        if (p.x() < lo.x() - margin || p.y() < lo.y() - margin || p.x() > hi.x() + margin || p.y() > hi.y() + margin ||
+            p.z() < lo.z() - margin) {
+            lost_[i] = 1;
+            // what it carries away, so the ledger still closes
+            lost_energy += 0.5 * m * v_new.squaredNorm() + m * def_.gravity * p.z();
+        }
+    }
+    energy_.kinetic = kinetic;
+    energy_.dissipated += friction;
+    energy_.lost += lost_energy;
+}
+
+void World3::save_state(BinaryWriter& out) const {
+    out.tag("DEM3");
+    out.put(std::uint64_t(pos_.size()));
+    for (size_t i = 0; i < pos_.size(); ++i) {
+        for (int k = 0; k < 3; ++k) out.put(pos_[i][k]);
+        for (int k = 0; k < 3; ++k) out.put(vel_[i][k]);
+        out.put(lost_[i]);
+    }
+    out.put(time_);
+    out.put(dt_);
+    out.put(std::int64_t(steps_));
+    out.put(energy_.kinetic);
+    out.put(energy_.potential);
+    out.put(energy_.elastic);
+    out.put(energy_.dissipated);
+    out.put(energy_.lost);
+}
+
+void World3::load_state(BinaryReader& in) {
+    in.expect_tag("DEM3");
+    std::uint64_t n = 0;
+    in.get(n);
+    if (n != pos_.size()) throw InputError("checkpoint: " + std::to_string(n) + " spheres, the scenario makes " + std::to_string(pos_.size()));
+    for (size_t i = 0; i < pos_.size(); ++i) {
+        for (int k = 0; k < 3; ++k) in.get(pos_[i][k]);
+        for (int k = 0; k < 3; ++k) in.get(vel_[i][k]);
+        in.get(lost_[i]);
+    }
+    in.get(time_);
+    in.get(dt_);
+    std::int64_t steps = 0;
+    in.get(steps);
+    steps_ = long(steps);
+    in.get(energy_.kinetic);
+    in.get(energy_.potential);
+    in.get(energy_.elastic);
+    in.get(energy_.dissipated);
+    in.get(energy_.lost);
+}
+
+}  // namespace demlab

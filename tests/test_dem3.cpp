@@ -1,0 +1,215 @@
+// The 3-D solver (src/dem3/world3.h) against DEBRIS' closed forms in 3-D: the mass and the bed
+// and pair forces (D1-D3), the normal restitution of D9 on the bed and head-on, sliding down a
+// plane of many triangles (D10), an undamped pile's energy and a gas's momentum, the same bits
+// on 1 and 2 threads, and a saved state resumed to the same bits.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+
+#include "dem3/world3.h"
+
+using namespace demlab;
+
+namespace {
+constexpr double kDeg = kPi / 180.0;
+
+template <class F>
+std::shared_ptr<const Tin> terrain(int n, double cell, F f, double x0 = 0.0, double y0 = 0.0) {
+    EsriGrid g;
+    g.ncols = g.nrows = n + 1;
+    g.cellsize = cell;
+    g.x0 = x0;
+    g.y0 = y0;
+    for (int r = 0; r <= n; ++r)
+        for (int c = 0; c <= n; ++c) g.z.push_back(f(x0 + c * cell, y0 + r * cell));
+    return std::make_shared<const Tin>(Tin::from_grid(g, "test.asc"));
+}
+
+std::shared_ptr<const Tin> flat(double size = 100.0, double z = 0.0) {
+    return terrain(10, size / 10, [z](double, double) { return z; }, -size / 2, -size / 2);
+}
+}  // namespace
+
+TEST(Dem3, MassAndTheBedAndPairForcesOfD1ToD3) {
+    const double E = 1e6;
+    // bed: R = 1, d = 0.9: a^2 = 0.19, F = E pi 0.19 0.1 / 1
+    EXPECT_NEAR(debris::sphere_force(E, 0.1, 1.0, 0.0), E * kPi * 0.19 * 0.1, 1e-9);
+    EXPECT_NEAR(debris::sphere_stiffness(E, 0.1, 1.0, 0.0), E * kPi * 0.1 * (4.0 - 0.3), 1e-9);
+    EXPECT_NEAR(debris::sphere_energy(E, 0.1, 1.0, 0.0), E * kPi * (2.0 * 0.001 / 3.0 - 0.0001 / 4.0), 1e-9);
+    // equal pair: R = 1, d = 1.9: x = 0.95, a^2 = 1 - 0.9025
+    EXPECT_NEAR(debris::sphere_force(E, 0.1, 1.0, 1.0), E * kPi * (1.0 - 0.9025) * 0.1 / 2.0, 1e-9);
+    // unequal pair: Ri = 1, Rj = 2, d = 2.8: x = (7.84 + 1 - 4)/5.6
+    const double x = (2.8 * 2.8 + 1.0 - 4.0) / 5.6;
+    EXPECT_NEAR(debris::sphere_force(E, 0.2, 1.0, 2.0), E * kPi * (1.0 - x * x) * 0.2 / 3.0, 1e-8);
+    // the stiffness is the force's derivative, the energy its integral
+    const double h = 1e-6;
+    EXPECT_NEAR(debris::sphere_stiffness(E, 0.2, 1.0, 2.0),
+                (debris::sphere_force(E, 0.2 + h, 1.0, 2.0) - debris::sphere_force(E, 0.2 - h, 1.0, 2.0)) / (2 * h), 1e-3);
+    double u = 0.0;
+    for (int k = 0; k < 200000; ++k) u += debris::sphere_force(E, (k + 0.5) * 0.2 / 200000, 1.0, 2.0) * 0.2 / 200000;
+    EXPECT_NEAR(debris::sphere_energy(E, 0.2, 1.0, 2.0) / u, 1.0, 1e-9);
+    // D1, and a sphere resting on the bed at the overlap where E pi a^2 delta / R = m g
+    World3 w(Dem3Def{}, flat());
+    w.add_sphere(Vec3(0, 0, 10), Vec3::Zero(), 10.0, 2000.0);
+    EXPECT_DOUBLE_EQ(w.masses()[0], 4.0 / 3.0 * kPi * 1000.0 * 2000.0);
+}
+
+namespace {
+// the rebound speed over the impact speed of a sphere meeting the bed at 1 m/s without gravity
+double bed_restitution(double mu) {
+    Dem3Def d;
+    d.mu = mu;
+    d.gravity = 0.0;
+    d.safety = 0.05;
+    d.youngs_modulus = 1e8;
+    World3 w(d, flat());
+    w.add_sphere(Vec3(0.3, -0.2, 1.001), Vec3(0, 0, -1.0), 1.0, 2000.0);
+    for (int k = 0; k < 2000000 && (w.positions()[0].z() < 1.0005 || w.velocities()[0].z() < 0.0); ++k) w.step();
+    return w.velocities()[0].norm();
+}
+double pair_restitution(double mu) {
+    Dem3Def d;
+    d.mu = mu;
+    d.gravity = 0.0;
+    d.safety = 0.05;
+    d.youngs_modulus = 1e8;
+    World3 w(d, flat(100.0, -50.0));
+    w.add_sphere(Vec3(-1.001, 0, 0), Vec3(1.0, 0, 0), 1.0, 2000.0);
+    w.add_sphere(Vec3(1.001, 0, 0), Vec3(-1.0, 0, 0), 1.0, 2000.0);
+    for (int k = 0; k < 2000000 && (w.positions()[1].x() - w.positions()[0].x() < 2.001 || w.velocities()[0].x() > 0.0); ++k) w.step();
+    return 0.5 * (w.velocities()[1].x() - w.velocities()[0].x());
+}
+}  // namespace
+
+TEST(Dem3, NormalRestitutionOfD9OnTheBedAndHeadOn) {
+    for (double mu : {0.3, 0.6}) {
+        const double e = std::sqrt((1.0 - mu) / (1.0 + mu));
+        EXPECT_NEAR(bed_restitution(mu) / e, 1.0, 0.01) << "bed, mu " << mu;
+        EXPECT_NEAR(pair_restitution(mu) / e, 1.0, 0.01) << "pair, mu " << mu;
+    }
+    EXPECT_NEAR(bed_restitution(0.0), 1.0, 1e-3);  // elastic without friction
+}
+
+TEST(Dem3, SlidesDownAPlaneOfManyTrianglesAtTheClosedFormWithoutAJumpAtEdges) {
+    // a 30 deg plane falling along a direction 17 deg off the grid's axes, 1,800 triangles
+    const double slope = 30 * kDeg, az = 17 * kDeg;
+    const Vec3 down(std::cos(az) * std::cos(slope), std::sin(az) * std::cos(slope), -std::sin(slope));
+    const Vec3 normal(std::cos(az) * std::sin(slope), std::sin(az) * std::sin(slope), std::cos(slope));
+    auto plane = [&](double x, double y) { return -std::tan(slope) * (x * std::cos(az) + y * std::sin(az)); };
+    Dem3Def d;
+    d.mu = 0.3;
+    d.youngs_modulus = 4e10;
+    const auto tin = terrain(30, 4.0, plane, -20.0, -20.0);
+    World3 w(d, tin);
+    const double R = 1.0, rho = 2000.0, m = 4.0 / 3.0 * kPi * rho;
+    // at rest at the overlap that carries m g cos(30 deg): E pi (2R delta - delta^2) delta / R
+    double delta = 1e-4;
+    for (int k = 0; k < 60; ++k) {
+        const double f = d.youngs_modulus * kPi * (2 * R * delta - delta * delta) * delta / R - m * d.gravity * std::cos(slope);
+        delta -= f / debris::sphere_stiffness(d.youngs_modulus, delta, R, 0.0);
+    }
+    const Vec3 start(-10.0, -8.0, plane(-10.0, -8.0));
+    w.add_sphere(start + (R - delta) * normal, Vec3::Zero(), R, rho);
+    double n_min = INFINITY, n_max = 0.0;
+    while (w.time() < 2.5) {
+        w.step();
+        const double n = w.bed_force(0).norm();
+        n_min = std::min(n_min, n);
+        n_max = std::max(n_max, n);
+    }
+    const double a = d.gravity * (std::sin(slope) - d.mu * std::cos(slope));
+    // the velocity is at the half step t - dt/2
+    const double t_half = w.time() - 0.5 * w.dt();
+    EXPECT_NEAR(w.velocities()[0].dot(down) / (a * t_half), 1.0, 1e-3);
+    EXPECT_LT(std::abs(w.velocities()[0].dot(normal)), 1e-6);
+    const double travelled = (w.positions()[0] - start).dot(down);
+    EXPECT_GT(travelled, 6.0);  // across many cells
+    EXPECT_LT((n_max - n_min) / n_max, 1e-6) << n_min << " " << n_max;
+}
+
+namespace {
+World3 pile(int threads, double mu, double safety = 0.8) {
+    Dem3Def d;
+    d.safety = safety;
+    d.mu = mu;
+    d.youngs_modulus = 1e9;
+    d.threads = threads;
+    // a bowl z = (x^2 + y^2)/40 and 125 spheres dropped into it
+    World3 w(d, terrain(20, 2.0, [](double x, double y) { return (x * x + y * y) / 40.0; }, -20.0, -20.0));
+    for (int i = 0; i < 5; ++i)
+        for (int j = 0; j < 5; ++j)
+            for (int k = 0; k < 5; ++k)
+                w.add_sphere(Vec3(-4.5 + 2.2 * i + 0.1 * k, -4.5 + 2.2 * j + 0.05 * k, 3.0 + 2.2 * k), Vec3::Zero(), 1.0, 2000.0);
+    return w;
+}
+}  // namespace
+
+TEST(Dem3, UndampedPileKeepsItsEnergyAndAGasItsMomentum) {
+    for (double safety : {0.8, 0.3}) {
+    World3 w = pile(1, 0.0, safety);
+    w.step();
+    const double e0 = w.energy().balance(), scale = std::abs(w.energy().potential);
+    double worst = 0.0;
+    long contact_steps = 0;
+    while (w.time() < 4.0) {
+        w.step();
+        worst = std::max(worst, std::abs(w.energy().balance() - e0));
+        contact_steps += w.contacts();
+    }
+    EXPECT_GT(contact_steps, 10000);  // (an elastic pile bounces: contacts come and go)
+    EXPECT_LT(worst / scale, 0.01);
+    RecordProperty("pile_energy_drift", std::to_string(worst / scale));
+    std::printf("undamped pile, safety %.1f: %ld steps, %ld contact-steps, largest |balance - start| / |potential| = %.2e\n", safety, w.step_count(), contact_steps, worst / scale);
+    }
+    // a gas without gravity, far above the bed: the momentum stays
+    Dem3Def d;
+    d.mu = 0.0;
+    d.gravity = 0.0;
+    d.youngs_modulus = 1e9;
+    World3 gas(d, flat(1000.0, -500.0));
+    for (int i = 0; i < 6; ++i)
+        for (int j = 0; j < 6; ++j)
+            for (int k = 0; k < 3; ++k)
+                gas.add_sphere(Vec3(2.1 * i, 2.1 * j, 2.1 * k), Vec3(std::sin(i + 3.0 * j), std::cos(7.0 * k + j), std::sin(5.0 * i * k)), 1.0, 2000.0);
+    auto momentum = [&] {
+        Vec3 p = Vec3::Zero();
+        for (size_t i = 0; i < gas.size(); ++i) p += gas.masses()[i] * gas.velocities()[i];
+        return p;
+    };
+    const Vec3 p0 = momentum();
+    double scale_p = 0.0;
+    for (size_t i = 0; i < gas.size(); ++i) scale_p += gas.masses()[i] * gas.velocities()[i].norm();
+    long touched = 0;
+    while (gas.time() < 5.0) {
+        gas.step();
+        touched += gas.contacts();
+    }
+    EXPECT_GT(touched, 0);
+    EXPECT_LT((momentum() - p0).norm() / scale_p, 1e-12);
+}
+
+TEST(Dem3, SameBitsOnOneAndTwoThreadsAndAfterAResume) {
+    World3 a = pile(1, 0.3), b = pile(2, 0.3);
+    for (int k = 0; k < 3000; ++k) {
+        a.step();
+        b.step();
+    }
+    ASSERT_EQ(a.size(), b.size());
+    EXPECT_EQ(std::memcmp(a.positions().data(), b.positions().data(), a.size() * sizeof(Vec3)), 0);
+    EXPECT_EQ(std::memcmp(a.velocities().data(), b.velocities().data(), a.size() * sizeof(Vec3)), 0);
+    EXPECT_GT(a.contacts(), 50);
+    // saved, loaded into a fresh world, and both run on
+    BinaryWriter out;
+    a.save_state(out);
+    World3 c = pile(2, 0.3);
+    BinaryReader in(out.bytes(), "state");
+    c.load_state(in);
+    for (int k = 0; k < 2000; ++k) {
+        a.step();
+        c.step();
+    }
+    EXPECT_EQ(std::memcmp(a.positions().data(), c.positions().data(), a.size() * sizeof(Vec3)), 0);
+    EXPECT_EQ(a.energy().balance(), c.energy().balance());
+}
