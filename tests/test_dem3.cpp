@@ -213,3 +213,94 @@ TEST(Dem3, SameBitsOnOneAndTwoThreadsAndAfterAResume) {
     EXPECT_EQ(std::memcmp(a.positions().data(), c.positions().data(), a.size() * sizeof(Vec3)), 0);
     EXPECT_EQ(a.energy().balance(), c.energy().balance());
 }
+
+// ---- a 3-D run through the run loop (scenario.solver = "dem3")
+
+#include <csignal>
+#include <filesystem>
+#include <fstream>
+
+#include "core/interrupt.h"
+#include "files.h"
+#include "resume.h"
+#include "run/checkpoint_file.h"
+#include "run/run.h"
+
+namespace {
+namespace fs = std::filesystem;
+using test::read_file;
+
+// a small slope of 20 x 20 cells of 2 m falling 20 deg towards +x into a flat floor, and a
+// scenario releasing a 4 m thick layer of 1 m spheres on it
+fs::path small_slide(const std::string& name) {
+    const fs::path dir = test::temp_dir(name);
+    fs::create_directories(dir);
+    std::ofstream g(dir / "bed.asc");
+    g << "ncols 21\nnrows 21\nxllcenter 0\nyllcenter 0\ncellsize 2\nNODATA_value -9999\n";
+    for (int r = 20; r >= 0; --r) {
+        for (int c = 0; c <= 20; ++c) g << (c ? " " : "") << std::max(0.0, (24.0 - 2.0 * c) * std::tan(20 * kDeg));
+        g << '\n';
+    }
+    g.close();
+    std::ofstream(dir / "slide.toml") << "[scenario]\nname = \"small slide\"\nsolver = \"dem3\"\n[dem3]\nterrain = \"bed.asc\"\n"
+                                         "release_thickness = 4.0\nrelease_lo = [2.0, 14.0]\nrelease_hi = [10.0, 26.0]\n"
+                                         "radius = 1.0\nyoungs_modulus = 1e9\n[stop]\nt_max = 30.0\n[output]\n"
+                                         "series_interval = 0.1\nsnapshot_interval = 1.0\n";
+    return dir;
+}
+}  // namespace
+
+TEST(Dem3, ARunToRestWritesItsFolderAndResumesToTheSameBytes) {
+    const fs::path dir = small_slide("dem3-run");
+    Scenario s = load_scenario((dir / "slide.toml").string());
+    finish_scenario(s);
+    const fs::path ref = dir / "ref", cut = dir / "cut";
+    const RunSummary r = run_scenario(s, {ref.string(), false, {}});
+    EXPECT_EQ(r.stop_reason, "rest");
+    EXPECT_GT(r.n_discs, 30);
+    for (const char* f : {"series.csv", "summary.json", "scenario.toml", "peak_thickness.asc", "peak_speed.asc", "deposit_thickness.asc",
+                          "snapshots/terrain.vtp", "snapshots/spheres.pvd", "snapshots/spheres_0000.vtp"})
+        EXPECT_TRUE(fs::exists(ref / f)) << f;
+    // the deposit raster holds the release's bulk volume
+    const EsriGrid deposit = read_esri_grid((ref / "deposit_thickness.asc").string());
+    double volume = 0.0;
+    for (double h : deposit.z) volume += h * 4.0;
+    const std::string summary = read_file(ref / "summary.json");
+    const size_t at = summary.find("\"release_bulk_volume\": ");
+    ASSERT_NE(at, std::string::npos);
+    EXPECT_NEAR(volume / std::stod(summary.substr(at + 23)), 1.0, 1e-5);
+    // stopped by a signal at its third snapshot, resumed on 2 threads: the same bytes
+    RunOptions ro{cut.string(), false, [](const std::string&, const std::string&, int index) {
+                      if (index == 2) request_interrupt(SIGTERM);
+                  }};
+    ro.handle_signals = true;
+    EXPECT_THROW(run_scenario(s, ro), Interrupted);
+    ASSERT_TRUE(fs::exists(cut / kCheckpointFile));
+    const RunSummary resumed = test::resume_run(cut, 2);
+    EXPECT_EQ(resumed.stop_reason, "rest");
+    for (const char* f : {"series.csv", "peak_thickness.asc", "peak_speed.asc", "deposit_thickness.asc", "snapshots/spheres_0005.vtp"})
+        EXPECT_EQ(read_file(ref / f), read_file(cut / f)) << f << " differs";
+    fs::remove_all(dir);
+}
+
+TEST(Dem3, BadScenariosAreRefusedBeforeAnyOutput) {
+    const fs::path dir = small_slide("dem3-bad");
+    auto refused = [&](const std::string& key_value, const std::string& needle) {
+        Scenario s = load_scenario((dir / "slide.toml").string());
+        try {
+            apply_override(s, key_value);
+            finish_scenario(s);
+            run_scenario(s, {(dir / "out").string(), false, {}});
+            ADD_FAILURE() << key_value << " was not refused";
+        } catch (const InputError& e) {
+            EXPECT_NE(std::string(e.what()).find(needle), std::string::npos) << e.what();
+        }
+        EXPECT_FALSE(fs::exists(dir / "out")) << key_value;
+    };
+    refused("dem3.terrain=\"missing.asc\"", "missing.asc");
+    refused("dem3.release_hi=[1.0, 26.0]", "release box");
+    refused("dem3.release_lo=[100.0, 100.0]", "release box");
+    refused("dem3.radius=-1", "dem3.radius");
+    refused("dem3.release_thickness=0", "release_thickness");
+    fs::remove_all(dir);
+}

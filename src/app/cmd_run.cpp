@@ -15,6 +15,7 @@
 #include "output/image.h"
 #include "output/plot.h"
 #include "output/render_run.h"
+#include "output/terrain_view.h"
 #include "scenario/scenario.h"
 #include "setups/setup.h"
 
@@ -91,7 +92,12 @@ void print_landmarks(const RunSummary& r) {
 
 // The lines a finished run prints, and its plots.
 int report_run(const Scenario& s, const RunSummary& r, const std::string& dir, bool plots) {
-    if (s.solver == "dan") {
+    if (s.solver == "dem3") {
+        std::printf("%s (3-D, DEBRIS): %ld spheres, %ld steps to t = %.3f s (%s), dt %.3g-%.3g s, wall time %.1f s, %.3e particle-steps/s\n",
+                    s.name.c_str(), r.n_discs, r.steps, r.t_end, r.stop_reason.c_str(), r.dt_min, r.dt_max, r.wall_seconds,
+                    r.particle_steps_per_second);
+        std::printf("  peak rasters, frames and summary.json in the folder\n");
+    } else if (s.solver == "dan") {
         std::printf("%s (DAN): %d blocks, %ld steps to t = %.3f s (%s), dt %.3g s, wall time %.2f s\n", s.name.c_str(),
                     s.dan.blocks, r.steps, r.t_end, r.stop_reason.c_str(), r.dt, r.wall_seconds);
         print_landmarks(r);
@@ -130,7 +136,8 @@ int report_run(const Scenario& s, const RunSummary& r, const std::string& dir, b
 // A run (new or resumed) with its frames: the DEM's as each snapshot is written, DAN's from its
 // blocks.csv after the run; then its report.
 int run_with_frames(const Scenario& s, RunOptions& ro) {
-    if (ro.frames && s.solver != "dan") attach_frame_hook(ro, make_setup(s)->kind() == "flume");
+    if (s.solver == "dem3") attach_terrain_pictures(ro);
+    else if (ro.frames && s.solver != "dan") attach_frame_hook(ro, make_setup(s)->kind() == "flume");
     const RunSummary r = run_scenario(s, ro);
     if (ro.frames && s.solver == "dan") {
         RenderRunOptions frames;

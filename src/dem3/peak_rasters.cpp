@@ -87,6 +87,16 @@ std::string esri_grid_text(const EsriGrid& g, const std::vector<double>& values)
     return o.str();
 }
 
+void PeakRasters::save(BinaryWriter& out) const {
+    out.put(peak_h_);
+    out.put(peak_v_);
+}
+
+void PeakRasters::load(BinaryReader& in) {
+    in.get(peak_h_, mass_.size());
+    in.get(peak_v_, mass_.size());
+}
+
 void PeakRasters::write(const std::string& dir) const {
     write_file_atomic(dir + "/peak_thickness.asc", esri_grid_text(grid_, peak_h_));
     write_file_atomic(dir + "/peak_speed.asc", esri_grid_text(grid_, peak_v_));

@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "core/binary_io.h"
 #include "core/vec3.h"
 #include "geometry/esri_grid.h"
 
@@ -38,6 +39,10 @@ public:
 
     // peak_thickness.asc, peak_speed.asc, deposit_thickness.asc in dir (atomically each)
     void write(const std::string& dir) const;
+    const EsriGrid& grid() const { return grid_; }
+    // the peaks so far, for a checkpoint
+    void save(BinaryWriter& out) const;
+    void load(BinaryReader& in);
 
 private:
     // the cell of (x, y), or -1 outside the grid

@@ -181,6 +181,28 @@ Image render_terrain(const TerrainScene& scene, const TerrainViewDef& def) {
     return box_filter_down(mesa.buffer.data(), w, h, ss);
 }
 
+void attach_terrain_pictures(RunOptions& ro) {
+    ro.terrain_frames = [](const std::string& dir, const std::string& tag, const Tin& terrain, const std::vector<Vec3>& centres,
+                           const std::vector<double>& radius, const std::vector<double>& speed, double speed_max) {
+        TerrainScene scene;
+        scene.vertices = &terrain.vertices();
+        scene.triangles = &terrain.triangles();
+        scene.centres = centres;
+        scene.radius = radius;
+        scene.speed = speed;
+        TerrainViewDef view;
+        view.speed_max = speed_max;
+        write_png(dir + "/frames/oblique_" + tag + ".png", render_terrain(scene, view));
+        view.camera = TerrainCamera::Map;
+        write_png(dir + "/frames/map_" + tag + ".png", render_terrain(scene, view));
+    };
+    ro.raster_picture = [](const std::string& png, const EsriGrid& terrain, const std::vector<double>& field, double field_max) {
+        // about 1,000 px across
+        const int scale = std::clamp(1000 / std::max(terrain.ncols, 1), 1, 16);
+        write_png(png, raster_over_hillshade(terrain, field, field_max, scale));
+    };
+}
+
 Image raster_over_hillshade(const EsriGrid& g, const std::vector<double>& field, double field_max, int scale) {
     if (scale < 1 || scale > 64 || g.ncols < 1 || g.nrows < 1) throw InputError("a raster picture needs a grid and 1 to 64 px a cell");
     Image img;

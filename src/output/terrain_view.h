@@ -11,6 +11,7 @@
 #include "core/vec3.h"
 #include "geometry/esri_grid.h"
 #include "output/image.h"
+#include "run/run.h"
 
 namespace demlab {
 
@@ -40,6 +41,9 @@ struct TerrainViewDef {
 // The terrain shaded by its slope towards the sun, tinted by height, with the spheres shaded
 // as balls (coloured by speed); the view fits the terrain's box.
 Image render_terrain(const TerrainScene& scene, const TerrainViewDef& def);
+
+// A 3-D run's pictures (RunOptions::terrain_frames, raster_picture) drawn by these functions.
+void attach_terrain_pictures(RunOptions& ro);
 
 // A field on g's cells over g's hillshade (sun from the north-west at 45 deg): cells with a
 // value above 0 coloured from 0 to field_max (viridis), the rest grey; `scale` pixels a cell.

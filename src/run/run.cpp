@@ -24,6 +24,7 @@
 #include "dem/world.h"
 #include "run/checkpoint_file.h"
 #include "run/dan_run.h"
+#include "dem3/dem3_run.h"
 #include "run/design_loads.h"
 #include "run/force_history.h"
 #include "run/measures.h"
@@ -409,6 +410,7 @@ RunSummary run_through_loop(const Scenario& s, const RunOptions& o, SolverRun& r
 
 RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
     if (s.solver == "dan") return run_through_loop(s, o, *make_dan_run(s, o));
+    if (s.solver == "dem3") return run_through_loop(s, o, *make_dem3_run(s, o));
     const std::string dir = o.out_dir;
     const std::string checkpoint_path = dir + "/" + kCheckpointFile;
     const std::string scenario_text = resolved_toml(s);

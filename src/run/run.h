@@ -37,6 +37,15 @@ struct RunOptions {
     std::function<void(double t, double t_max, double steps_per_second)> on_progress = {};
     // recorded in the checkpoint for `demlab resume` (the caller acts on them)
     bool frames = false, plots = true;
+    // A 3-D run's pictures (scenario.solver = "dem3"), drawn by the output library, which the
+    // engine does not link: the command line attaches them (output/terrain_view.h); without
+    // them the run writes no PNG. A frame: the terrain and the spheres (centres, radii,
+    // speeds) into dir/frames/{oblique,map}_TAG.png; a raster over the terrain's hillshade.
+    std::function<void(const std::string& dir, const std::string& tag, const Tin& terrain, const std::vector<Vec3>& centres,
+                       const std::vector<double>& radius, const std::vector<double>& speed, double speed_max)>
+        terrain_frames;
+    std::function<void(const std::string& png, const EsriGrid& terrain, const std::vector<double>& field, double field_max)>
+        raster_picture;
 };
 
 // The checkpoint's file name inside a run folder.

@@ -23,6 +23,8 @@ const FileKey kFileKeys[] = {
     {"lattice_release.top", [](const Scenario& s) -> const std::string& { return s.lattice_release.top; }},
     {"release.from_file", [](const Scenario& s) -> const std::string& { return s.release.from_file; }},
     {"dan.sync_front", [](const Scenario& s) -> const std::string& { return s.dan.sync_front; }},
+    {"dem3.terrain", [](const Scenario& s) -> const std::string& { return s.dem3.terrain; }},
+    {"dem3.release_top", [](const Scenario& s) -> const std::string& { return s.dem3.release_top; }},
 };
 
 // 128-bit FNV-1a in two 64-bit words (prime 2^88 + 0x13B, offset basis 6c62272e...c58d)

@@ -206,7 +206,7 @@ void add_scenario_and_material_keys(std::vector<Key>& k) {
     // scenario
     k.push_back(text("scenario.name", "name of the scenario, used in outputs", [](Scenario& s) -> std::string& { return s.name; }));
     k.push_back(text("scenario.description", "free text", [](Scenario& s) -> std::string& { return s.description; }));
-    k.push_back(text("scenario.solver", "dem: the discs (the thesis' PFC2D model); dan: the depth-averaged continuum model on a flume's path ([dan], docs/dan.md)", [](Scenario& s) -> std::string& { return s.solver; }, {"dem", "dan"}));
+    k.push_back(text("scenario.solver", "dem: the discs (the thesis' PFC2D model); dan: the depth-averaged continuum model on a flume's path ([dan], docs/dan.md); dem3: spheres with the DEBRIS law on a 3-D terrain ([dem3], docs/debris.md)", [](Scenario& s) -> std::string& { return s.solver; }, {"dem", "dan", "dem3"}));
     {
         Key seed{"scenario.seed", "-", "integer in [0, 2^63)", "seed of every random draw (release mass radii and positions)", nullptr, nullptr};
         seed.set = [](Scenario& s, const toml::node& n, const std::string& where) {
@@ -400,6 +400,24 @@ void add_dan_keys(std::vector<Key>& k) {
     k.push_back(choice<DanStep>("dan.dt_mode", "a fixed step (the run stops past cfl_max) or the largest within cfl_max", [](Scenario& s) -> DanStep& { return s.dan.dt_mode; }, {{"fixed", DanStep::Fixed}, {"auto", DanStep::Auto}}));
     k.push_back(real("dan.cfl_max", "-", "stability limit: dt (sqrt(k g h cos alpha) + |dv|) / l at most this", [](Scenario& s) -> double& { return s.dan.cfl_max; }, 0, 1, true));
     k.push_back(real("dan.path_extension", "m", "the path goes on straight this far past the barrier's end and before the slope's start", [](Scenario& s) -> double& { return s.dan.path_extension; }, 0, 100));
+    // the 3-D solver (scenario.solver = "dem3"; docs/debris.md, "In three dimensions")
+    k.push_back(text("dem3.terrain", "the bed: an ESRI ASCII grid (.asc; each cell two triangles) or an x y z point file (.xyz, .txt; triangulated in map view); a relative path is taken from the scenario file's folder", [](Scenario& s) -> std::string& { return s.dem3.terrain; }));
+    k.push_back(text("dem3.release_top", "the mass's top surface before failure, as dem3.terrain (.asc or .xyz): the release fills the space between it and the bed inside the release box; empty = dem3.release_thickness above the bed", [](Scenario& s) -> std::string& { return s.dem3.release_top; }));
+    k.push_back(real("dem3.release_thickness", "m", "the release's thickness above the bed when there is no dem3.release_top", [](Scenario& s) -> double& { return s.dem3.release_thickness; }, 0, 1e4));
+    k.push_back(vec2("dem3.release_lo", "m", "the release box's south-west corner in map view [x, y]", [](Scenario& s) -> Vec2& { return s.dem3.release_lo; }));
+    k.push_back(vec2("dem3.release_hi", "m", "the release box's north-east corner in map view [x, y]", [](Scenario& s) -> Vec2& { return s.dem3.release_hi; }));
+    k.push_back(real("dem3.radius", "m", "the spheres' radius R; the release is close-packed, each inner sphere touching twelve (Mikhailov, Attabad: 10 m)", [](Scenario& s) -> double& { return s.dem3.radius; }, 0, 1e4, true));
+    k.push_back(real("dem3.density", "kg/m3", "the spheres' density; m = 4/3 pi R^3 rho (D1; Attabad: 2000)", [](Scenario& s) -> double& { return s.dem3.density; }, 0, 1e5, true));
+    k.push_back(real("dem3.youngs_modulus", "Pa", "E of the spheres and of the bed: F = E pi a^2 delta / R (bed), / (Ri + Rj) (pair) (Attabad: 40 GPa)", [](Scenario& s) -> double& { return s.dem3.law.youngs_modulus; }, 0, 1e12, true));
+    k.push_back(real("dem3.mu", "-", "dry friction coefficient of a sphere's friction force mu (N + P) against its velocity (Attabad: 0.3)", [](Scenario& s) -> double& { return s.dem3.law.mu; }, 0, 1));
+    k.push_back(real("dem3.eta", "N s/m", "viscous friction eta v of a sphere (Attabad: 0)", [](Scenario& s) -> double& { return s.dem3.law.eta; }, 0, 1e15));
+    k.push_back(choice<DebrisNormal>("dem3.friction_normal", "N and P of the friction: resultant (the moduli of the summed bed and pair forces) or sum (the sums of their moduli)", [](Scenario& s) -> DebrisNormal& { return s.dem3.law.friction_normal; }, {{"resultant", DebrisNormal::Resultant}, {"sum", DebrisNormal::Sum}}));
+    k.push_back(choice<DebrisDirection>("dem3.friction_direction", "the friction against the velocity after the other forces (trial) or the last step's (previous: Mikhailov literally)", [](Scenario& s) -> DebrisDirection& { return s.dem3.law.friction_direction; }, {{"trial", DebrisDirection::Trial}, {"previous", DebrisDirection::Previous}}));
+    k.push_back(real("dem3.dt_max", "s", "the automatic step's ceiling, the step of a sphere without contacts (Mikhailov's 0.01 s)", [](Scenario& s) -> double& { return s.dem3.law.dt_max; }, 0, 1, true));
+    k.push_back(real("dem3.dt_fixed", "s", "a fixed step instead of the automatic one (0: automatic; 0.01 = Mikhailov's literal run)", [](Scenario& s) -> double& { return s.dem3.law.dt_fixed; }, 0, 1));
+    k.push_back(real("dem3.safety", "-", "the automatic step's safety factor on min sqrt(m / K)", [](Scenario& s) -> double& { return s.dem3.law.safety; }, 0, 2, true));
+    k.push_back(real("dem3.gravity", "m/s2", "gravity along -z", [](Scenario& s) -> double& { return s.dem3.law.gravity; }, 0, 100));
+    k.push_back(real("dem3.raster_cell", "m", "the peak rasters' cell size (0: the terrain grid's, or two radii for a point terrain)", [](Scenario& s) -> double& { return s.dem3.raster_cell; }, 0, 1e5));
     k.push_back(real("dan.sync_time", "s", "the reference front's time the DAN front is synchronised at (thesis Abb. 37: 0.4 s)", [](Scenario& s) -> double& { return s.dan.sync_time; }, 0, 100));
     k.push_back(text("dan.sync_front", "a reference front.csv (a DEM run's, or the lab's digitised) for front_synced.csv; a relative path is taken from the scenario file's folder; empty = none", [](Scenario& s) -> std::string& { return s.dan.sync_front; }));
 }

@@ -186,6 +186,7 @@ void read_table(Scenario& s, const toml::table& t, const std::string& prefix, co
         if (key == "cohesion") s.cohesion.given = true;
         if (key == "lattice_release") s.lattice_release.enabled = true;
         if (key == "dan") s.dan_given = true;
+        if (key == "dem3") s.dem3_given = true;
         if (const toml::table* sub = node.as_table()) {
             read_table(s, *sub, key, file);
             continue;
@@ -238,6 +239,7 @@ void apply_override(Scenario& s, const std::string& assignment) {
     if (key.rfind("cohesion.", 0) == 0) s.cohesion.given = true;
     if (key.rfind("lattice_release.", 0) == 0) s.lattice_release.enabled = true;
     if (key.rfind("dan.", 0) == 0) s.dan_given = true;
+    if (key.rfind("dem3.", 0) == 0) s.dem3_given = true;
 }
 
 // A relative path is the scenario file's neighbour; resolved, it is written absolute, so the
@@ -436,6 +438,32 @@ void finish_dan(Scenario& s) {
     }
 }
 
+// The 3-D solver's inputs (src/dem3/): its own terrain and release, none of the 2-D set-ups;
+// the files beside the scenario, the release box in map view.
+void finish_dem3(Scenario& s) {
+    const std::string where = s.source + ": ";
+    if (s.solver != "dem3") {
+        if (s.dem3_given)
+            throw InputError(where + "a [dem3] table is read only by scenario.solver = \"dem3\" (this scenario's is \"" + s.solver + "\")");
+        return;
+    }
+    Dem3Scenario& d = s.dem3;
+    if (s.flume.enabled || s.dam_break.enabled || s.terrain.enabled || s.cohesion.enabled || s.lattice_release.enabled ||
+        !s.discs.empty() || !s.walls.empty())
+        throw InputError(where + "scenario.solver = \"dem3\" has its own terrain and release ([dem3]); leave out [flume], "
+                         "[dam_break], [terrain], [cohesion], [lattice_release], [[discs]] and [[walls]]");
+    if (d.terrain.empty()) throw InputError(where + "dem3.terrain: the 3-D solver needs a terrain (an .asc grid or an .xyz point file)");
+    resolve_beside_scenario(s, d.terrain);
+    if (!d.release_top.empty()) resolve_beside_scenario(s, d.release_top);
+    else if (!(d.release_thickness > 0.0))
+        throw InputError(where + "dem3.release_thickness = " + format_number(d.release_thickness) +
+                         " m: give the release a thickness above the bed, or a top surface (dem3.release_top)");
+    if (!(d.release_hi.x() > d.release_lo.x() && d.release_hi.y() > d.release_lo.y()))
+        throw InputError(where + "dem3.release_lo = [" + format_number(d.release_lo.x()) + ", " + format_number(d.release_lo.y()) +
+                         "], dem3.release_hi = [" + format_number(d.release_hi.x()) + ", " + format_number(d.release_hi.y()) +
+                         "] m: the release box needs its north-east corner beyond its south-west one");
+}
+
 // Bonds listed in a [cohesion] that is not enabled would be silently unused.
 static bool c_enabled_or_no_bonds(const Scenario& s) { return s.cohesion.enabled || s.cohesion.bonds.empty(); }
 
@@ -586,6 +614,7 @@ void finish_scenario(Scenario& s) {
     finish_explicit_discs(s);
     if (s.terrain.enabled) finish_terrain(s);
     finish_dan(s);
+    finish_dem3(s);
     finish_lattice(s);
     finish_cohesion(s);
     if (!r.from_file.empty() && (!has_release(s) || s.lattice_release.enabled))
@@ -600,7 +629,7 @@ void finish_scenario(Scenario& s) {
     if (s.stop.rest_duration >= s.stop.t_max)
         throw InputError(where + "stop.rest_duration = " + format_number(s.stop.rest_duration) +
                          " s must be shorter than stop.t_max = " + format_number(s.stop.t_max) + " s");
-    if (!has_release(s) && s.discs.empty() && !s.lattice_release.enabled)
+    if (!has_release(s) && s.discs.empty() && !s.lattice_release.enabled && s.solver != "dem3")
         throw InputError(where + "no discs: give a [flume] or [dam_break] (its release mass is generated), a [terrain] with a release polygon, a [lattice_release], or [[discs]]");
     if (s.dam_break.enabled) {
         const DamBreakDef& d = s.dam_break;
@@ -672,6 +701,7 @@ static bool section_in_use(const Scenario& s, const std::string& sec) {
     if (sec == "cohesion") return s.cohesion.given;
     if (sec == "lattice_release") return s.lattice_release.enabled;
     if (sec == "dan") return s.dan_given || s.solver == "dan";
+    if (sec == "dem3") return s.dem3_given || s.solver == "dem3";
     // a law's section, when it is the chosen law
     bool law_section = false, chosen = false;
     for_each_contact_law([&](auto law) {

@@ -10,6 +10,7 @@
 #include "dem/bonds/bond_builder.h"
 #include "geometry/wall.h"
 #include "dan/dan_def.h"
+#include "dem3/world3.h"
 #include "dem/world.h"
 
 namespace demlab {
@@ -125,6 +126,21 @@ inline WorldDef scenario_world() {
     return d;
 }
 
+// The 3-D solver's scenario (src/dem3/, docs/debris.md "In three dimensions"): a terrain as a
+// TIN, a release of close-packed spheres between it and a top surface (or a thickness) inside a
+// box in map view, and the DEBRIS law's parameters (Dem3Def).
+struct Dem3Scenario {
+    std::string terrain;                   // .asc grid or .xyz points: the bed
+    std::string release_top;               // .asc or .xyz: the mass's top before failure ("": release_thickness)
+    double release_thickness = 0.0;        // m, above the bed when there is no top surface
+    Vec2 release_lo{0.0, 0.0};             // m, the release's box in map view
+    Vec2 release_hi{0.0, 0.0};
+    double radius = 10.0;                  // m
+    double density = 2000.0;               // kg/m3
+    Dem3Def law;                           // E, mu, eta, step, gravity
+    double raster_cell = 0.0;              // m, the peak rasters' cell (0: the terrain grid's, or 2 radii)
+};
+
 struct Scenario {
     std::string source;                    // file it was read from (for messages)
     std::string name = "unnamed";
@@ -147,6 +163,8 @@ struct Scenario {
     std::vector<MaterialDef> wall_entry_materials;
     std::string solver = "dem";            // "dem" (discs) or "dan" (the continuum model, dan/)
     DanDef dan;                            // the continuum model's parameters ([dan])
+    Dem3Scenario dem3;                     // the 3-D solver's ([dem3]; scenario.solver = "dem3")
+    bool dem3_given = false;               // a [dem3] table was given
     bool dan_given = false;                // a [dan] table was given (it is then written back)
     FlumeDef flume;
     DamBreakDef dam_break;

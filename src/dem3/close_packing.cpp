@@ -1,0 +1,58 @@
+#include "dem3/close_packing.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "core/error.h"
+
+namespace demlab {
+
+ClosePackedRelease close_packed_release(const Tin& bed, const std::function<bool(double, double, double&)>& top, const Vec2& lo,
+                                        const Vec2& hi, double R) {
+    ClosePackedRelease out;
+    // the bulk volume and the elevations' range, on samples a quarter radius apart
+    const double step = 0.25 * R;
+    const int nx = std::max(1, int(std::ceil((hi.x() - lo.x()) / step))), ny = std::max(1, int(std::ceil((hi.y() - lo.y()) / step)));
+    const double cx = (hi.x() - lo.x()) / nx, cy = (hi.y() - lo.y()) / ny;
+    double z_lo = INFINITY, z_hi = -INFINITY;
+    for (int j = 0; j < ny; ++j)
+        for (int i = 0; i < nx; ++i) {
+            const double x = lo.x() + (i + 0.5) * cx, y = lo.y() + (j + 0.5) * cy;
+            double zb = 0.0, zt = 0.0;
+            if (!bed.height_at(x, y, zb) || !top(x, y, zt)) continue;
+            z_lo = std::min(z_lo, zb);
+            z_hi = std::max(z_hi, zt);
+            if (zt > zb) out.bulk_volume += (zt - zb) * cx * cy;
+        }
+    if (!std::isfinite(z_lo) || !(z_hi > z_lo)) return out;
+    const double s3 = std::sqrt(3.0), layer = 2.0 * std::sqrt(2.0 / 3.0) * R;
+    const Vec3 a1(2.0 * R, 0, 0), a2(R, s3 * R, 0), a3(R, R / s3, layer);
+    const int layers = int(std::ceil((z_hi - z_lo) / layer)) + 1;
+    const int rows = int(std::ceil((hi.y() - lo.y()) / (s3 * R))) + 2;
+    const double span_x = hi.x() - lo.x();
+    std::vector<TinContact> touch;
+    for (int k = 0; k < layers; ++k)
+        for (int j = 0; j < rows; ++j) {
+            // the row's shift along x from the stacking and the rows below, undone so that each
+            // row starts at the box's west side
+            const Vec3 row0 = Vec3(lo.x(), lo.y(), z_lo) + double(j) * a2 + double(k) * a3;
+            const int shift = int(std::floor((row0.x() - lo.x()) / (2.0 * R)));
+            const int cols = int(std::ceil(span_x / (2.0 * R))) + 2;
+            for (int i = -shift - 1; i < -shift + cols; ++i) {
+                const Vec3 p = row0 + double(i) * a1;
+                if (p.x() < lo.x() || p.x() > hi.x() || p.y() < lo.y() || p.y() > hi.y()) continue;
+                double zt = 0.0;
+                if (!top(p.x(), p.y(), zt) || p.z() > zt - R) continue;
+                double zb = 0.0;
+                if (!bed.height_at(p.x(), p.y(), zb) || p.z() < zb) continue;
+                touch.clear();
+                bed.sphere_contacts(p, R, touch);
+                if (!touch.empty()) continue;
+                out.centres.push_back(p);
+            }
+        }
+    out.solid_volume = double(out.centres.size()) * 4.0 / 3.0 * kPi * R * R * R;
+    return out;
+}
+
+}  // namespace demlab
