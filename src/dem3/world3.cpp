@@ -84,15 +84,15 @@ void World3::gather(size_t i, double ahead_dt, Load& l, std::vector<TinContact>&
         l.elastic += debris::sphere_energy(E, delta, ri, 0.0);
         ++l.touching;
     }
-    // the pairs, from the 27 cells around
+    // the pairs, from the 27 cells around: z is the key's lowest part, so each column of three
+    // cells is one run of the sorted list
     const std::int64_t cx = std::int64_t(std::floor(p.x() / cell_)), cy = std::int64_t(std::floor(p.y() / cell_)),
                        cz = std::int64_t(std::floor(p.z() / cell_));
     for (std::int64_t dx = -1; dx <= 1; ++dx)
-        for (std::int64_t dy = -1; dy <= 1; ++dy)
-            for (std::int64_t dz = -1; dz <= 1; ++dz) {
-                const std::uint64_t key = cell_key(cx + dx, cy + dy, cz + dz);
-                auto it = std::lower_bound(cells_.begin(), cells_.end(), std::make_pair(key, std::uint32_t(0)));
-                for (; it != cells_.end() && it->first == key; ++it) {
+        for (std::int64_t dy = -1; dy <= 1; ++dy) {
+                const std::uint64_t first = cell_key(cx + dx, cy + dy, cz - 1), last = cell_key(cx + dx, cy + dy, cz + 1);
+                auto it = std::lower_bound(cells_.begin(), cells_.end(), std::make_pair(first, std::uint32_t(0)));
+                for (; it != cells_.end() && it->first <= last; ++it) {
                     const size_t j = it->second;
                     if (j == i) continue;
                     const double rj = radius_[j], rsum = ri + rj;
@@ -113,7 +113,7 @@ void World3::gather(size_t i, double ahead_dt, Load& l, std::vector<TinContact>&
                     l.elastic += 0.5 * debris::sphere_energy(E, delta, ri, rj);
                     ++l.touching;
                 }
-            }
+        }
 }
 
 void World3::step() {
