@@ -50,6 +50,11 @@ TEST(Dem3, MassAndTheBedAndPairForcesOfD1ToD3) {
     double u = 0.0;
     for (int k = 0; k < 200000; ++k) u += debris::sphere_force(E, (k + 0.5) * 0.2 / 200000, 1.0, 2.0) * 0.2 / 200000;
     EXPECT_NEAR(debris::sphere_energy(E, 0.2, 1.0, 2.0) / u, 1.0, 1e-9);
+    // the closed forms of the bed and an equal pair against the quadrature
+    for (double rj : {0.0, 1.0}) {
+        const double q = debris::gauss_energy([&](double s) { return debris::sphere_force(E, s, 1.0, rj); }, 0.1);
+        EXPECT_NEAR(debris::sphere_energy(E, 0.1, 1.0, rj) / q, 1.0, 1e-12) << "rj " << rj;
+    }
     // D1, and a sphere resting on the bed at the overlap where E pi a^2 delta / R = m g
     World3 w(Dem3Def{}, flat());
     w.add_sphere(Vec3(0, 0, 10), Vec3::Zero(), 10.0, 2000.0);

@@ -43,9 +43,9 @@ struct RunOptions {
     // speeds) into dir/frames/{oblique,map}_TAG.png; a raster over the terrain's hillshade.
     std::function<void(const std::string& dir, const std::string& tag, const Tin& terrain, const std::vector<Vec3>& centres,
                        const std::vector<double>& radius, const std::vector<double>& speed, double speed_max)>
-        terrain_frames;
+        terrain_frames = {};
     std::function<void(const std::string& png, const EsriGrid& terrain, const std::vector<double>& field, double field_max)>
-        raster_picture;
+        raster_picture = {};
 };
 
 // The checkpoint's file name inside a run folder.

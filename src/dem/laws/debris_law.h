@@ -152,9 +152,14 @@ inline double sphere_stiffness(double E, double delta, double ri, double rj) {
     return E * kPi * delta * (q + 2.0 * c) / rsum;
 }
 
-// J: int_0^delta F (bed: E pi (2R delta^3/3 - delta^4/4)/R, which the quadrature gives to
-// rounding: F(w^2) 2w is a polynomial of degree 7 in w)
+// J: int_0^delta F. The bed's and an equal pair's in closed form (a^2 is a polynomial in delta:
+// bed E pi (2R delta^3/3 - delta^4/4)/R, equal pair E pi (R delta^3/3 - delta^4/16)/(2R)),
+// an unequal pair's by the quadrature: the ledger takes it for every contact in every step.
 inline double sphere_energy(double E, double delta, double ri, double rj) {
+    if (!(delta > 0.0)) return 0.0;
+    const double d3 = delta * delta * delta;
+    if (rj <= 0.0) return E * kPi * (2.0 * ri * d3 / 3.0 - d3 * delta / 4.0) / ri;
+    if (ri == rj) return E * kPi * (ri * d3 / 3.0 - d3 * delta / 16.0) / (2.0 * ri);
     return gauss_energy([&](double s) { return sphere_force(E, s, ri, rj); }, delta);
 }
 
