@@ -163,3 +163,43 @@ TEST(Tin, BadFilesAreRefusedWithTheirNames) {
         EXPECT_NE(std::string(e.what()).find("holes.asc"), std::string::npos);
     }
 }
+
+#include "dem3/close_packing.h"
+
+TEST(ClosePack, TwelveNeighboursAtTwoRadiiAndTheLatticesDensity) {
+    // a flat bed at z = 0 and a top 20 R above it over a 40 R x 40 R box
+    const double R = 1.0;
+    const Tin bed = Tin::from_grid(grid_of(10, 5.0, [](double, double) { return 0.0; }), "flat.asc");
+    const auto top = [](double, double, double& z) {
+        z = 20.0;
+        return true;
+    };
+    const ClosePackedRelease r = close_packed_release(bed, top, Vec2(5.0, 5.0), Vec2(45.0, 45.0), R);
+    ASSERT_GT(r.centres.size(), 1000u);
+    EXPECT_NEAR(r.bulk_volume, 40.0 * 40.0 * 20.0, 1e-6);
+    EXPECT_NEAR(r.solid_volume, double(r.centres.size()) * 4.0 / 3.0 * kPi, 1e-6);
+    // no two closer than 2R, and every sphere well inside the box has twelve neighbours at 2R
+    size_t inner = 0;
+    for (size_t i = 0; i < r.centres.size(); ++i) {
+        const Vec3& p = r.centres[i];
+        EXPECT_GE(p.z(), R - 1e-9);
+        EXPECT_LE(p.z(), 20.0 - R + 1e-9);
+        int touching = 0;
+        for (size_t j = 0; j < r.centres.size(); ++j) {
+            if (j == i) continue;
+            const double d = (r.centres[j] - p).norm();
+            EXPECT_GE(d, 2.0 * R - 1e-9);
+            touching += d < 2.0 * R + 1e-9;
+        }
+        const bool deep = p.x() > 10 && p.x() < 40 && p.y() > 10 && p.y() < 40 && p.z() > 4 && p.z() < 16;
+        if (deep) {
+            EXPECT_EQ(touching, 12) << "sphere " << i;
+            ++inner;
+        }
+    }
+    EXPECT_GT(inner, 200u);
+    // the face-centred cubic lattice's number density, 1 / (4 sqrt(2) R^3), inside
+    size_t in_core = 0;
+    for (const Vec3& p : r.centres) in_core += p.x() >= 10 && p.x() < 40 && p.y() >= 10 && p.y() < 40 && p.z() >= 4 && p.z() < 16;
+    EXPECT_NEAR(double(in_core) / (30.0 * 30.0 * 12.0) * 4.0 * std::sqrt(2.0), 1.0, 0.06);
+}

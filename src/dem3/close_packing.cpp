@@ -32,7 +32,8 @@ ClosePackedRelease close_packed_release(const Tin& bed, const std::function<bool
     const double span_x = hi.x() - lo.x();
     std::vector<TinContact> touch;
     for (int k = 0; k < layers; ++k)
-        for (int j = 0; j < rows; ++j) {
+        // each layer starts R/sqrt(3) further north (a3): its rows from below the box's south side
+        for (int j = -(k / 3) - 1; j < rows; ++j) {
             // the row's shift along x from the stacking and the rows below, undone so that each
             // row starts at the box's west side
             const Vec3 row0 = Vec3(lo.x(), lo.y(), z_lo) + double(j) * a2 + double(k) * a3;
