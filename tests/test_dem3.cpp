@@ -263,6 +263,10 @@ TEST(Dem3, ARunToRestWritesItsFolderAndResumesToTheSameBytes) {
     const RunSummary r = run_scenario(s, {ref.string(), false, {}});
     EXPECT_EQ(r.stop_reason, "rest");
     EXPECT_GT(r.n_discs, 30);
+    // one row an instant: the series' times rise strictly to the last
+    const std::vector<double> t = test::csv_column(ref / "series.csv", "t_s");
+    ASSERT_GT(t.size(), 10u);
+    for (size_t k = 1; k < t.size(); ++k) EXPECT_LT(t[k - 1], t[k]) << "row " << k;
     for (const char* f : {"series.csv", "summary.json", "scenario.toml", "peak_thickness.asc", "peak_speed.asc", "deposit_thickness.asc",
                           "snapshots/terrain.vtp", "snapshots/spheres.pvd", "snapshots/spheres_0000.vtp"})
         EXPECT_TRUE(fs::exists(ref / f)) << f;

@@ -293,7 +293,7 @@ void Dem3Run::write_frames(const std::string& tag) const {
 
 RunSummary Dem3Run::finish(const std::string& stop_reason, const std::vector<ScenarioInput>& inputs, double wall_seconds) {
     const World3& w = *world_;
-    sample();
+    // (the loop has sampled the last instant already; the rasters take it as the deposit)
     if (s_.output.snapshot_interval > 0 && (snap_times_.empty() || snap_times_.back() != w.time())) snapshot();
     series_.close();
     rasters_->finish(w.positions(), w.velocities(), w.masses());
