@@ -166,7 +166,7 @@ TEST(Dem3, UndampedPileKeepsItsEnergyAndAGasItsMomentum) {
     EXPECT_GT(contact_steps, 10000);  // (an elastic pile bounces: contacts come and go)
     EXPECT_LT(worst / scale, 0.01);
     RecordProperty("pile_energy_drift", std::to_string(worst / scale));
-    std::printf("undamped pile, safety %.1f: %ld steps, %ld contact-steps, largest |balance - start| / |potential| = %.2e\n", safety, w.step_count(), contact_steps, worst / scale);
+    std::printf("undamped pile, safety %.1f: %ld steps, %ld contact-steps, %zu lost, largest |balance - start| / |potential| = %.2e\n", safety, w.step_count(), contact_steps, w.lost_count(), worst / scale);
     }
     // a gas without gravity, far above the bed: the momentum stays
     Dem3Def d;

@@ -22,7 +22,14 @@ struct ClosePackedRelease {
 // Spheres of radius R on the lattice, with the lattice's origin at (lo.x, lo.y, lowest bed in
 // the box), kept when inside the box, clear of the bed (no TIN contact) and with the centre at
 // least R below the top (top(x, y) gives the top's elevation, false outside it).
+//
+// LatticeLayers::Bed tilts the lattice so that its layers lie parallel to the plane fitted to the
+// bed in the box (least squares), the first layer a radius above it: a slab on a planar slope
+// then rests on the bed everywhere instead of on a staircase of level layers, and is not shaken
+// apart as its spheres drop onto the slope at the start.
+enum class LatticeLayers { Level, Bed };
+
 ClosePackedRelease close_packed_release(const Tin& bed, const std::function<bool(double, double, double&)>& top, const Vec2& lo,
-                                        const Vec2& hi, double R);
+                                        const Vec2& hi, double R, LatticeLayers layers = LatticeLayers::Level);
 
 }  // namespace demlab

@@ -11,6 +11,7 @@
 #include "core/machine.h"
 #include "dem3/close_packing.h"
 #include "dem3/peak_rasters.h"
+#include "dem3/sphere_bonds.h"
 #include "dem3/world3.h"
 #include "run/summary_file.h"
 
@@ -49,6 +50,9 @@ public:
         r.potential = e.potential;
         r.elastic = e.elastic;
         r.dissipated_contacts = e.dissipated;
+        r.bond_elastic = e.bond_elastic;
+        r.bond_break_loss = e.bond_broken;
+        r.lost_with_discs = e.lost;
         return r;
     }
     void save_state(BinaryWriter& out) const override { w_.save_state(out); }
@@ -60,7 +64,7 @@ private:
 
 constexpr const char* kSeriesColumns =
     "t_s,kinetic_J,potential_J,elastic_J,dissipated_J,balance_J,centre_x_m,centre_y_m,centre_z_m,max_travel_m,"
-    "max_speed_m_per_s,moving_spheres,contacts,lost_spheres,dt_s";
+    "max_speed_m_per_s,moving_spheres,contacts,lost_spheres,dt_s,intact_bonds,bond_elastic_J,bond_broken_J";
 
 class Dem3Run final : public SolverRun {
 public:
@@ -78,7 +82,7 @@ public:
             z += d.release_thickness;
             return true;
         };
-        release_ = close_packed_release(*tin_, top_at, d.release_lo, d.release_hi, d.radius);
+        release_ = close_packed_release(*tin_, top_at, d.release_lo, d.release_hi, d.radius, d.release_layers);
         if (release_.centres.empty())
             throw InputError(s.source + ": the release box [" + format_number(d.release_lo.x()) + ", " + format_number(d.release_lo.y()) +
                              "] - [" + format_number(d.release_hi.x()) + ", " + format_number(d.release_hi.y()) +
@@ -89,6 +93,14 @@ public:
         world_ = std::make_unique<World3>(law, tin_);
         for (const Vec3& p : release_.centres) world_->add_sphere(p, Vec3::Zero(), d.radius, d.density);
         start_ = world_->positions();
+        if (s.cohesion.enabled) {
+            // the slab's bonds: the filtered Delaunay edges between the release's centres
+            std::vector<double> radii(release_.centres.size(), d.radius);
+            BondBuildDef build = s.cohesion.build;
+            if (build.filter == BondFilter::Gap && build.max_gap == 0.0) build.max_gap = 0.25 * d.radius;
+            world_->set_bonds(s.cohesion.bond, delaunay_bonds3(release_.centres, radii, build, &bond_report_));
+        }
+        world_->measure();  // the first row's ledger
         solver_ = std::make_unique<Dem3Loop>(*world_);
         // the rasters: the terrain's grid, or one over the TIN's box
         if (grid.ncols == 0 || d.raster_cell > 0.0) {
@@ -177,6 +189,7 @@ private:
     std::shared_ptr<const Tin> tin_;
     EsriGrid terrain_grid_;
     ClosePackedRelease release_;
+    BondBuildReport bond_report_;
     double solid_fraction_ = 0.0;
     std::unique_ptr<World3> world_;
     std::unique_ptr<Dem3Loop> solver_;
@@ -207,9 +220,9 @@ void Dem3Run::sample() {
     max_speed_ = std::max(max_speed_, speed);
     max_travel_ = std::max(max_travel_, travel);
     char row[512];
-    std::snprintf(row, sizeof row, "%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%ld,%ld,%zu,%.6g\n", w.time(), e.kinetic,
-                  e.potential, e.elastic, e.dissipated, e.balance(), centre.x(), centre.y(), centre.z(), travel, speed, moving,
-                  w.contacts(), w.lost_count(), w.dt());
+    std::snprintf(row, sizeof row, "%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%.9g,%ld,%ld,%zu,%.6g,%zu,%.9g,%.9g\n", w.time(),
+                  e.kinetic, e.potential, e.elastic, e.dissipated, e.balance(), centre.x(), centre.y(), centre.z(), travel, speed,
+                  moving, w.contacts(), w.lost_count(), w.dt(), w.intact_bonds(), e.bond_elastic, e.bond_broken);
     series_.out() << row;
     series_.check();
     rasters_->sample(w.positions(), w.velocities(), w.masses());
@@ -239,7 +252,8 @@ void Dem3Run::snapshot() {
     std::ostringstream o;
     o.precision(10);
     o << "<?xml version=\"1.0\"?>\n<VTKFile type=\"PolyData\" version=\"0.1\" byte_order=\"LittleEndian\">\n<PolyData>\n"
-      << "<Piece NumberOfPoints=\"" << w.size() << "\" NumberOfVerts=\"" << w.size() << "\">\n<PointData Scalars=\"radius\">\n"
+      << "<Piece NumberOfPoints=\"" << w.size() << "\" NumberOfVerts=\"" << w.size() << "\" NumberOfLines=\"" << w.intact_bonds()
+      << "\">\n<PointData Scalars=\"radius\">\n"
       << "<DataArray type=\"Float64\" Name=\"radius\" format=\"ascii\">\n";
     for (double r : w.radii()) o << r << '\n';
     o << "</DataArray>\n<DataArray type=\"Float64\" Name=\"velocity\" NumberOfComponents=\"3\" format=\"ascii\">\n";
@@ -252,7 +266,16 @@ void Dem3Run::snapshot() {
     for (size_t k = 0; k < w.size(); ++k) o << k << '\n';
     o << "</DataArray>\n<DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">\n";
     for (size_t k = 0; k < w.size(); ++k) o << k + 1 << '\n';
-    o << "</DataArray>\n</Verts>\n</Piece>\n</PolyData>\n</VTKFile>\n";
+    o << "</DataArray>\n</Verts>\n";
+    if (w.intact_bonds() > 0) {  // the intact bonds as lines between the centres
+        o << "<Lines>\n<DataArray type=\"Int64\" Name=\"connectivity\" format=\"ascii\">\n";
+        for (const Bond& b : w.bonds())
+            if (!b.broken) o << b.k << ' ' << b.l << '\n';
+        o << "</DataArray>\n<DataArray type=\"Int64\" Name=\"offsets\" format=\"ascii\">\n";
+        for (size_t k = 0; k < w.intact_bonds(); ++k) o << 2 * (k + 1) << '\n';
+        o << "</DataArray>\n</Lines>\n";
+    }
+    o << "</Piece>\n</PolyData>\n</VTKFile>\n";
     char name[64];
     std::snprintf(name, sizeof name, "/snapshots/spheres_%04zu.vtp", snap_times_.size());
     write_file_atomic(dir_ + name, o.str());
@@ -360,6 +383,19 @@ RunSummary Dem3Run::finish(const std::string& stop_reason, const std::vector<Sce
     j.integer("lost_spheres", long(w.lost_count()));
     j.number("energy_kinetic", e.kinetic, "J");
     j.number("energy_dissipated", e.dissipated, "J");
+    if (!w.bonds().empty()) {
+        j.integer("bonds", long(w.bonds().size()));
+        j.integer("bonds_broken", long(w.bonds().size() - w.intact_bonds()));
+        j.number("bonds_broken_fraction", double(w.bonds().size() - w.intact_bonds()) / double(w.bonds().size()), "-");
+        j.number("bond_mean_rest_length", bond_report_.mean_rest_length, "m");
+        j.number("first_bond_break", w.bond_breaks().empty() ? NAN : w.bond_breaks().front().t, "s");
+        j.number("energy_bond_broken", e.bond_broken, "J");
+        std::ostringstream csv;
+        csv.precision(9);
+        csv << "t_s,k,l,strain,energy_J\n";
+        for (const BondBreakEvent& b : w.bond_breaks()) csv << b.t << ',' << b.k << ',' << b.l << ',' << b.strain << ',' << b.energy << '\n';
+        write_file_atomic(dir_ + "/bond_breaks.csv", csv.str());
+    }
     write_file_atomic(dir_ + "/summary.json", j.str());
     return sum;
 }

@@ -33,6 +33,56 @@ void World3::add_sphere(const Vec3& position, const Vec3& velocity, double radiu
     r_max_ = std::max(r_max_, radius);
 }
 
+void World3::set_bonds(const BondDef& def, const std::vector<std::pair<int, int>>& pairs) {
+    std::vector<std::pair<int, int>> sorted;
+    for (auto [k, l] : pairs) {
+        if (k < 0 || l < 0 || size_t(std::max(k, l)) >= pos_.size() || k == l)
+            throw InputError("bond [" + std::to_string(k) + ", " + std::to_string(l) + "]: needs two different spheres of the " +
+                             std::to_string(pos_.size()));
+        sorted.emplace_back(std::min(k, l), std::max(k, l));
+    }
+    std::sort(sorted.begin(), sorted.end());
+    if (std::adjacent_find(sorted.begin(), sorted.end()) != sorted.end())
+        throw InputError("a bond is given twice: [" + std::to_string(std::adjacent_find(sorted.begin(), sorted.end())->first) + ", " +
+                         std::to_string(std::adjacent_find(sorted.begin(), sorted.end())->second) + "]");
+    bond_def_ = def;
+    bonds_.clear();
+    for (auto [k, l] : sorted) bonds_.push_back(Bond{k, l, (pos_[size_t(l)] - pos_[size_t(k)]).norm(), 0});
+    intact_ = bonds_.size();
+    breaks_.clear();
+}
+
+// Each intact bond once, in bond order (the same sums on any number of threads): its force
+// on both spheres, its largest stiffness in both spheres' K (C10), its energy; a bond past its
+// strain or to a lost sphere breaks and books what it held (C4, C12).
+void World3::add_bond_forces() {
+    double elastic = 0.0;
+    for (Bond& b : bonds_) {
+        if (b.broken) continue;
+        const size_t k = size_t(b.k), l = size_t(b.l);
+        const double k0 = ElasticBond::k0_sphere(bond_def_, b.rest_length);
+        const Vec3 d = pos_[l] - pos_[k];
+        const ElasticBond::Eval e = ElasticBond::evaluate(bond_def_, k0, b.rest_length, 1.0 / b.rest_length, d);
+        if (e.breaks || lost_[k] || lost_[l]) {
+            const double held = e.skipped ? 0.0 : ElasticBond::energy(bond_def_, k0, b.rest_length, e.strain);
+            energy_.bond_broken += held;
+            breaks_.push_back(BondBreakEvent{time_, b.k, b.l, e.strain, held});
+            b.broken = 1;
+            --intact_;
+            continue;
+        }
+        const double k_max = ElasticBond::max_stiffness(bond_def_, k0);
+        load_[k].k += k_max;
+        load_[l].k += k_max;
+        if (e.skipped) continue;
+        const Vec3 f = e.f * d;  // on k, towards l when stretched
+        load_[k].bonds += f;
+        load_[l].bonds -= f;
+        elastic += ElasticBond::energy(bond_def_, k0, b.rest_length, e.strain);
+    }
+    energy_.bond_elastic = elastic;
+}
+
 size_t World3::lost_count() const {
     size_t n = 0;
     for (std::uint8_t l : lost_) n += l;
@@ -116,16 +166,46 @@ void World3::gather(size_t i, double ahead_dt, Load& l, std::vector<TinContact>&
         }
 }
 
-void World3::step() {
+void World3::gather_all(double ahead_dt) {
     const size_t n = pos_.size();
     load_.resize(n);
     build_cells();
-    const double ahead_dt = dt_ > 0.0 ? dt_ : def_.dt_max;
-    pool_->parallel_for(n, [&](size_t begin, size_t end, int) {
+    // a sphere's gather (its TIN features, 27 cells) costs microseconds, so a few hundred spheres
+    // already pay for sharing out (the pool's own rule waits for thousands of cheap items)
+    const size_t parts = n >= 256 ? size_t(pool_->size()) : 1;
+    auto chunk = [&](size_t k) {
         thread_local std::vector<TinContact> bed;
-        for (size_t i = begin; i < end; ++i)
+        for (size_t i = n * k / parts; i < n * (k + 1) / parts; ++i)
             if (!lost_[i]) gather(i, ahead_dt, load_[i], bed);
-    });
+    };
+    if (parts == 1) chunk(0);
+    else pool_->for_each_thread([&](int k) { chunk(size_t(k)); });
+    if (!bonds_.empty()) add_bond_forces();
+}
+
+void World3::measure() {
+    gather_all(dt_ > 0.0 ? dt_ : def_.dt_max);
+    double elastic = 0.0, potential = 0.0, kinetic = 0.0;
+    long touching = 0;
+    for (size_t i = 0; i < pos_.size(); ++i) {
+        if (lost_[i]) continue;
+        elastic += load_[i].elastic;
+        potential += mass_[i] * def_.gravity * pos_[i].z();
+        kinetic += 0.5 * mass_[i] * vel_[i].squaredNorm();
+        touching += load_[i].touching;
+    }
+    contacts_ = touching;
+    energy_.elastic = elastic;
+    energy_.potential = potential;
+    energy_.kinetic = kinetic;
+}
+
+void World3::step() {
+    const size_t n = pos_.size();
+    const double ahead_dt = dt_ > 0.0 ? dt_ : def_.dt_max;
+    energy_.lost += lost_pending_;
+    lost_pending_ = 0.0;
+    gather_all(ahead_dt);
     // the step (D12): the smallest m / K over the spheres
     double best_sq = INFINITY, elastic = 0.0, potential = 0.0;
     long touching = 0;
@@ -161,7 +241,7 @@ void World3::integrate(double dt) {
         const Load& l = load_[i];
         const double m = mass_[i], inv_m = 1.0 / m;
         const Vec3 v_old = vel_[i];
-        const Vec3 v_star = v_old + (l.bed + l.pairs + m * g) * (inv_m * h);
+        const Vec3 v_star = v_old + (l.bed + l.pairs + l.bonds + m * g) * (inv_m * h);
         Vec3 v_new = v_star;
         if (l.touching > 0) {
             const double normal = resultant ? l.bed.norm() + l.pairs.norm() : l.moduli;  // N + P (D4)
@@ -178,7 +258,10 @@ void World3::integrate(double dt) {
         vel_[i] = v_new;
         pos_[i] += dt * v_new;
         const Vec3& p = pos_[i];
-        if (p.x() < lo.x() - margin || p.y() < lo.y() - margin || p.x() > hi.x() + margin || p.y() > hi.y() + margin ||
+        // past the terrain's edge in map view there is no bed: the sphere is lost there (it
+        // would only fall), or below the terrain by its height
+        const double edge = radius_[i];
+        if (p.x() < lo.x() - edge || p.y() < lo.y() - edge || p.x() > hi.x() + edge || p.y() > hi.y() + edge ||
             p.z() < lo.z() - margin) {
             lost_[i] = 1;
             // what it carries away, so the ledger still closes
@@ -187,7 +270,8 @@ void World3::integrate(double dt) {
     }
     energy_.kinetic = kinetic;
     energy_.dissipated += friction;
-    energy_.lost += lost_energy;
+    // this step's ledger (x_n) still holds the spheres lost in it; the next one books them
+    lost_pending_ = lost_energy;
 }
 
 void World3::save_state(BinaryWriter& out) const {
@@ -206,6 +290,23 @@ void World3::save_state(BinaryWriter& out) const {
     out.put(energy_.elastic);
     out.put(energy_.dissipated);
     out.put(energy_.lost);
+    out.put(lost_pending_);
+    out.tag("BND3");
+    out.put(std::uint64_t(bonds_.size()));
+    for (const Bond& b : bonds_) {
+        out.put(b.rest_length);
+        out.put(b.broken);
+    }
+    out.put(energy_.bond_elastic);
+    out.put(energy_.bond_broken);
+    out.put(std::uint64_t(breaks_.size()));
+    for (const BondBreakEvent& e : breaks_) {
+        out.put(e.t);
+        out.put(std::int64_t(e.k));
+        out.put(std::int64_t(e.l));
+        out.put(e.strain);
+        out.put(e.energy);
+    }
 }
 
 void World3::load_state(BinaryReader& in) {
@@ -228,6 +329,30 @@ void World3::load_state(BinaryReader& in) {
     in.get(energy_.elastic);
     in.get(energy_.dissipated);
     in.get(energy_.lost);
+    in.get(lost_pending_);
+    in.expect_tag("BND3");
+    in.get(n);
+    if (n != bonds_.size()) throw InputError("checkpoint: " + std::to_string(n) + " bonds, the scenario makes " + std::to_string(bonds_.size()));
+    intact_ = 0;
+    for (Bond& b : bonds_) {
+        in.get(b.rest_length);
+        in.get(b.broken);
+        intact_ += b.broken ? 0 : 1;
+    }
+    in.get(energy_.bond_elastic);
+    in.get(energy_.bond_broken);
+    in.get(n);
+    breaks_.assign(size_t(n), BondBreakEvent{});
+    for (BondBreakEvent& e : breaks_) {
+        std::int64_t k = 0, l = 0;
+        in.get(e.t);
+        in.get(k);
+        in.get(l);
+        e.k = std::int32_t(k);
+        e.l = std::int32_t(l);
+        in.get(e.strain);
+        in.get(e.energy);
+    }
 }
 
 }  // namespace demlab

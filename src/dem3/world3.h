@@ -7,8 +7,13 @@
 //   step  min(dt_max, safety min sqrt(m / K)), K the tangent stiffnesses one step ahead,
 //         growing by at most 5 % a step (the 2-D law's rule, capped_growing_step)
 // Each sphere gathers its own contacts (a pair is computed from both sides), so the result is
-// the same on any number of threads. A sphere that leaves the terrain's box by more than its
-// height is lost: it stops moving and counts no more.
+// the same on any number of threads. Bonds (set_bonds; dem/bonds/elastic_bond.h with the
+// spheres' face, k0 = E L0/(2 sqrt 2) per bond) act beside the contacts as in 2-D: a central
+// spring that breaks for good past its strain, evaluated once per bond in bond order, so the
+// sums are the same on any number of threads too. Their force is not a contact force: it does
+// not enter the friction's N + P. A sphere whose centre leaves the terrain's box in map
+// view by more than its radius, or falls below the terrain by its height, is lost: it stops
+// moving and counts no more.
 #pragma once
 #include <cstdint>
 #include <memory>
@@ -17,6 +22,7 @@
 #include "core/binary_io.h"
 #include "core/thread_pool.h"
 #include "core/vec3.h"
+#include "dem/bonds/elastic_bond.h"
 #include "dem/laws/debris_law.h"
 #include "dem3/tin.h"
 
@@ -42,7 +48,9 @@ struct Energy3 {
     double elastic = 0.0;      // the contacts' at x_n
     double dissipated = 0.0;   // by friction, so far
     double lost = 0.0;         // carried away by lost spheres
-    double balance() const { return kinetic + potential + elastic + dissipated + lost; }
+    double bond_elastic = 0.0;  // the intact bonds' at x_n (C7)
+    double bond_broken = 0.0;   // the bonds' energy when they broke (C12)
+    double balance() const { return kinetic + potential + elastic + dissipated + lost + bond_elastic + bond_broken; }
 };
 
 class World3 {
@@ -50,7 +58,13 @@ public:
     World3(const Dem3Def& def, std::shared_ptr<const Tin> terrain);
 
     void add_sphere(const Vec3& position, const Vec3& velocity, double radius, double density);
+    // Bonds between spheres k != l with their rest lengths at the spheres' present positions;
+    // replaces any earlier bonds. Refused: a missing sphere, a pair given twice.
+    void set_bonds(const BondDef& def, const std::vector<std::pair<int, int>>& pairs);
     void step();
+    // The contacts, bonds and ledger at the present positions without a step: a run's t = 0
+    // (its first row then holds the start's energies, kinetic as sum m v^2 / 2).
+    void measure();
 
     double time() const { return time_; }
     double dt() const { return dt_; }          // s, the last step's
@@ -68,6 +82,9 @@ public:
     Vec3 bed_force(size_t i) const { return load_.empty() ? Vec3::Zero() : load_[i].bed; }  // N, at the last pass
     const Tin& terrain() const { return *tin_; }
     const Dem3Def& def() const { return def_; }
+    const std::vector<Bond>& bonds() const { return bonds_; }
+    size_t intact_bonds() const { return intact_; }
+    const std::vector<BondBreakEvent>& bond_breaks() const { return breaks_; }  // in the order they broke
 
     void save_state(BinaryWriter& out) const;
     void load_state(BinaryReader& in);
@@ -76,6 +93,7 @@ private:
     struct Load {                   // one sphere's gathered contacts at x_n
         Vec3 bed = Vec3::Zero();    // N, sum of the bed reactions
         Vec3 pairs = Vec3::Zero();  // N, sum of the pair forces
+        Vec3 bonds = Vec3::Zero();  // N, sum of the bond forces
         double moduli = 0.0;        // N, sum of all their moduli ("sum")
         double k = 0.0;             // N/m, tangent stiffnesses ahead
         double elastic = 0.0;       // J, the bed's and half the pairs' energy
@@ -83,6 +101,8 @@ private:
     };
     void build_cells();
     void gather(size_t i, double ahead_dt, Load& l, std::vector<TinContact>& bed) const;
+    void gather_all(double ahead_dt);
+    void add_bond_forces();
     void integrate(double dt);
 
     Dem3Def def_;
@@ -99,6 +119,11 @@ private:
     long steps_ = 0;
     long contacts_ = 0;
     Energy3 energy_;
+    double lost_pending_ = 0.0;  // J, the spheres lost in the last step: booked at the next
+    BondDef bond_def_;
+    std::vector<Bond> bonds_;
+    size_t intact_ = 0;
+    std::vector<BondBreakEvent> breaks_;
 };
 
 }  // namespace demlab

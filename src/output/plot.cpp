@@ -291,6 +291,27 @@ void plot_peaks(const std::string& run_dir, const std::string& dir, std::ostring
     }
 }
 
+// motion.png and bonds.png of a 3-D run (series.csv of dem3/dem3_run.cpp): the fastest sphere
+// and the largest travel, and the intact bonds when there are any.
+void plot_spheres(const std::string& run_dir, const std::string& dir, std::ostringstream& gp, std::vector<std::string>& made) {
+    std::ifstream in(run_dir + "/series.csv");
+    std::string header, first;
+    if (!std::getline(in, header) || header.find("moving_spheres") == std::string::npos) return;
+    gp << "set output 'motion.png'\nset title 'The fastest sphere and the largest travel in map view'\n"
+       << "set ylabel 'speed (m/s)'\nset y2label 'travel (m)'\nset y2tics\n"
+       << "plot '../series.csv' using 1:11 with lines lw 2 title 'fastest sphere' axes x1y1, '' using 1:10 with lines lw 2 "
+       << "title 'largest travel' axes x1y2\nunset y2tics\nunset y2label\n";
+    made.push_back(dir + "/motion.png");
+    std::getline(in, first);  // the t = 0 row: bonds there are the bonds made
+    size_t column = 0, at = 0;
+    for (int k = 0; k < 15 && at != std::string::npos; ++k) at = first.find(',', at + (k ? 1 : 0));
+    if (at != std::string::npos) column = size_t(std::strtoul(first.c_str() + at + 1, nullptr, 10));
+    if (column == 0) return;
+    gp << "set output 'bonds.png'\nset title 'Intact bonds'\nset ylabel 'bonds'\n"
+       << "plot '../series.csv' using 1:16 with lines lw 2 title 'intact'\n";
+    made.push_back(dir + "/bonds.png");
+}
+
 }  // namespace
 
 bool gnuplot_available() { return program_available("gnuplot"); }
@@ -313,7 +334,8 @@ std::vector<std::string> make_plots(const std::string& run_dir, int width, int h
     plot_energy(run_dir, dir, gp, made);
     plot_pressure(run_dir, dir, gp, made);
     plot_peaks(run_dir, dir, gp, made);
-    if (made.empty()) throw InputError(run_dir + ": no forces.csv, front.csv or energy.csv to plot");
+    plot_spheres(run_dir, dir, gp, made);
+    if (made.empty()) throw InputError(run_dir + ": no forces.csv, front.csv, energy.csv or series.csv to plot");
     const std::string script = dir + "/plots.gp";
     write_file_atomic(script, gp.str());
     // no shell, and the script names its files relative to the plots folder, where gnuplot

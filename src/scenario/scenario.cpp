@@ -448,10 +448,17 @@ void finish_dem3(Scenario& s) {
         return;
     }
     Dem3Scenario& d = s.dem3;
-    if (s.flume.enabled || s.dam_break.enabled || s.terrain.enabled || s.cohesion.enabled || s.lattice_release.enabled ||
-        !s.discs.empty() || !s.walls.empty())
+    if (s.flume.enabled || s.dam_break.enabled || s.terrain.enabled || s.lattice_release.enabled || !s.discs.empty() ||
+        !s.walls.empty())
         throw InputError(where + "scenario.solver = \"dem3\" has its own terrain and release ([dem3]); leave out [flume], "
-                         "[dam_break], [terrain], [cohesion], [lattice_release], [[discs]] and [[walls]]");
+                         "[dam_break], [terrain], [lattice_release], [[discs]] and [[walls]]");
+    // bonds between the spheres come from their triangulation; the predicted length (C5) is the
+    // discs' leapfrog's and not built for spheres
+    if (s.cohesion.enabled && !s.cohesion.bonds.empty())
+        throw InputError(where + "cohesion.bonds: the 3-D solver bonds the release's spheres from their Delaunay triangulation; "
+                         "explicit pairs are not read (leave cohesion.bonds out)");
+    if (s.cohesion.enabled && s.cohesion.bond.predict)
+        throw InputError(where + "cohesion.predict = true: not offered by the 3-D solver (accepted: false)");
     if (d.terrain.empty()) throw InputError(where + "dem3.terrain: the 3-D solver needs a terrain (an .asc grid or an .xyz point file)");
     resolve_beside_scenario(s, d.terrain);
     if (!d.release_top.empty()) resolve_beside_scenario(s, d.release_top);

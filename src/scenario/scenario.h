@@ -10,6 +10,7 @@
 #include "dem/bonds/bond_builder.h"
 #include "geometry/wall.h"
 #include "dan/dan_def.h"
+#include "dem3/close_packing.h"
 #include "dem3/world3.h"
 #include "dem/world.h"
 
@@ -133,6 +134,7 @@ struct Dem3Scenario {
     std::string terrain;                   // .asc grid or .xyz points: the bed
     std::string release_top;               // .asc or .xyz: the mass's top before failure ("": release_thickness)
     double release_thickness = 0.0;        // m, above the bed when there is no top surface
+    LatticeLayers release_layers = LatticeLayers::Level;  // the lattice's layers level (Mikhailov's) or along the bed
     Vec2 release_lo{0.0, 0.0};             // m, the release's box in map view
     Vec2 release_hi{0.0, 0.0};
     double radius = 10.0;                  // m

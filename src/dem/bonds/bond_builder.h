@@ -13,6 +13,7 @@
 // of rounding; for cocircular points CGAL's choice depends on the input order only, so the
 // same scenario gives the same bonds.
 #pragma once
+#include <array>
 #include <cstddef>
 #include <utility>
 #include <vector>
@@ -31,10 +32,22 @@ struct BondBuildDef {
 };
 
 struct BondBuildReport {
-    int dimension = 0;              // of the triangulation: 2, 1 (collinear), 0 or -1
-    size_t faces = 0, faces_kept = 0, bonds = 0;
+    int dimension = 0;              // of the triangulation: 3 (spheres), 2, 1 (collinear), 0 or -1
+    size_t faces = 0, faces_kept = 0, bonds = 0;  // faces: the simplices (triangles, tetrahedra)
     double mean_rest_length = 0.0;  // m
 };
+
+// A simplex of a Delaunay triangulation: 2 (an edge), 3 (a triangle) or 4 (a tetrahedron) ids.
+struct BondSimplex {
+    std::array<size_t, 4> v{};
+    int n = 0;
+};
+
+// The filter on the simplices, then their sides as bonds (min id, max id), sorted and unique;
+// `length(k, l)` is the distance between two centres. The discs' and the spheres' builders share it.
+std::vector<std::pair<int, int>> bonds_of_simplices(const std::vector<BondSimplex>& simplices, const std::vector<double>& radius,
+                                                    double (*length)(const void*, size_t, size_t), const void* centres,
+                                                    const BondBuildDef& def, BondBuildReport& report);
 
 std::vector<std::pair<int, int>> delaunay_bonds(const std::vector<Vec2>& pos, const std::vector<double>& radius,
                                                 const BondBuildDef& def, BondBuildReport* report = nullptr);

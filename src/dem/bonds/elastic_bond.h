@@ -13,6 +13,13 @@
 //   U_b = k0 L0^2 (eps^2/2 + eps^3/3) ("current"), k0 L0^2 eps^2 / 2 ("rest")   C7
 //   the automatic step adds k_b,max = k0 (1 + 2 eps_c) ("current") or k0 to both discs  C10
 //   predict: the length (strain, force, break) from x + dt v, a dashpot c = k_b dt     C5, C11
+// Between spheres (the 3-D solver, dem3/world3.h) the face is the Voronoi face between two
+// neighbours of a close-packed lattice of spacing L0: the cell is a rhombic dodecahedron of
+// volume L0^3/sqrt(2) with 12 faces at L0/2, so each face is L0^2/(2 sqrt 2). "current" scales
+// one of its sides with L, as AvaFrame's face width (A = L0 L/(2 sqrt 2)), "rest" keeps it:
+// the same algebra as above with k0 = E L0/(2 sqrt 2) per bond (k0_sphere). A face-centred
+// cubic network of these bonds (cube side a = sqrt(2) L0, k0/a = E/4) has C11 = E/2,
+// C12 = C44 = E/4: Young's modulus E/3 along a cube axis, Poisson's ratio 1/3 (derived).
 #pragma once
 #include <cmath>
 #include <cstdint>
@@ -54,6 +61,8 @@ struct BondBreakEvent {
 struct ElasticBond {
     // k0 = E t / sqrt(3), N/m
     static double k0(const BondDef& d) { return d.modulus * d.thickness / std::sqrt(3.0); }
+    // between spheres, k0 = E L0 / (2 sqrt 2), N/m (the face above)
+    static double k0_sphere(const BondDef& d, double rest_length) { return d.modulus * rest_length / (2.0 * std::sqrt(2.0)); }
 
     // eps = L / L0 - 1, with 1 / L0 taken once per bond (a division per bond and step saved)
     static double strain(double length, double inv_rest_length) { return length * inv_rest_length - 1.0; }
@@ -65,7 +74,8 @@ struct ElasticBond {
         double strain = 0.0;
         bool skipped = false, breaks = false;
     };
-    static Eval evaluate(const BondDef& def, double k0_, double rest_length, double inv_rest_length, const Vec2& d) {
+    template <class Vec>  // Vec2 (discs) or Vec3 (spheres)
+    static Eval evaluate(const BondDef& def, double k0_, double rest_length, double inv_rest_length, const Vec& d) {
         Eval e;
         const double length_sq = d.squaredNorm();
         if (length_sq <= def.min_distance * def.min_distance) {
