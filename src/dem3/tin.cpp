@@ -177,6 +177,19 @@ void Tin::build() {
         bucket_items_.insert(bucket_items_.end(), lists[b].begin(), lists[b].end());
         bucket_start_[b + 1] = std::uint32_t(bucket_items_.size());
     }
+    plane_normal_.resize(triangles_.size());
+    plane_offset_.resize(triangles_.size());
+    for (size_t f = 0; f < triangles_.size(); ++f) {
+        const Vec3 &a = vertices_[triangles_[f][0]], &b = vertices_[triangles_[f][1]], &c = vertices_[triangles_[f][2]];
+        const Vec3 n = (b - a).cross(c - a);
+        const double len = n.norm();
+        plane_normal_[f] = len > 0.0 ? Vec3(n / len) : Vec3::Zero();
+        plane_offset_[f] = plane_normal_[f].dot(a);
+    }
+    bucket_top_.assign(lists.size(), -INFINITY);
+    for (size_t b = 0; b < lists.size(); ++b)
+        for (std::uint32_t f : lists[b])
+            for (std::uint32_t v : triangles_[f]) bucket_top_[b] = std::max(bucket_top_[b], vertices_[v].z());
 }
 
 void Tin::triangles_near(double x0, double y0, double x1, double y1, std::vector<std::uint32_t>& out) const {
@@ -193,7 +206,20 @@ void Tin::triangles_near(double x0, double y0, double x1, double y1, std::vector
     out.erase(std::unique(out.begin(), out.end()), out.end());
 }
 
+double Tin::top_near(double x0, double y0, double x1, double y1) const {
+    if (x1 < lower_.x() || y1 < lower_.y() || x0 > upper_.x() || y0 > upper_.y()) return -INFINITY;
+    const int i0 = std::clamp(int((x0 - lower_.x()) / bucket_), 0, buckets_x_ - 1), i1 = std::clamp(int((x1 - lower_.x()) / bucket_), 0, buckets_x_ - 1);
+    const int j0 = std::clamp(int((y0 - lower_.y()) / bucket_), 0, buckets_y_ - 1), j1 = std::clamp(int((y1 - lower_.y()) / bucket_), 0, buckets_y_ - 1);
+    double top = -INFINITY;
+    for (int j = j0; j <= j1; ++j)
+        for (int i = i0; i <= i1; ++i) top = std::max(top, bucket_top_[size_t(j) * size_t(buckets_x_) + size_t(i)]);
+    return top;
+}
+
 void Tin::sphere_contacts(const Vec3& centre, double radius, std::vector<TinContact>& out) const {
+    // a sphere whose lowest point is above every corner of the triangles below it touches none
+    // of them (most of a thick mass): no search (the same contacts, found sooner)
+    if (centre.z() - radius > top_near(centre.x() - radius, centre.y() - radius, centre.x() + radius, centre.y() + radius)) return;
     // Each face near the sphere gives its closest point and the feature it lies on. A feature is
     // the sphere's contact only when every face it bounds finds its closest point on it (the
     // centre is in the feature's Voronoi region): a face's interior always; an edge when both
@@ -212,6 +238,10 @@ void Tin::sphere_contacts(const Vec3& centre, double radius, std::vector<TinCont
     triangles_near(centre.x() - radius, centre.y() - radius, centre.x() + radius, centre.y() + radius, near);
     const std::uint32_t F = std::uint32_t(triangles_.size()), E = std::uint32_t(edge_faces_.size());
     for (std::uint32_t f : near) {
+        // a face whose plane is a radius away or more is as far from all its points: it and the
+        // features on it cannot be a contact, and a feature within the radius lies only on
+        // faces nearer than that, so leaving it out changes no contact
+        if (std::abs(plane_normal_[f].dot(centre) - plane_offset_[f]) > radius * (1.0 + 1e-9)) continue;  // (a hair of margin for rounding)
         const auto& t = triangles_[f];
         const TrianglePoint q = closest_on_triangle(centre, vertices_[t[0]], vertices_[t[1]], vertices_[t[2]]);
         const double d = (centre - q.point).norm();

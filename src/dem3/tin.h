@@ -63,6 +63,11 @@ private:
     double bucket_ = 1.0;
     int buckets_x_ = 1, buckets_y_ = 1;
     std::vector<std::uint32_t> bucket_start_, bucket_items_;
+    std::vector<Vec3> plane_normal_;   // unit normal of each triangle's plane
+    std::vector<double> plane_offset_; // its offset: n . x = offset on the plane
+    std::vector<double> bucket_top_;  // m, the highest corner of the triangles each bucket lists (-inf: none)
+    // the highest corner of the triangles listed over a box in map view (-inf outside the TIN)
+    double top_near(double x0, double y0, double x1, double y1) const;
     Vec3 lower_ = Vec3::Zero(), upper_ = Vec3::Zero();
 };
 
