@@ -408,6 +408,20 @@ RunSummary run_through_loop(const Scenario& s, const RunOptions& o, SolverRun& r
 
 }  // namespace
 
+// The discs at the start: the largest radius (m), their mass (kg/m) and area (m2).
+struct DiscTotals {
+    double r_max = 0.0, mass = 0.0, area = 0.0;
+};
+static DiscTotals disc_totals(const World& w) {
+    DiscTotals t;
+    for (size_t i = 0; i < w.disc_count(); ++i) {
+        t.r_max = std::max(t.r_max, w.radii()[i]);
+        t.mass += w.masses()[i];
+        t.area += kPi * w.radii()[i] * w.radii()[i];
+    }
+    return t;
+}
+
 RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
     if (s.solver == "dan") return run_through_loop(s, o, *make_dan_run(s, o));
     if (s.solver == "dem3") return run_through_loop(s, o, *make_dem3_run(s, o));
@@ -443,11 +457,8 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
     // the discs at the start, by id (disc_ids: a lost disc leaves the world, not these)
     const std::vector<Vec2> start_pos = w.positions();
     const std::vector<double> start_radius = w.radii();
-    double r_max = 0, total_mass = 0;
-    for (size_t i = 0; i < n; ++i) {
-        r_max = std::max(r_max, w.radii()[i]);
-        total_mass += w.masses()[i];
-    }
+    const DiscTotals totals = disc_totals(w);
+    const double r_max = totals.r_max, total_mass = totals.mass;
     const double noise = ledger_noise(w, s.world.gravity.norm());  // (check_energy_growth)
     const std::unique_ptr<BedPath> path = setup->bed_path(w);
     const MeasureContext measure{s, path.get(), path ? setup->barrier(*path) : BarrierMarks{}, setup->force_walls(),
@@ -549,11 +560,9 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
     take_peaks(sum, st, extremes, filter);
 
     barrier.finish(sum);
-    double disc_area = 0.0;
-    for (double r : start_radius) disc_area += kPi * r * r;
     write_results(s, *setup, w, measure, mass, dir, sum, [&](RunSummary& out) {
         // the deposit's bulk density: the discs' over their area, less the settled mass's porosity
-        const double bulk = disc_area > 0 && out.porosity_inside_mass >= 0 ? total_mass / disc_area * (1.0 - out.porosity_inside_mass) : NAN;
+        const double bulk = totals.area > 0 && out.porosity_inside_mass >= 0 ? total_mass / totals.area * (1.0 - out.porosity_inside_mass) : NAN;
         design.finish(filter, out, bulk, s.world.gravity.norm());
     });
     std::filesystem::remove(checkpoint_path);  // the run is complete: nothing to resume
