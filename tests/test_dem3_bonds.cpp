@@ -17,6 +17,7 @@
 #include "files.h"
 #include "resume.h"
 #include "run/checkpoint_file.h"
+#include "output/plot.h"
 #include "run/run.h"
 
 using namespace demlab;
@@ -218,6 +219,12 @@ TEST(Dem3Bonds, ABondedSlabBreaksAtTheSlopeBreakAndResumesToTheSameBytes) {
     test::resume_run(cut, 2);
     for (const char* f : {"series.csv", "bond_breaks.csv", "deposit_thickness.asc", "snapshots/spheres_0009.vtp"})
         EXPECT_EQ(test::read_file(ref / f), test::read_file(cut / f)) << f << " differs";
+    // the plots of a 3-D run: its motion and its bonds
+    if (gnuplot_available()) {
+        const std::vector<std::string> made = make_plots(ref.string(), 320, 200);
+        for (const char* f : {"plots/motion.png", "plots/bonds.png"}) EXPECT_TRUE(fs::exists(ref / f)) << f;
+        EXPECT_EQ(made.size(), 2u);
+    }
     // explicit pairs and the predicted length are refused before any output
     for (const char* bad : {"cohesion.predict=true", "cohesion.bonds=[[0, 1]]"}) {
         Scenario b = load_scenario((dir / "slab.toml").string());
