@@ -108,7 +108,9 @@ TEST(Dem3Bonds, ABondedPairOscillatesAtItsPeriodAndBreaksAtItsStrain) {
         if (last < 0 && now >= 0) {  // upward crossings of the rest length
             if (ups == 0) first_up = w.time();
             ++ups;
-            if (ups == 6) EXPECT_NEAR((w.time() - first_up) / 5 / period, 1.0, 1e-3);
+            if (ups == 6) {
+                EXPECT_NEAR((w.time() - first_up) / 5 / period, 1.0, 1e-3);
+            }
         }
         last = now;
         worst = std::max(worst, std::abs(w.energy().balance() - e0));
@@ -143,7 +145,9 @@ TEST(Dem3Bonds, ABondedPairOscillatesAtItsPeriodAndBreaksAtItsStrain) {
         const double now = c.positions()[1].x() - c.positions()[0].x() - L0;
         if (lc < 0 && now >= 0) {
             if (n == 0) t_first = c.time();
-            if (++n == 4) EXPECT_NEAR((c.time() - t_first) / 3 / period, 1.0, 2e-3);
+            if (++n == 4) {
+                EXPECT_NEAR((c.time() - t_first) / 3 / period, 1.0, 2e-3);
+            }
         }
         lc = now;
     }
@@ -190,14 +194,16 @@ TEST(Dem3Bonds, ABondedSlabBreaksAtTheSlopeBreakAndResumesToTheSameBytes) {
         return at == std::string::npos ? NAN : std::stod(summary.substr(at + key.size() + 4));
     };
     const double bonds = number("bonds"), broken = number("bonds_broken");
-    EXPECT_GT(bonds, 4.0 * r.n_discs);  // close-packed: six a sphere inside, fewer on the faces
+    EXPECT_GT(bonds, 4.0 * double(r.n_discs));  // close-packed: six a sphere inside, fewer on the faces
     // it slides whole down the slope (its centre 10 m on by 3 s), and breaks up where the slope
     // ends on the floor
     const std::vector<double> t = test::csv_column(ref / "series.csv", "t_s"),
                               intact = test::csv_column(ref / "series.csv", "intact_bonds"),
                               x = test::csv_column(ref / "series.csv", "centre_x_m");
     for (size_t k = 0; k < t.size(); ++k)
-        if (t[k] <= 3.0) EXPECT_GT(intact[k], 0.99 * bonds) << "at " << t[k] << " s";
+        if (t[k] <= 3.0) {
+            EXPECT_GT(intact[k], 0.99 * bonds) << "at " << t[k] << " s";
+        }
     const size_t at3 = size_t(std::lower_bound(t.begin(), t.end(), 3.0) - t.begin());
     EXPECT_GT(x[at3] - x.front(), 8.0);
     EXPECT_GT(broken, 0.2 * bonds);
@@ -230,6 +236,20 @@ TEST(Dem3Bonds, ABondedSlabBreaksAtTheSlopeBreakAndResumesToTheSameBytes) {
         Scenario b = load_scenario((dir / "slab.toml").string());
         apply_override(b, bad);
         EXPECT_THROW(finish_scenario(b), InputError) << bad;
+    }
+    // a filter that keeps no bond is refused before any output, as for discs
+    {
+        Scenario b = load_scenario((dir / "slab.toml").string());
+        apply_override(b, "cohesion.filter=\"length\"");
+        apply_override(b, "cohesion.max_bond_length=0.5");
+        finish_scenario(b);
+        try {
+            run_scenario(b, {(dir / "none").string(), false, {}});
+            ADD_FAILURE() << "a slab without bonds was run";
+        } catch (const InputError& e) {
+            EXPECT_NE(std::string(e.what()).find("gave no bond"), std::string::npos) << e.what();
+        }
+        EXPECT_FALSE(fs::exists(dir / "none"));
     }
     fs::remove_all(dir);
 }

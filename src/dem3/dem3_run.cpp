@@ -96,9 +96,11 @@ public:
         if (s.cohesion.enabled) {
             // the slab's bonds: the filtered Delaunay edges between the release's centres
             std::vector<double> radii(release_.centres.size(), d.radius);
-            BondBuildDef build = s.cohesion.build;
-            if (build.filter == BondFilter::Gap && build.max_gap == 0.0) build.max_gap = 0.25 * d.radius;
-            world_->set_bonds(s.cohesion.bond, delaunay_bonds3(release_.centres, radii, build, &bond_report_));
+            const auto bonds = delaunay_bonds3(release_.centres, radii, with_default_gap(s.cohesion.build, d.radius), &bond_report_);
+            if (bonds.empty())
+                throw InputError(s.source + ": cohesion.enabled = true, but the triangulation of the " +
+                                 std::to_string(release_.centres.size()) + " sphere centres gave no bond with cohesion.filter's rule");
+            world_->set_bonds(s.cohesion.bond, bonds);
         }
         world_->measure();  // the first row's ledger
         solver_ = std::make_unique<Dem3Loop>(*world_);

@@ -42,9 +42,8 @@ void World3::set_bonds(const BondDef& def, const std::vector<std::pair<int, int>
         sorted.emplace_back(std::min(k, l), std::max(k, l));
     }
     std::sort(sorted.begin(), sorted.end());
-    if (std::adjacent_find(sorted.begin(), sorted.end()) != sorted.end())
-        throw InputError("a bond is given twice: [" + std::to_string(std::adjacent_find(sorted.begin(), sorted.end())->first) + ", " +
-                         std::to_string(std::adjacent_find(sorted.begin(), sorted.end())->second) + "]");
+    if (const auto twice = std::adjacent_find(sorted.begin(), sorted.end()); twice != sorted.end())
+        throw InputError("a bond is given twice: [" + std::to_string(twice->first) + ", " + std::to_string(twice->second) + "]");
     bond_def_ = def;
     bonds_.clear();
     for (auto [k, l] : sorted) bonds_.push_back(Bond{k, l, (pos_[size_t(l)] - pos_[size_t(k)]).norm(), 0});
@@ -183,33 +182,12 @@ void World3::gather_all(double ahead_dt) {
     if (!bonds_.empty()) add_bond_forces();
 }
 
-void World3::measure() {
-    gather_all(dt_ > 0.0 ? dt_ : def_.dt_max);
-    double elastic = 0.0, potential = 0.0, kinetic = 0.0;
-    long touching = 0;
-    for (size_t i = 0; i < pos_.size(); ++i) {
-        if (lost_[i]) continue;
-        elastic += load_[i].elastic;
-        potential += mass_[i] * def_.gravity * pos_[i].z();
-        kinetic += 0.5 * mass_[i] * vel_[i].squaredNorm();
-        touching += load_[i].touching;
-    }
-    contacts_ = touching;
-    energy_.elastic = elastic;
-    energy_.potential = potential;
-    energy_.kinetic = kinetic;
-}
-
-void World3::step() {
-    const size_t n = pos_.size();
-    const double ahead_dt = dt_ > 0.0 ? dt_ : def_.dt_max;
-    energy_.lost += lost_pending_;
-    lost_pending_ = 0.0;
-    gather_all(ahead_dt);
-    // the step (D12): the smallest m / K over the spheres
+// The gathered loads summed at x_n: the contacts and the ledger's elastic and potential
+// energy; returns the smallest m / K over the spheres (the step's rule, D12).
+double World3::tally() {
     double best_sq = INFINITY, elastic = 0.0, potential = 0.0;
     long touching = 0;
-    for (size_t i = 0; i < n; ++i) {
+    for (size_t i = 0; i < pos_.size(); ++i) {
         if (lost_[i]) continue;
         if (load_[i].k > 0.0) best_sq = std::min(best_sq, mass_[i] / load_[i].k);
         elastic += load_[i].elastic;
@@ -217,13 +195,40 @@ void World3::step() {
         touching += load_[i].touching;
     }
     contacts_ = touching;
-    const double dt = def_.dt_fixed > 0.0 ? def_.dt_fixed : capped_growing_step(def_.dt_max, kGrowth, def_.safety, best_sq, dt_);
     energy_.elastic = elastic;
     energy_.potential = potential;
+    return best_sq;
+}
+
+void World3::measure() {
+    gather_all(dt_ > 0.0 ? dt_ : def_.dt_max);
+    tally();
+    energy_.kinetic = kinetic_energy();
+}
+
+void World3::step() {
+    gather_all(dt_ > 0.0 ? dt_ : def_.dt_max);
+    const double best_sq = tally();
+    const double dt = def_.dt_fixed > 0.0 ? def_.dt_fixed : capped_growing_step(def_.dt_max, kGrowth, def_.safety, best_sq, dt_);
+    book_lost(dt);
     integrate(dt);
     time_ += dt;
     dt_ = dt;
     ++steps_;
+}
+
+// The spheres lost in the last step leave this step's ledger; what they carry is booked as
+// the ledger would have held them now: the potential at x_n and the leapfrog's kinetic energy
+// m v(n-1/2) . v(n+1/2) / 2 with v(n+1/2) from gravity alone (free flight), so the balance
+// neither jumps when they go nor counts them twice.
+void World3::book_lost(double dt) {
+    const double h = dt_ > 0.0 ? 0.5 * (dt_ + dt) : dt;
+    const Vec3 g(0.0, 0.0, -def_.gravity);
+    for (std::uint32_t i : just_lost_) {
+        const Vec3& v = vel_[i];
+        energy_.lost += 0.5 * mass_[i] * v.dot(v + h * g) + mass_[i] * def_.gravity * pos_[i].z();
+    }
+    just_lost_.clear();
 }
 
 void World3::integrate(double dt) {
@@ -235,7 +240,7 @@ void World3::integrate(double dt) {
     const bool trial = def_.friction_direction == DebrisDirection::Trial;
     const Vec3 lo = tin_->lower_corner(), hi = tin_->upper_corner();
     const double margin = std::max(hi.z() - lo.z(), 10.0 * r_max_);
-    double kinetic = 0.0, friction = 0.0, lost_energy = 0.0;
+    double kinetic = 0.0, friction = 0.0;
     for (size_t i = 0; i < pos_.size(); ++i) {
         if (lost_[i]) continue;
         const Load& l = load_[i];
@@ -264,14 +269,11 @@ void World3::integrate(double dt) {
         if (p.x() < lo.x() - edge || p.y() < lo.y() - edge || p.x() > hi.x() + edge || p.y() > hi.y() + edge ||
             p.z() < lo.z() - margin) {
             lost_[i] = 1;
-            // what it carries away, so the ledger still closes
-            lost_energy += 0.5 * m * v_new.squaredNorm() + m * def_.gravity * p.z();
+            just_lost_.push_back(std::uint32_t(i));  // this step's ledger still holds it (book_lost)
         }
     }
     energy_.kinetic = kinetic;
     energy_.dissipated += friction;
-    // this step's ledger (x_n) still holds the spheres lost in it; the next one books them
-    lost_pending_ = lost_energy;
 }
 
 void World3::save_state(BinaryWriter& out) const {
@@ -290,7 +292,8 @@ void World3::save_state(BinaryWriter& out) const {
     out.put(energy_.elastic);
     out.put(energy_.dissipated);
     out.put(energy_.lost);
-    out.put(lost_pending_);
+    out.put(std::uint64_t(just_lost_.size()));
+    for (std::uint32_t i : just_lost_) out.put(i);
     out.tag("BND3");
     out.put(std::uint64_t(bonds_.size()));
     for (const Bond& b : bonds_) {
@@ -329,7 +332,12 @@ void World3::load_state(BinaryReader& in) {
     in.get(energy_.elastic);
     in.get(energy_.dissipated);
     in.get(energy_.lost);
-    in.get(lost_pending_);
+    in.get(n);
+    just_lost_.assign(size_t(n), 0);
+    for (std::uint32_t& i : just_lost_) {
+        in.get(i);
+        if (i >= pos_.size()) throw InputError("checkpoint: a lost sphere " + std::to_string(i) + " that does not exist");
+    }
     in.expect_tag("BND3");
     in.get(n);
     if (n != bonds_.size()) throw InputError("checkpoint: " + std::to_string(n) + " bonds, the scenario makes " + std::to_string(bonds_.size()));

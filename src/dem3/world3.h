@@ -102,7 +102,9 @@ private:
     void build_cells();
     void gather(size_t i, double ahead_dt, Load& l, std::vector<TinContact>& bed) const;
     void gather_all(double ahead_dt);
+    double tally();
     void add_bond_forces();
+    void book_lost(double dt);
     void integrate(double dt);
 
     Dem3Def def_;
@@ -119,7 +121,7 @@ private:
     long steps_ = 0;
     long contacts_ = 0;
     Energy3 energy_;
-    double lost_pending_ = 0.0;  // J, the spheres lost in the last step: booked at the next
+    std::vector<std::uint32_t> just_lost_;  // lost in the last step, booked in the next (book_lost)
     BondDef bond_def_;
     std::vector<Bond> bonds_;
     size_t intact_ = 0;

@@ -294,21 +294,24 @@ void plot_peaks(const std::string& run_dir, const std::string& dir, std::ostring
 // motion.png and bonds.png of a 3-D run (series.csv of dem3/dem3_run.cpp): the fastest sphere
 // and the largest travel, and the intact bonds when there are any.
 void plot_spheres(const std::string& run_dir, const std::string& dir, std::ostringstream& gp, std::vector<std::string>& made) {
-    std::ifstream in(run_dir + "/series.csv");
-    std::string header, first;
-    if (!std::getline(in, header) || header.find("moving_spheres") == std::string::npos) return;
+    const std::string path = run_dir + "/series.csv";
+    std::ifstream in(path);
+    std::string header_line, first;
+    if (!std::getline(in, header_line) || header_line.find("moving_spheres") == std::string::npos) return;
+    const CsvHeader header(header_line, path);
+    auto col = [&](const char* name) { return std::to_string(header.column(name) + 1); };  // gnuplot counts from 1
     gp << "set output 'motion.png'\nset title 'The fastest sphere and the largest travel in map view'\n"
        << "set ylabel 'speed (m/s)'\nset y2label 'travel (m)'\nset y2tics\n"
-       << "plot '../series.csv' using 1:11 with lines lw 2 title 'fastest sphere' axes x1y1, '' using 1:10 with lines lw 2 "
-       << "title 'largest travel' axes x1y2\nunset y2tics\nunset y2label\n";
+       << "plot '../series.csv' using 1:" << col("max_speed_m_per_s") << " with lines lw 2 title 'fastest sphere' axes x1y1, '' using 1:"
+       << col("max_travel_m") << " with lines lw 2 title 'largest travel' axes x1y2\nunset y2tics\nunset y2label\n";
     made.push_back(dir + "/motion.png");
-    std::getline(in, first);  // the t = 0 row: bonds there are the bonds made
-    size_t column = 0, at = 0;
-    for (int k = 0; k < 15 && at != std::string::npos; ++k) at = first.find(',', at + (k ? 1 : 0));
-    if (at != std::string::npos) column = size_t(std::strtoul(first.c_str() + at + 1, nullptr, 10));
-    if (column == 0) return;
+    // the t = 0 row: the bonds there are the bonds made
+    if (!header.has("intact_bonds") || !std::getline(in, first)) return;
+    const std::vector<std::string> cells = csv_cells(first);
+    const size_t bonds = header.column("intact_bonds");
+    if (bonds >= cells.size() || std::strtod(cells[bonds].c_str(), nullptr) <= 0.0) return;
     gp << "set output 'bonds.png'\nset title 'Intact bonds'\nset ylabel 'bonds'\n"
-       << "plot '../series.csv' using 1:16 with lines lw 2 title 'intact'\n";
+       << "plot '../series.csv' using 1:" << col("intact_bonds") << " with lines lw 2 title 'intact'\n";
     made.push_back(dir + "/bonds.png");
 }
 

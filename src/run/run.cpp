@@ -135,11 +135,9 @@ void add_bonds(const Scenario& s, World& w) {
         }
         return;
     }
-    BondBuildDef build = s.cohesion.build;
     double r_min = INFINITY;
     for (double r : w.radii()) r_min = std::min(r_min, r);
-    if (build.max_gap == 0.0) build.max_gap = 0.25 * r_min;
-    const auto bonds = delaunay_bonds(w.positions(), w.radii(), build);
+    const auto bonds = delaunay_bonds(w.positions(), w.radii(), with_default_gap(s.cohesion.build, r_min));
     if (bonds.empty())
         throw InputError(s.source + ": cohesion.enabled = true, but the triangulation of the " + std::to_string(n) +
                          " disc centres gave no bond with cohesion.filter's rule");

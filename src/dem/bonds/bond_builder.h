@@ -31,6 +31,12 @@ struct BondBuildDef {
     double max_gap = 0.0;           // m, "gap"; the caller resolves 0 to 0.25 r_min
 };
 
+// "gap" with max_gap = 0 means a quarter of the smallest radius (COHESION.md section 3)
+inline BondBuildDef with_default_gap(BondBuildDef d, double r_min) {
+    if (d.max_gap == 0.0) d.max_gap = 0.25 * r_min;
+    return d;
+}
+
 struct BondBuildReport {
     int dimension = 0;              // of the triangulation: 3 (spheres), 2, 1 (collinear), 0 or -1
     size_t faces = 0, faces_kept = 0, bonds = 0;  // faces: the simplices (triangles, tetrahedra)
