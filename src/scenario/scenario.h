@@ -76,6 +76,7 @@ struct LatticeReleaseDef {
     double r_min = 0.0;                    // m, > 0 (required)
     double r_max = 0.0;                    // m; 0 = r_min (radii uniform in [r_min, r_max] from the seed)
     bool settle = false;                   // settle under gravity before t = 0 (lattice_release.cpp)
+    double settle_alpha = 0.7;             // local damping while the lattice settles (with friction)
 };
 
 struct ReleaseDef {
@@ -86,8 +87,9 @@ struct ReleaseDef {
     double radius_reduction = 0.03;        // fraction by which all radii shrink after generation
     std::string variant = "II";            // I: gate deleted at t = 0; II: gate lifted at gate_speed
     double gate_speed = 2.25;              // m/s, Variant II
-    double settle_alpha = 0.7;             // local damping while settling (frictionless phase)
-    double settle_stiffness_factor = 1.0;  // the stiffnesses while the mass compacts without friction, as a fraction of theirs
+    double settle_alpha = 0.3;             // local damping while the mass compacts without friction
+    double settle_stiffness_factor = 0.25; // the stiffnesses while the mass compacts without friction, as a fraction of theirs
+    double settle_friction_alpha = 0.2;    // local damping while the mass settles with friction
     double settle_ratio = 5e-4;            // settled when mean |unbalanced force| / mean |contact force| < this
     bool accept_unsettled = false;         // run a mass that did not reach settle_ratio (else refused, exit 3)
     double settle_max_time = 1.5;          // s of simulated settling at most

@@ -87,7 +87,7 @@ ReleaseMass lattice_mass(const Scenario& s, const std::vector<WallDef>& walls) {
 
 // The lattice settled under gravity before t = 0 (COHESION.md section 3, variant C): the
 // discs and every wall of the run, those removed at t = 0 (a gate) too, with the release's
-// local damping (release.settle_alpha) and no tensile dashpot force (mode 1, as the flume's
+// local damping (lattice_release.settle_alpha) and no tensile dashpot force (mode 1, as the flume's
 // settling), rotation locked; settled when the mean unbalanced force falls below
 // release.settle_ratio of the mean contact force, refused when it does not within
 // release.settle_max_time. Bonds are built afterwards, at t = 0, from the settled positions.
@@ -96,7 +96,7 @@ void settle_lattice(const Scenario& s, const std::vector<WallDef>& walls, Releas
     const ReleaseDef& rd = s.release;
     WorldDef def = s.world;
     def.rotation.model = 1;
-    def.damping.local_alpha = rd.settle_alpha;
+    def.damping.local_alpha = s.lattice_release.settle_alpha;
     def.damping.dp_mode = DashpotMode::NoTension;
     World w(def);
     for (const MaterialDef& mt : scenario_materials(s)) w.add_material(mt);
