@@ -90,6 +90,7 @@ struct ReleaseDef {
     double settle_alpha = 0.3;             // local damping while the mass compacts without friction
     double settle_stiffness_factor = 0.25; // the stiffnesses while the mass compacts without friction, as a fraction of theirs
     double settle_friction_alpha = 0.2;    // local damping while the mass settles with friction
+    std::string settle_dashpots = "lagged";  // the dashpots while settling: lagged or centred (timestep.dashpots)
     double settle_ratio = 5e-4;            // settled when mean |unbalanced force| / mean |contact force| < this
     bool accept_unsettled = false;         // run a mass that did not reach settle_ratio (else refused, exit 3)
     double settle_max_time = 1.5;          // s of simulated settling at most
