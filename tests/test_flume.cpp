@@ -197,8 +197,15 @@ TEST(GeometryA20, GenerationToRestBalancesAndDeterminism) {
     const double weight = s.total_mass * 9.81;
     {
         SCOPED_TRACE("at rest the walls carry the weight");
-        // fy_total: force of the discs on W1 + W2 + W3; the gate has gone
-        EXPECT_NEAR(-last("fy_total_N_per_m"), weight, 0.01 * weight);
+        // fy_total: force of the discs on W1 + W2 + W3; the gate has gone. At rest (kinetic
+        // energy below 1e-3 of its peak for 0.2 s) the mass still rocks: one row's load lies
+        // anywhere within about 15 % of the weight (measured: 1,577-1,906 N/m for 1,653 N/m),
+        // its mean over the rest window within 1 %
+        const std::vector<double> fy = csv_column(forces, "fy_total_N_per_m");
+        ASSERT_GE(fy.size(), 41u);
+        double mean = 0.0;
+        for (size_t k = fy.size() - 40; k < fy.size(); ++k) mean -= fy[k] / 40.0;
+        EXPECT_NEAR(mean, weight, 0.01 * weight);
     }
     {
         SCOPED_TRACE("the walls' impulse balances gravity's over the run (rest to rest)");
