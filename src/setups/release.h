@@ -1,6 +1,6 @@
 // The release mass (thesis section 4.2): discs of radii uniform in [r_min, r_max] fill the
 // triangle between W1, the gate and the lid at a target porosity, all radii shrink by 3 %,
-// and the mass settles under gravity. The count follows PFC's radius-expansion rule,
+// and the mass settles under gravity (release.cpp: compaction, restiffening, friction). The count follows PFC's radius-expansion rule,
 // N = A (1 - n) / (pi R_mean^2), which gives the thesis' 9,099 (scale 4), 36,403 (2) and 364 (20).
 #pragma once
 #include <array>
@@ -24,8 +24,8 @@ struct ReleaseMass {
     long settle_steps = 0;
     double settle_ratio = 0;       // final unbalanced-force ratio
     bool settled = false;
-    double lid_load_fraction = 0;
-    std::vector<std::array<Vec2, 2>> box_walls;  // W1, gate, lid the mass settled against  // load on the lid / weight at the end of the frictionless phase
+    double lid_load_fraction = 0;  // load on the lid / weight at the end of the compaction
+    std::vector<std::array<Vec2, 2>> box_walls;  // W1, gate, lid the mass settled against
     double wall_seconds = 0;
 };
 
