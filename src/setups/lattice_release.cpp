@@ -86,9 +86,9 @@ ReleaseMass lattice_mass(const Scenario& s, const std::vector<WallDef>& walls) {
 }
 
 // The lattice settled under gravity before t = 0 (COHESION.md section 3, variant C): the
-// discs and every wall of the run, those removed at t = 0 (a gate) too, with the release's
-// local damping (lattice_release.settle_alpha) and no tensile dashpot force (mode 1, as the flume's
-// settling), rotation locked; settled when the mean unbalanced force falls below
+// discs and every wall of the run, those removed at t = 0 (a gate) too, with local damping
+// lattice_release.settle_alpha and no tensile dashpot force (mode 1, as the flume's settling),
+// rotation locked; settled when the mean unbalanced force falls below
 // release.settle_ratio of the mean contact force, refused when it does not within
 // release.settle_max_time. Bonds are built afterwards, at t = 0, from the settled positions.
 void settle_lattice(const Scenario& s, const std::vector<WallDef>& walls, ReleaseMass& m) {

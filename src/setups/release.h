@@ -1,7 +1,8 @@
 // The release mass (thesis section 4.2): discs of radii uniform in [r_min, r_max] fill the
 // triangle between W1, the gate and the lid at a target porosity, all radii shrink by 3 %,
-// and the mass settles under gravity (release.cpp: compaction, restiffening, friction). The count follows PFC's radius-expansion rule,
-// N = A (1 - n) / (pi R_mean^2), which gives the thesis' 9,099 (scale 4), 36,403 (2) and 364 (20).
+// and the mass settles under gravity (release.cpp: compaction, restiffening, friction). The
+// count follows PFC's radius-expansion rule, N = A (1 - n) / (pi R_mean^2), which gives the
+// thesis' 9,099 (scale 4), 36,403 (2) and 364 (20).
 #pragma once
 #include <array>
 #include <string>
