@@ -168,8 +168,8 @@ TEST(CentreLanes, EveryWidthGivesTheBaselineBits) {
         in.inv_mn[l] = 2.0 / (1e-2 * (1.5 + u(rng)));
         in.inv_ii[l] = 1.0 / (1e-8 * (1.5 + u(rng)));
         in.inv_ij[l] = 1.0 / (1e-8 * (1.5 + u(rng)));
-        in.cn[l] = 50.0 * (1.5 + u(rng));
-        in.cs[l] = 50.0 * (1.5 + u(rng));
+        in.cn[l] = 600.0 * (1.5 + u(rng));  // g = c dt / m of 0.1-1, as at PFC's step
+        in.cs[l] = 600.0 * (1.5 + u(rng));
         in.kn[l] = 1e8;
         in.mu[l] = 0.28;
         // a third of the pairs slide: |F_s| = mu F_n
@@ -219,5 +219,134 @@ TEST(CentreLanes, EveryWidthGivesTheBaselineBits) {
             if (k.no_shear_sliding) {
                 EXPECT_NEAR(ref.fx[0] * nx + ref.fy[0] * ny, d_new - d_old, 1e-9 * std::abs(d_new - d_old) + 1e-15);
             }
+        }
+}
+
+// The wide gather (centre_wide.h) against the scalar gather into a block and the baseline
+// lanes: discs with random states, two materials, 61 listed pairs (not a multiple of any
+// width), every dashpot mode with rotation free and locked; the same bits in every output,
+// and a listed pair that does not touch refused (the caller then gathers one by one).
+TEST(CentreLanes, WideGatherGivesTheScalarGathersBits) {
+    const bool avx2 = cpu_has_avx2(), avx512 = cpu_has_avx512();
+    if (!avx2) GTEST_SKIP() << "this CPU has no AVX2";
+    std::mt19937_64 rng(11);
+    std::uniform_real_distribution<double> u(-1.0, 1.0);
+    const size_t n_discs = 40;
+    std::vector<Vec2> pos(n_discs);
+    std::vector<double> radius(n_discs);
+    std::vector<int32_t> material(n_discs);
+    struct alignas(64) Row {
+        double v[8];
+    };
+    std::vector<Row> discs(n_discs);
+    for (size_t d = 0; d < n_discs; ++d) {
+        pos[d] = Vec2(0.01 * u(rng), 0.01 * u(rng));
+        radius[d] = 1e-3 * (1.5 + 0.5 * u(rng));
+        material[d] = int32_t(d % 2);
+        discs[d] = Row{{u(rng), u(rng), 100.0 * u(rng), u(rng), u(rng), 100.0 * u(rng), 1.0 / (1e-2 * (1.5 + u(rng))),
+                        1.0 / (1e-8 * (1.5 + u(rng)))}};
+    }
+    const std::vector<PairMaterial> materials{LinearLaw::params(1e8, 5e7, 0.28), LinearLaw::params(8e7, 4e7, 0.36),
+                                              LinearLaw::params(8e7, 4e7, 0.36), LinearLaw::params(6e7, 3e7, 0.5)};
+    // pairs placed touching: j moved to a random direction at 0.98-0.999 of the radii' sum
+    std::vector<DiscContact> contacts;
+    std::vector<uint32_t> list;
+    for (size_t k = 0; k < 61; ++k) {
+        const int32_t i = int32_t(k % (n_discs - 1)), j = int32_t(i + 1 + int32_t(k % 3 == 0 && i + 2 < int32_t(n_discs)));
+        const double a = 3.14159 * u(rng), dist = (radius[size_t(i)] + radius[size_t(j)]) * (0.9895 + 0.0095 * u(rng));
+        pos[size_t(j)] = pos[size_t(i)] + dist * Vec2(std::cos(a), std::sin(a));
+        // dashpots of beta about 0.3 at these masses and stiffnesses: g = c dt / m of 0.1-1, as
+        // in a flow at PFC's step (smaller g would hide its rounding under the 1 of 1 + g/2)
+        DiscContact c{i, j, 0.0, 600.0 * (1.5 + u(rng)), 600.0 * (1.5 + u(rng)), 0.0f, 0.0f};
+        contacts.push_back(c);
+        list.push_back(uint32_t(k));
+    }
+    // the positions moved as the list grew: keep the pairs that still touch, and give a third
+    // of them a sliding shear force (|F_s| = mu F_n)
+    std::vector<uint32_t> touching;
+    for (const uint32_t k : list) {
+        DiscContact& c = contacts[k];
+        const size_t i = size_t(c.i), j = size_t(c.j);
+        const double dist = (pos[j] - pos[i]).norm(), rsum = radius[i] + radius[j];
+        if (dist >= rsum) continue;
+        const PairMaterial& pm = materials[size_t(material[i]) * 2 + size_t(material[j])];
+        const double fn = pm.kn * (rsum - dist);
+        c.fs = touching.size() % 3 == 0 ? -pm.mu * fn : 0.5 * pm.mu * fn * u(rng);
+        touching.push_back(k);
+    }
+    ASSERT_GT(touching.size(), 20u);
+    ASSERT_NE(touching.size() % 8, 0u);
+    const CentrePairArrays arrays{pos.data()->data(), radius.data(), material.data(), materials.data(), 2, contacts.data(),
+                                  discs.data()->v};
+    for (const bool rotation_free : {false, true})
+        for (const int mode : {0, 1, 2, 3}) {
+            SCOPED_TRACE("mode " + std::to_string(mode) + (rotation_free ? " free" : " locked"));
+            const CentreConsts k{2e-6, 1e-6, rotation_free, mode == 1 || mode == 3, mode == 2 || mode == 3};
+            // the scalar gather (centred_dashpots.cpp's), then the baseline lanes
+            auto ref = std::make_unique<CentreBlock>();
+            for (const uint32_t e : touching) {
+                const DiscContact& c = contacts[e];
+                const size_t i = size_t(c.i), j = size_t(c.j), l = ref->count++;
+                const Vec2 dx = pos[j] - pos[i];
+                const double* ci = discs[i].v;
+                const double* cj = discs[j].v;
+                const PairMaterial& pm = materials[size_t(material[i]) * 2 + size_t(material[j])];
+                ref->dx[l] = dx.x();
+                ref->dy[l] = dx.y();
+                ref->dist2[l] = dx.squaredNorm();
+                ref->ri[l] = radius[i];
+                ref->rj[l] = radius[j];
+                ref->vrx[l] = cj[0] - ci[0];
+                ref->vry[l] = cj[1] - ci[1];
+                ref->wi[l] = ci[2];
+                ref->wj[l] = cj[2];
+                ref->prx[l] = cj[3] - ci[3];
+                ref->pry[l] = cj[4] - ci[4];
+                ref->pwi[l] = ci[5];
+                ref->pwj[l] = cj[5];
+                ref->inv_mn[l] = ci[6] + cj[6];
+                ref->inv_ii[l] = ci[7];
+                ref->inv_ij[l] = cj[7];
+                ref->cn[l] = c.cn;
+                ref->cs[l] = c.cs;
+                ref->kn[l] = pm.kn;
+                ref->mu[l] = pm.mu;
+                ref->fs[l] = c.fs;
+            }
+            centre_block(*ref, k, false, false);
+            for (const bool eight : {false, true}) {
+                if (eight && !avx512) continue;
+                SCOPED_TRACE(eight ? "AVX-512" : "AVX2");
+                auto b = std::make_unique<CentreBlock>();
+                const bool done = eight ? centre_touching_avx512(arrays, touching.data(), touching.size(), *b, k)
+                                        : centre_touching_avx2(arrays, touching.data(), touching.size(), *b, k);
+                ASSERT_TRUE(done);
+                ASSERT_EQ(b->count, touching.size());
+                for (size_t l = 0; l < b->count; ++l) {
+                    ASSERT_EQ(b->contact[l], touching[l]);
+                    ASSERT_EQ(b->i[l], contacts[touching[l]].i);
+                    ASSERT_EQ(b->j[l], contacts[touching[l]].j);
+                    for (const auto field : {&CentreBlock::fx, &CentreBlock::fy, &CentreBlock::torque_i, &CentreBlock::torque_j,
+                                             &CentreBlock::dissipated, &CentreBlock::damp_n, &CentreBlock::damp_s})
+                        ASSERT_EQ(std::memcmp(&((*b).*field)[l], &((*ref).*field)[l], 8), 0) << l;
+                }
+                // a pair that does not touch, listed
+                const uint32_t open = uint32_t(contacts.size());
+                std::vector<DiscContact> more = contacts;
+                more.push_back(DiscContact{0, 1, 0.0, 1.0, 1.0, 0.0f, 0.0f});
+                std::vector<Vec2> apart = pos;
+                apart[1] = apart[0] + Vec2(1.0, 0.0);
+                CentrePairArrays far = arrays;
+                far.contacts = more.data();
+                far.pos = apart.data()->data();
+                const uint32_t one[1] = {open};
+                EXPECT_FALSE(eight ? centre_touching_avx512(far, one, 1, *b, k) : centre_touching_avx2(far, one, 1, *b, k));
+                EXPECT_EQ(b->count, 0u);
+            }
+            // the sliding pairs lose their shear dashpot in modes 2 and 3 only: the mode was exercised
+            size_t no_shear = 0;
+            for (size_t l = 0; l < ref->count; ++l) no_shear += ref->damp_s[l] == 0.0;
+            if (k.no_shear_sliding) EXPECT_GE(no_shear, ref->count / 3);
+            else EXPECT_EQ(no_shear, 0u);
         }
 }

@@ -16,6 +16,8 @@
 #include <cstddef>
 #include <cstdint>
 
+#include "dem/laws/pair_kernel.h"
+
 namespace demlab {
 
 struct CentreBlock {
@@ -54,6 +56,24 @@ struct CentreConsts {
 
 // The shifts of b's pairs (centre_lanes.cpp picks the width).
 void centre_block(CentreBlock& b, const CentreConsts& k, bool avx2, bool avx512);
+
+// What the wide gather (centre_wide.h) reads: the discs' and contacts' arrays of the pass.
+struct CentrePairArrays {
+    const double* pos;                // m, (x, y) per disc
+    const double* radius;             // m
+    const int32_t* material;
+    const PairMaterial* materials;    // [mi * n_materials + mj]
+    size_t n_materials;
+    const DiscContact* contacts;
+    const double* discs;              // the centre pass' disc records: eight doubles per disc, 64-byte aligned
+};
+
+// The touching pairs contacts[list[0, n)], n <= CentreBlock::kSize, gathered into lanes and
+// computed by centre_lanes' formulas kWidth at a time (centre_avx2.cpp, centre_avx512.cpp):
+// b's outputs, contact, i and j for each, b.count = n. False, with b.count = 0, when a listed
+// pair does not touch (the pass listed them from the same positions: not expected).
+bool centre_touching_avx2(const CentrePairArrays& a, const uint32_t* list, size_t n, CentreBlock& b, const CentreConsts& k);
+bool centre_touching_avx512(const CentrePairArrays& a, const uint32_t* list, size_t n, CentreBlock& b, const CentreConsts& k);
 
 // The formulas, lane l of a block; the template flags are constant per pass.
 template <bool kRotationFree, bool kNoTension, bool kNoShearSliding>

@@ -173,8 +173,7 @@ bool World::centre_range(size_t tr, const PairPassParams& pp) {
         b.count = 0;
     };
     // own contacts: both discs' shares (a cross contact's second disc is another range's)
-    auto add_own = [&]() {
-        centre_block(b, consts, avx2_, avx512_);
+    auto add_own_computed = [&]() {
         for (size_t l = 0; l < b.count; ++l) {
             DiscContact& c = dd[b.contact[l]];
             c.damp_n = float(b.damp_n[l]);
@@ -192,6 +191,10 @@ bool World::centre_range(size_t tr, const PairPassParams& pp) {
         }
         b.count = 0;
     };
+    auto add_own = [&]() {
+        centre_block(b, consts, avx2_, avx512_);
+        add_own_computed();
+    };
     b.count = 0;
     if (force_ranges_ > 1) {
         for (int32_t e = cross_in_start_[tr]; e < cross_in_start_[tr + 1]; ++e) {
@@ -203,7 +206,25 @@ bool World::centre_range(size_t tr, const PairPassParams& pp) {
     // the pass listed its touching pairs (its own and its cross ones, in list order): the
     // others add nothing, and testing every candidate here cost more than the shifts
     const uint32_t* const touching = touching_list_[tr].data();
-    for (size_t e = 0, n = touching_count_[tr]; e < n; ++e) {
+    const size_t n_touching = touching_count_[tr];
+    if (avx2_) {
+        // gathered into lanes a block at a time (centre_wide.h); the same bits
+        static_assert(sizeof(CentreDisc) == 64 && alignof(CentreDisc) == 64, "one aligned row of eight doubles");
+        const CentrePairArrays arrays{pos_.data()->data(), radius,  material, pp.materials, pp.n_materials,
+                                      dd,                  reinterpret_cast<const double*>(cd)};
+        for (size_t e = 0; e < n_touching; e += CentreBlock::kSize) {
+            const size_t n = std::min(CentreBlock::kSize, n_touching - e);
+            const bool done = avx512_ ? centre_touching_avx512(arrays, touching + e, n, b, consts)
+                                      : centre_touching_avx2(arrays, touching + e, n, b, consts);
+            if (!done) {  // a listed pair that does not touch: the scalar gather leaves it out
+                for (size_t x = e; x < e + n; ++x) gather(dd[touching[x]], touching[x]);
+                centre_block(b, consts, avx2_, avx512_);
+            }
+            add_own_computed();
+        }
+        return centre_walls(tr, consts);
+    }
+    for (size_t e = 0; e < n_touching; ++e) {
         const size_t k = touching[e];
         gather(dd[k], k);
         if (b.count == CentreBlock::kSize) add_own();
