@@ -350,3 +350,20 @@ TEST(CentreLanes, WideGatherGivesTheScalarGathersBits) {
             else EXPECT_EQ(no_shear, 0u);
         }
 }
+
+// A world whose discs are all gone (lost, or none added) still steps with the centred dashpots
+// on every width: the wide gather's arrays are formed from empty vectors without touching them.
+TEST(CentredDashpots, AWorldWithoutDiscsSteps) {
+    for (const bool simd : {false, true}) {
+        WorldDef def;
+        def.simd = simd;
+        def.timestep.automatic = false;
+        def.timestep.fixed = 1e-6;
+        World w(def);
+        w.add_material(material(0.5, 2e7));
+        w.add_wall(segment(w, Vec2(0.0, 0.0), Vec2(1.0, 0.0), 0.4, SegmentSolid::Right));
+        w.finalize();
+        for (int k = 0; k < 10; ++k) w.step();
+        EXPECT_NEAR(w.time(), 1e-5, 1e-18);
+    }
+}

@@ -210,8 +210,10 @@ bool World::centre_range(size_t tr, const PairPassParams& pp) {
     if (avx2_) {
         // gathered into lanes a block at a time (centre_wide.h); the same bits
         static_assert(sizeof(CentreDisc) == 64 && alignof(CentreDisc) == 64, "one aligned row of eight doubles");
-        const CentrePairArrays arrays{pos_.data()->data(), radius,  material, pp.materials, pp.n_materials,
-                                      dd,                  reinterpret_cast<const double*>(cd)};
+        // (the arrays as raw doubles without a member call: a world without discs has none)
+        static_assert(sizeof(Vec2) == 2 * sizeof(double), "(x, y) side by side");
+        const CentrePairArrays arrays{reinterpret_cast<const double*>(pos_.data()), radius, material, pp.materials,
+                                      pp.n_materials, dd, reinterpret_cast<const double*>(cd)};
         for (size_t e = 0; e < n_touching; e += CentreBlock::kSize) {
             const size_t n = std::min(CentreBlock::kSize, n_touching - e);
             const bool done = avx512_ ? centre_touching_avx512(arrays, touching + e, n, b, consts)
