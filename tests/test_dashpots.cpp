@@ -276,7 +276,7 @@ TEST(CentreLanes, WideGatherGivesTheScalarGathersBits) {
     }
     ASSERT_GT(touching.size(), 20u);
     ASSERT_NE(touching.size() % 8, 0u);
-    const CentrePairArrays arrays{pos.data()->data(), radius.data(), material.data(), materials.data(), 2, contacts.data(),
+    CentrePairArrays arrays{pos.data()->data(), radius.data(), material.data(), materials.data(), 2, contacts.data(),
                                   discs.data()->v};
     for (const bool rotation_free : {false, true})
         for (const int mode : {0, 1, 2, 3}) {
@@ -314,9 +314,12 @@ TEST(CentreLanes, WideGatherGivesTheScalarGathersBits) {
                 ref->fs[l] = c.fs;
             }
             centre_block(*ref, k, false, false);
-            for (const bool eight : {false, true}) {
+            for (const bool eight : {false, true})
+            for (const bool prefetch : {false, true}) {  // asking ahead reads the list, changes nothing
                 if (eight && !avx512) continue;
                 SCOPED_TRACE(eight ? "AVX-512" : "AVX2");
+                SCOPED_TRACE(prefetch ? "prefetch" : "no prefetch");
+                arrays.prefetch = prefetch;
                 auto b = std::make_unique<CentreBlock>();
                 const bool done = eight ? centre_touching_avx512(arrays, touching.data(), touching.size(), *b, k)
                                         : centre_touching_avx2(arrays, touching.data(), touching.size(), *b, k);

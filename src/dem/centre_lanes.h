@@ -66,6 +66,7 @@ struct CentrePairArrays {
     size_t n_materials;
     const DiscContact* contacts;
     const double* discs;              // the centre pass' disc records: eight doubles per disc, 64-byte aligned
+    bool prefetch = false;            // ask for disc j's record ahead (World::prefetching)
 };
 
 // The touching pairs contacts[list[0, n)], n <= CentreBlock::kSize, gathered into lanes and

@@ -37,13 +37,15 @@ DEMLAB_WIDE bool touching(const CentrePairArrays& a, const uint32_t* list, size_
     const D kn_one = kOneMaterial ? W::set1(a.materials[0].kn) : zero;
     const D mu_one = kOneMaterial ? W::set1(a.materials[0].mu) : zero;
     for (size_t g = 0; g < n; g += N) {
-        // the records of the group two ahead asked for now: at the real sand size (145,615
-        // discs, 9.3 MB of records) disc j's row comes from beyond the caches, and waiting for
-        // it was most of this pass
-        for (size_t l = 2 * N; l < 3 * N && g + l < n; ++l) {
-            const DiscContact& ahead = a.contacts[list[g + l]];
-            __builtin_prefetch(a.discs + 8 * size_t(ahead.j));
-            __builtin_prefetch(a.pos + 2 * size_t(ahead.j));
+        // the records of the group two ahead asked for now, when the step's arrays outgrow the
+        // cache (the force pass' switch): at the real sand size (145,615 discs, 9.3 MB of
+        // records) disc j's row came from memory, and waiting for it was most of this pass
+        if (a.prefetch) {
+            for (size_t l = 2 * N; l < 3 * N && g + l < n; ++l) {
+                const DiscContact& ahead = a.contacts[list[g + l]];
+                __builtin_prefetch(a.discs + 8 * size_t(ahead.j));
+                __builtin_prefetch(a.pos + 2 * size_t(ahead.j));
+            }
         }
         // the lanes past n repeat the last pair (computed, not added)
         const DiscContact* q[N];

@@ -213,7 +213,7 @@ bool World::centre_range(size_t tr, const PairPassParams& pp) {
         // (the arrays as raw doubles without a member call: a world without discs has none)
         static_assert(sizeof(Vec2) == 2 * sizeof(double), "(x, y) side by side");
         const CentrePairArrays arrays{reinterpret_cast<const double*>(pos_.data()), radius, material, pp.materials,
-                                      pp.n_materials, dd, reinterpret_cast<const double*>(cd)};
+                                      pp.n_materials, dd, reinterpret_cast<const double*>(cd), prefetching()};
         for (size_t e = 0; e < n_touching; e += CentreBlock::kSize) {
             const size_t n = std::min(CentreBlock::kSize, n_touching - e);
             const bool done = avx512_ ? centre_touching_avx512(arrays, touching + e, n, b, consts)
