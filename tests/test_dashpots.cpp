@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <cstring>
 #include <random>
+#include <utility>
 
 #include "dem/centre_lanes.h"
 #include "dem/laws/pair_kernel.h"
@@ -277,7 +278,7 @@ TEST(CentreLanes, WideGatherGivesTheScalarGathersBits) {
     ASSERT_GT(touching.size(), 20u);
     ASSERT_NE(touching.size() % 8, 0u);
     CentrePairArrays arrays{pos.data()->data(), radius.data(), material.data(), materials.data(), 2, contacts.data(),
-                                  discs.data()->v};
+                            discs.data()->v};
     for (const bool rotation_free : {false, true})
         for (const int mode : {0, 1, 2, 3}) {
             SCOPED_TRACE("mode " + std::to_string(mode) + (rotation_free ? " free" : " locked"));
@@ -314,8 +315,8 @@ TEST(CentreLanes, WideGatherGivesTheScalarGathersBits) {
                 ref->fs[l] = c.fs;
             }
             centre_block(*ref, k, false, false);
-            for (const bool eight : {false, true})
-            for (const bool prefetch : {false, true}) {  // asking ahead reads the list, changes nothing
+            for (const auto& [eight, prefetch] : {std::pair{false, false}, std::pair{false, true}, std::pair{true, false},
+                                                 std::pair{true, true}}) {  // asking ahead changes nothing
                 if (eight && !avx512) continue;
                 SCOPED_TRACE(eight ? "AVX-512" : "AVX2");
                 SCOPED_TRACE(prefetch ? "prefetch" : "no prefetch");

@@ -440,7 +440,7 @@ Command add_bench_command(CLI::App& app) {
                     "N (16 copies: 146,240 discs, the flume's mass at the real sand size)")
         ->capture_default_str()->check(CLI::Range(1, 64));
     sub->add_option("--prefetch", opts->prefetch,
-                    "Software prefetch in the force pass: auto (on when the step streams more than half the last-level "
+                    "Software prefetch in the force and centre passes: auto (on when the step streams more than half the last-level "
                     "cache), on, off (the same bits; for comparison)")
         ->capture_default_str()->check(CLI::IsMember({"auto", "on", "off"}));
     sub->add_option("--file", opts->file, "db9k: initial state 'id x y r' (default: the repository's bench/db9k/db9k_initial.xyr); "

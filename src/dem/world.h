@@ -53,8 +53,8 @@ struct TimeStepDef {
 // stops with an error, or the disc is taken out at the end of the step (World::lost_discs).
 enum class LostDiscs { Stop, Remove };
 
-// Software prefetch in the force pass and the centre pass: Auto turns it on when the step's arrays outgrow the
-// cache (World::prefetching), On and Off force it (benchmarks, tests).
+// Software prefetch in the force pass and the centre pass: Auto turns it on when the step's
+// arrays outgrow the cache (World::prefetching), On and Off force it (benchmarks, tests).
 enum class Prefetch { Auto, Off, On };
 // the bytes a step must stream (World::step_bytes) above which Auto prefetches
 size_t prefetch_threshold_bytes();
