@@ -17,9 +17,8 @@
 namespace demlab {
 
 long World::disc_index(long id) const {
-    if (finalized_) return id >= 0 && size_t(id) < index_of_id_.size() ? long(index_of_id_[size_t(id)]) : -1;
-    // before finalize: the discs in the order they were added
-    return id >= 0 && size_t(id) < id_.size() ? id : -1;
+    const auto it = std::lower_bound(id_.begin(), id_.end(), int32_t(id));
+    return it != id_.end() && *it == id ? long(it - id_.begin()) : -1;
 }
 
 void World::take_out_lost_discs() {
@@ -65,7 +64,6 @@ void World::compact_discs(const std::vector<size_t>& gone) {
     squeeze(omega_);
     squeeze(material_);
     squeeze(id_);
-    index_ids();
     squeeze(rr_factor_);
     squeeze(load_);
     squeeze(external_force_);

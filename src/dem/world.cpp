@@ -33,8 +33,6 @@ void validate(const WorldDef& d, const std::string& where) {
     require_non_negative(where + ".wall_piece_length", d.wall_piece_length, "m");
     require_non_negative(where + ".joint_tolerance", d.joint_tolerance, "m");
     require_range(where + ".max_overlap_ratio", d.max_overlap_ratio, 1e-6, 2.0, false, "(ratio)");
-    if (d.reorder_every < 0) throw InputError(where + ".reorder_every = " + std::to_string(d.reorder_every) + ": must be 0 (never) or more steps");
-    if (d.reorder_min_discs < 0) throw InputError(where + ".reorder_min_discs = " + std::to_string(d.reorder_min_discs) + ": must be 0 or more discs");
     with_contact_law(d.law, [&](auto law) {
         using Law = decltype(law);
         Law::validate(d.template law_def<Law>(), d);
@@ -251,7 +249,6 @@ void World::finalize() {
     double r_min = 0.0;
     if (n > 0) r_min = *std::min_element(radius_.begin(), radius_.end());
     validate(def_.rotation, r_min, "rotation");
-    index_ids();
 
     join_wall_ends();
     const size_t nw = walls_.size();
@@ -443,9 +440,6 @@ void World::step() {
         dt_ = capped_by_travel(step_from_critical_squared(best_sq));
     }
     if (!lost_pending_.empty()) take_out_lost_discs();
-    if (def_.reorder_every > 0 && steps_ % def_.reorder_every == 0 && pos_.size() >= size_t(def_.reorder_min_discs) &&
-        !pos_.empty())
-        reorder_in_space();
 }
 
 double World::smallest_radius() {

@@ -86,15 +86,6 @@ struct WorldDef {
                                            // friction and step ceiling; law_def<Law>())
     Prefetch prefetch = Prefetch::Auto;    // the force pass asks for its arrays' lines ahead of use
                                            // (force_pass.cpp, kPrefetchContacts); never changes a result
-    // The discs are renumbered in space order every reorder_every steps (0: never) in worlds of
-    // at least reorder_min_discs discs (disc_order.cpp): a flow scrambles the release's order,
-    // and a step over discs whose neighbours lie far apart in memory waits on the cache. A
-    // renumbered world sums its forces in another order, so its bits differ from a world never
-    // renumbered; they are still the same for any thread count, and checkpoints keep the order.
-    // Never by default here (code that reads the discs back by index, as the release generator
-    // does, keeps its order); a scenario's world renumbers (scenario_world).
-    int reorder_every = 0;                 // steps
-    int reorder_min_discs = 50000;         // discs; smaller worlds keep their order (and their bits)
 
     template <typename Law>
     typename Law::Def& law_def() { return std::get<size_t(law_kind<Law>())>(laws); }
@@ -193,8 +184,8 @@ public:
     const std::vector<WallContact>& wall_contacts() const { return dw_; }
     const std::vector<Bond>& bonds() const { return bonds_; }                // sorted by (k, l)
     const std::vector<BondBreakEvent>& bond_breaks() const { return bond_breaks_; }  // in order, disc ids
-    // The index each disc had when it was added (disc_ids()[i] == i until a disc is lost or
-    // the discs are renumbered, WorldDef::reorder_every), the discs taken out in order, and the bonds: how many there were at
+    // The index each disc had when it was added (disc_ids()[i] == i until a disc is lost;
+    // ascending), the discs taken out in order, and the bonds: how many there were at
     // finalize() and how many intact ones went with lost discs (bonds() holds the others).
     const std::vector<int32_t>& disc_ids() const { return id_; }
     const std::vector<LostDiscEvent>& lost_discs() const { return lost_; }
@@ -202,11 +193,6 @@ public:
     size_t bonds_lost_with_discs() const { return bonds_lost_; }
     // the present index of the disc added as `id`, or -1 if it was lost
     long disc_index(long id) const;
-    // Renumbers the discs: the disc now at order[k] becomes disc k (order is a permutation of
-    // the present indices); contacts, bonds and histories follow (disc_order.cpp). The step
-    // does this itself (WorldDef::reorder_every); callable for tests.
-    void reorder_discs(const std::vector<size_t>& order);
-    long reorders() const { return reorders_; }  // how often the step renumbered the discs
     const WallDef& wall_def(int w) const { return walls_[size_t(w)]; }
     const WallGeom& wall_geom(int w) const { return geom_[size_t(w)]; }
     bool wall_active(int w) const { return wall_active_[size_t(w)] != 0; }
@@ -412,12 +398,6 @@ private:
     void take_out_lost_discs();
     // takes the discs `gone` (present indices, ascending) out of every array, list and bond
     void compact_discs(const std::vector<size_t>& gone);
-    // disc order (disc_order.cpp): every per-disc array, the bonds and the wall records put in
-    // `order`, without the contact lists (reorder_discs renumbers those; load_state reads them)
-    void permute_discs(const std::vector<size_t>& order);
-    void index_ids();  // index_of_id_ from id_
-    void reorder_in_space();  // reorder_discs in space_order (the step's renumbering)
-    long reorders_ = 0;
     // the broad phase and contact lists rebuilt for the present discs, with these histories
     void rebuild_lists(const std::vector<DiscContact>& dd, const std::vector<WallContact>& dw);
     void index_bonds();
@@ -465,7 +445,6 @@ private:
     std::vector<double> radius_, mass_, inv_mass_, inertia_, inv_inertia_, angle_, omega_;
     std::vector<int32_t> material_;
     std::vector<int32_t> id_;           // the index each disc had when added (disc_ids)
-    std::vector<int32_t> index_of_id_;  // per id: the disc's present index, -1 once lost (disc_index)
     std::vector<LostDiscEvent> lost_;
     double lost_energy_ = 0.0, lost_potential_ = 0.0;  // J/m, the ledger's share of the lost discs
     std::vector<double> rr_factor_;     // Preh-Poisel factor per disc, 1/m (0 without rolling resistance)

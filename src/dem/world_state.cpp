@@ -27,7 +27,7 @@
 namespace demlab {
 
 namespace {
-constexpr uint32_t kWorldStateVersion = 3;  // 2: the lost discs; 3: the disc order
+constexpr uint32_t kWorldStateVersion = 2;  // 2: the lost discs
 
 // A contact's history: the law's fields (LinearLaw::for_each_history_field).
 template <typename Fn, typename... Contact>
@@ -70,11 +70,6 @@ void World::save_state(BinaryWriter& out) const {
     out.put(uint64_t(bonds_lost_));
     out.put(lost_energy_);
     out.put(lost_potential_);
-    // the discs' order (their ids): a renumbered world (disc_order.cpp) is put in it before
-    // the rest is read
-    out.tag("ORDR");
-    out.put(uint64_t(id_.size()));
-    for (int32_t id : id_) out.put(id);
     out.put(uint64_t(pos_.size()));
     out.put(uint64_t(walls_.size()));
     out.put(time_);
@@ -185,9 +180,7 @@ void merge_histories(const std::vector<Contact>& saved, std::vector<Contact>& fr
 void World::load_state(BinaryReader& in) {
     if (!finalized_) finalize();
     in.expect_tag("WRLD");
-    // version 2 (before the renumbering) is read too: its discs are in the order they were added
-    const uint32_t version = in.get<uint32_t>();
-    if (version != kWorldStateVersion && version != 2) throw InputError("checkpoint: written by another version of demlab");
+    if (in.get<uint32_t>() != kWorldStateVersion) throw InputError("checkpoint: written by another version of demlab");
     in.expect_tag("LOST");
     const uint64_t lost = in.get<uint64_t>();
     if (lost > pos_.size()) throw InputError("checkpoint: corrupt list of lost discs");
@@ -212,23 +205,6 @@ void World::load_state(BinaryReader& in) {
     bonds_lost_ = size_t(in.get<uint64_t>());
     in.get(lost_energy_);
     in.get(lost_potential_);
-    if (version >= 3) {
-        in.expect_tag("ORDR");
-        const uint64_t count = in.get<uint64_t>();
-        if (count != id_.size()) throw InputError("checkpoint: its disc count differs from the scenario's");
-        std::vector<size_t> order(id_.size());
-        for (size_t& k : order) {
-            const long i = disc_index(in.get<int32_t>());
-            if (i < 0) throw InputError("checkpoint: its disc order names a disc that is not in this set-up");
-            k = size_t(i);
-        }
-        std::vector<uint8_t> seen(order.size(), 0);
-        for (size_t k : order) {
-            if (seen[k]) throw InputError("checkpoint: corrupt disc order");
-            seen[k] = 1;
-        }
-        permute_discs(order);  // (the contacts are read below, in the saved numbering)
-    }
     const size_t n = pos_.size(), nw = walls_.size();
     if (in.get<uint64_t>() != n || in.get<uint64_t>() != nw)
         throw InputError("checkpoint: its disc or wall count differs from the scenario's");

@@ -123,12 +123,10 @@ struct OutputDef {
 };
 
 // A scenario's world starts from the engine's defaults but takes a stray disc out
-// (world.lost_discs): one disc over a barrier's end should not end a run; and a large one
-// renumbers its discs in space order as the flow scrambles them (world.reorder_every).
+// (world.lost_discs): one disc over a barrier's end should not end a run.
 inline WorldDef scenario_world() {
     WorldDef d;
     d.lost_discs = LostDiscs::Remove;
-    d.reorder_every = 10000;
     return d;
 }
 

@@ -96,7 +96,6 @@ void settle_lattice(const Scenario& s, const std::vector<WallDef>& walls, Releas
     const ReleaseDef& rd = s.release;
     WorldDef def = s.world;
     def.rotation.model = 1;
-    def.reorder_every = 0;  // the positions are read back by index
     def.damping.local_alpha = s.lattice_release.settle_alpha;
     def.damping.dp_mode = DashpotMode::NoTension;
     World w(def);

@@ -14,7 +14,6 @@
 #include "core/interrupt.h"
 #include "core/progress.h"
 #include "core/validate.h"
-#include "dem/space_order.h"
 #include "dem/world.h"
 #include "setups/settle_loop.h"
 
@@ -205,7 +204,6 @@ void settle_release(const Scenario& s, const ReleaseBox& box, std::vector<Vec2>&
     // friction until it is at rest
     WorldDef settle = s.world;
     settle.rotation.model = 1;  // settling is quasi-static; rotation does not change the state reached
-    settle.reorder_every = 0;   // the positions are read back by index (and the mass is in space order)
     // the dashpots lagged (release.settle_dashpots): a centred step is a second pass over the
     // contacts and costs about twice a lagged one, which with the damping correction takes
     // steps 0.87 times as long; the mass settles into the same packing (geometry A at scale 4:
@@ -391,7 +389,18 @@ ReleaseMass generate_release(const Scenario& s) {
 void order_in_space(ReleaseMass& m, double strip) {
     const size_t n = m.pos.size();
     if (n == 0 || !(strip > 0.0)) return;
-    const std::vector<size_t> order = space_order(m.pos, strip);
+    double x_min = INFINITY;
+    for (const Vec2& p : m.pos) x_min = std::min(x_min, p.x());
+    std::vector<size_t> order(n);
+    std::vector<long> column(n);
+    for (size_t i = 0; i < n; ++i) {
+        order[i] = i;
+        column[i] = long(std::floor((m.pos[i].x() - x_min) / strip));
+    }
+    std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {
+        if (column[a] != column[b]) return column[a] < column[b];
+        return m.pos[a].y() < m.pos[b].y();
+    });
     auto permute = [&](auto& v) {
         if (v.size() != n) return;
         auto old = v;
