@@ -11,6 +11,7 @@
 #include <functional>
 #include <limits>
 
+#include "core/fileio.h"
 #include "core/interrupt.h"
 #include "core/output_dir.h"
 #include "files.h"
@@ -390,6 +391,52 @@ TEST(Validation, ForceReplacesTheFolderAndAFailedRunLosesNothing) {
     EXPECT_TRUE(std::filesystem::exists(replaced_output_dir(dir.string()) + "/snapshots/discs_00002.vtp"));
     std::filesystem::remove_all(dir);
     std::filesystem::remove_all(replaced_output_dir(dir.string()));
+}
+
+// --force replaces demlab's own files only: a completed run lists them in its marker, and a
+// folder the user has put notes or an analysis into is refused (exit 2) with both kept.
+TEST(Validation, ForceKeepsOffTheUsersOwnFilesInARunFolder) {
+    Scenario s = parse_scenario("[stop]\nt_max = 0.04\nrest_duration = 0.01\nrest_ke_fraction = 1e-12\n"
+                                "[output]\nseries_interval = 0.005\nsnapshot_interval = 0.02\n"
+                                "[[discs]]\nposition = [0.0, 0.05]\nradius = 0.01\n[[walls]]\nstart = [-1, 0]\nend = [1, 0]\n",
+                                "drop.toml");
+    finish_scenario(s);
+    namespace fs = std::filesystem;
+    const auto dir = fs::temp_directory_path() / ("demlab-force-own-" + std::to_string(::getpid()));
+    fs::remove_all(dir);
+    run_scenario(s, {dir.string(), false, {}});
+    run_scenario(s, {dir.string(), true, {}});  // demlab's files only: replaced
+    write_file_atomic((dir / "notes.txt").string(), "my notes\n");
+    fs::create_directories(dir / "snapshots/mine");
+    write_file_atomic((dir / "snapshots/mine/fig.txt").string(), "x\n");
+    // and inside a folder with its own marker (as plots/ and frames/ are)
+    fs::create_directories(dir / "plots");
+    mark_output_dir((dir / "plots").string());
+    write_file_atomic((dir / "plots/a.png").string(), "png\n");
+    record_output_files((dir / "plots").string());
+    write_file_atomic((dir / "plots/b.txt").string(), "mine\n");
+    try {
+        run_scenario(s, {dir.string(), true, {}});
+        ADD_FAILURE() << "a --force over the user's files went ahead";
+    } catch (const InputError& e) {
+        const std::string what = e.what();
+        EXPECT_NE(what.find("'notes.txt'"), std::string::npos) << what;
+        EXPECT_NE(what.find("'snapshots/mine'"), std::string::npos) << what;
+        EXPECT_NE(what.find("'plots/b.txt'"), std::string::npos) << what;
+        EXPECT_EQ(what.find("a.png"), std::string::npos) << what;
+        EXPECT_NE(what.find("4 entries"), std::string::npos) << what;
+    }
+    EXPECT_TRUE(fs::exists(dir / "notes.txt"));
+    EXPECT_TRUE(fs::exists(dir / "snapshots/mine/fig.txt"));
+    EXPECT_TRUE(fs::exists(dir / "plots/b.txt"));
+    EXPECT_TRUE(fs::exists(dir / "summary.json"));
+    fs::remove(dir / "notes.txt");
+    fs::remove(dir / "plots/b.txt");
+    fs::remove_all(dir / "snapshots/mine");
+    run_scenario(s, {dir.string(), true, {}});
+    EXPECT_TRUE(fs::exists(dir / "summary.json"));
+    EXPECT_FALSE(fs::exists(replaced_output_dir(dir.string())));
+    fs::remove_all(dir);
 }
 
 // A series file cut short behind the checkpoint's back is an input error on resume (exit 2),

@@ -1,6 +1,8 @@
 #include "core/output_dir.h"
 
+#include <algorithm>
 #include <filesystem>
+#include <fstream>
 
 #include "core/error.h"
 #include "core/fileio.h"
@@ -20,6 +22,66 @@ fs::path resolved(const std::string& p) {
 }
 
 std::string marker_path(const std::string& dir) { return dir + "/" + kOutputMarker; }
+
+constexpr const char* kMarkerHead = "made by demlab; `--force` may replace this folder\n";
+constexpr const char* kFilesLine = "files it wrote (a --force keeps off any other):\n";
+
+// Every file and folder below dir (relative, '/'-separated, sorted), its marker and a run's
+// lock left out. A
+// folder that carries its own marker (frames/, plots/ made by a later command) is listed, its
+// content not: it is demlab's as a whole.
+std::vector<std::string> listed_entries(const std::string& dir) {
+    std::vector<std::string> out;
+    std::error_code ec;
+    auto it = fs::recursive_directory_iterator(dir, fs::directory_options::none, ec);
+    for (; !ec && it != fs::recursive_directory_iterator(); it.increment(ec)) {
+        const fs::path rel = it->path().lexically_relative(dir);
+        if (rel == kOutputMarker || rel == kRunLockName) continue;  // the folder's own bookkeeping
+        out.push_back(rel.generic_string());
+        if (it->is_directory(ec) && !it->is_symlink(ec) && is_demlab_output(it->path().string())) it.disable_recursion_pending();
+    }
+    std::sort(out.begin(), out.end());
+    return out;
+}
+
+// The files a completed output recorded in its marker; false for a marker without the list (a
+// folder still being written, or made by an earlier build).
+bool recorded_entries(const std::string& dir, std::vector<std::string>& files) {
+    std::ifstream in(marker_path(dir));
+    std::string line;
+    bool listed = false;
+    while (std::getline(in, line)) {
+        if (listed) files.push_back(line);
+        else if (line + "\n" == kFilesLine) listed = true;
+    }
+    return listed;
+}
+
+// The entries below dir that its marker does not list (prefixed with `prefix`), and those of
+// the folders with their own marker inside it (frames/, plots/), which keep their own lists.
+void collect_foreign(const std::string& dir, const std::string& prefix, std::vector<std::string>& foreign) {
+    std::vector<std::string> recorded;
+    if (!recorded_entries(dir, recorded)) return;  // no list: all of it is demlab's as before
+    for (const std::string& e : listed_entries(dir)) {
+        const std::string path = dir + "/" + e;
+        if (is_demlab_output(path)) collect_foreign(path, prefix + e + "/", foreign);
+        else if (!std::binary_search(recorded.begin(), recorded.end(), e)) foreign.push_back(prefix + e);
+    }
+}
+
+// Refuses a --force that would delete what the user put into a completed output folder (notes,
+// an analysis) beside demlab's own files: anything its marker does not list.
+void check_only_demlab_files(const std::string& dir) {
+    std::vector<std::string> foreign;
+    collect_foreign(dir, "", foreign);
+    if (foreign.empty()) return;
+    std::string names;
+    for (size_t i = 0; i < foreign.size() && i < 5; ++i) names += (i ? ", '" : "'") + foreign[i] + "'";
+    if (foreign.size() > 5) names += " and " + std::to_string(foreign.size() - 5) + " more";
+    throw InputError("output folder '" + dir + "' holds " + std::to_string(foreign.size()) +
+                     (foreign.size() == 1 ? " entry" : " entries") + " demlab did not write (" + names +
+                     "); --force would delete them: move them out of the folder first, or choose another --out");
+}
 
 }  // namespace
 
@@ -75,10 +137,11 @@ void check_output_dir(const std::string& dir, bool force, const std::vector<std:
         throw InputError("output folder '" + dir + "' was not made by demlab (it has no " + kOutputMarker +
                          " marker); --force replaces only demlab's own output folders, never other files: "
                          "choose another --out, or move or delete the folder yourself");
+    check_only_demlab_files(dir);
 }
 
 void mark_output_dir(const std::string& dir) {
-    if (!is_demlab_output(dir)) write_file_atomic(marker_path(dir), "made by demlab; `--force` may replace this folder\n");
+    if (!is_demlab_output(dir)) write_file_atomic(marker_path(dir), kMarkerHead);
 }
 
 void prepare_output_dir(const std::string& dir, bool force, const std::vector<std::string>& inputs) {
@@ -104,7 +167,18 @@ void prepare_output_dir(const std::string& dir, bool force, const std::vector<st
     mark_output_dir(dir);
 }
 
+void record_output_files(const std::string& dir) {
+    if (!is_demlab_output(dir)) return;
+    std::string marker = std::string(kMarkerHead) + kFilesLine;
+    for (const std::string& e : listed_entries(dir)) {
+        marker += e + "\n";
+        if (is_demlab_output(dir + "/" + e)) record_output_files(dir + "/" + e);
+    }
+    write_file_atomic(marker_path(dir), marker);
+}
+
 void remove_replaced_output(const std::string& dir) {
+    record_output_files(dir);  // complete: what is in it now is demlab's
     std::error_code ec;
     const std::string aside = replaced_output_dir(dir);
     if (is_demlab_output(aside)) fs::remove_all(aside, ec);

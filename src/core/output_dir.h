@@ -4,7 +4,9 @@
 // - A new folder is made with a marker file (kOutputMarker) that says demlab made it.
 // - An existing folder is refused unless the user said --force, and even then it is replaced
 //   only when it carries the marker, is not (and does not hold) one of the command's inputs,
-//   and does not hold the working directory: --force never deletes a user's own files.
+//   and does not hold the working directory: --force never deletes a user's own files. A
+//   completed output lists its files in the marker, and a --force is refused while the folder
+//   holds anything else (a user's notes or analysis put beside the results).
 // - A forced folder is moved aside (FOLDER.replaced) and a new one made, so nothing of the old
 //   output stays beside the new files; the old one is removed only when the new output is
 //   complete (remove_replaced_output), so a failed command loses nothing.
@@ -18,6 +20,8 @@ namespace demlab {
 
 // The file demlab writes into every output folder it makes.
 inline constexpr const char* kOutputMarker = ".demlab-output";
+// The file a run folder's lock is held on (run/run_folder.h), kept after the run.
+inline constexpr const char* kRunLockName = ".demlab.lock";
 
 // Throws InputError unless `dir` may become a new output folder: a non-empty name that does
 // not exist, or (force) an output folder demlab made that neither is, nor holds, any of
@@ -37,7 +41,11 @@ bool is_demlab_output(const std::string& dir);
 // The folder a forced prepare_output_dir moved the old one to.
 std::string replaced_output_dir(const std::string& dir);
 
-// Removes the old folder a forced prepare_output_dir moved aside (nothing when there is none).
+// The output in dir is complete: its files are listed in its marker, and in those of the
+// marked folders inside it (a later --force deletes nothing else).
+void record_output_files(const std::string& dir);
+
+// record_output_files, and the old folder a forced prepare_output_dir moved aside is removed.
 void remove_replaced_output(const std::string& dir);
 
 // A command that failed after prepare_output_dir: its new folder is removed and the old one

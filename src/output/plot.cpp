@@ -348,6 +348,7 @@ std::vector<std::string> make_plots(const std::string& run_dir, int width, int h
     gnuplot.cwd = dir;
     gnuplot.stderr_file = dir + "/gnuplot.log";
     if (run_process(gnuplot) != 0) throw RunError("gnuplot failed on " + script + " (see " + dir + "/gnuplot.log)");
+    record_output_files(dir);  // (so a --force on the run keeps off what the user adds here)
     return made;
 }
 

@@ -14,6 +14,7 @@
 
 #include "core/binary_io.h"
 #include "core/error.h"
+#include "core/output_dir.h"
 #include "run/run.h"
 #include "scenario/fingerprint.h"
 
@@ -23,7 +24,7 @@ namespace demlab {
 // the file.
 class RunFolderLock {
 public:
-    explicit RunFolderLock(const std::string& dir) : path_(dir + "/.demlab.lock") {
+    explicit RunFolderLock(const std::string& dir) : path_(dir + "/" + kRunLockName) {
         fd_ = ::open(path_.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
         if (fd_ < 0) throw InputError(path_ + ": cannot create the run folder's lock");
         if (::flock(fd_, LOCK_EX | LOCK_NB) != 0) {
