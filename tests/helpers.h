@@ -8,6 +8,7 @@
 
 #include "core/error.h"
 #include "dem/world.h"
+#include "scenario/scenario.h"
 
 namespace demlab::test {
 
@@ -78,5 +79,17 @@ inline void expect_refused(const std::function<void()>& f, std::initializer_list
 
 // Restitution coefficient of the linear spring-dashpot for a damping ratio beta.
 inline double restitution(double beta) { return std::exp(-kPi * beta / std::sqrt(1.0 - beta * beta)); }
+
+// Geometry A at scale 20 (364 discs) for 0.01 s without snapshots: a run of a fraction of a
+// second with a generated release mass, for the checks of saved masses.
+inline Scenario short_geometry_a() {
+    Scenario s = load_scenario(std::string(DEMLAB_SOURCE_DIR) + "/scenarios/geometry-A.toml");
+    apply_override(s, "release.scale=20");
+    apply_override(s, "stop.t_max=0.01");
+    apply_override(s, "stop.rest_duration=0.005");
+    apply_override(s, "output.snapshot_interval=0");
+    finish_scenario(s);
+    return s;
+}
 
 }  // namespace demlab::test

@@ -280,12 +280,7 @@ TEST(Guards, DemoWritesARunFolder) {
 // Discs of a --release-from file that overlap beyond world.max_overlap_ratio are named with
 // the file (exit 2) instead of stopping the first step as a blow-up (exit 3).
 TEST(Guards, OverlappingDiscsInAReleaseFileAreNamed) {
-    Scenario s = load_scenario(std::string(DEMLAB_SOURCE_DIR) + "/scenarios/geometry-A.toml");
-    apply_override(s, "release.scale=20");
-    apply_override(s, "stop.t_max=0.01");
-    apply_override(s, "stop.rest_duration=0.005");
-    apply_override(s, "output.snapshot_interval=0");
-    finish_scenario(s);
+    Scenario s = test::short_geometry_a();
     ReleaseMass m = generate_release(s);
     for (const WallDef& wd : make_setup(s)->release_box().walls) m.box_walls.push_back({wd.p0, wd.p1});
     ASSERT_GT(m.pos.size(), 10u);

@@ -10,6 +10,7 @@
 #include <fstream>
 #include <functional>
 #include <limits>
+#include <sstream>
 
 #include "core/fileio.h"
 #include "core/interrupt.h"
@@ -343,12 +344,7 @@ TEST(Validation, LateFindingsLeaveNoRunFolder) {
 // A saved mass of another scale is refused (the resolved scenario would describe discs that
 // are not the ones used), before any folder is made; the same scale is taken.
 TEST(Validation, ReleaseFromAnotherScaleIsRefused) {
-    Scenario s = load_scenario(std::string(DEMLAB_SOURCE_DIR) + "/scenarios/geometry-A.toml");
-    apply_override(s, "release.scale=20");
-    apply_override(s, "stop.t_max=0.01");
-    apply_override(s, "stop.rest_duration=0.005");
-    apply_override(s, "output.snapshot_interval=0");
-    finish_scenario(s);
+    Scenario s = short_geometry_a();
     const auto tmp = std::filesystem::temp_directory_path();
     const auto first = tmp / ("demlab-mass-" + std::to_string(::getpid())), second = tmp / ("demlab-mass2-" + std::to_string(::getpid()));
     std::filesystem::remove_all(first);
@@ -364,6 +360,64 @@ TEST(Validation, ReleaseFromAnotherScaleIsRefused) {
     EXPECT_NO_THROW(run_scenario(s, {second.string(), false, {}}));
     std::filesystem::remove_all(first);
     std::filesystem::remove_all(second);
+}
+
+// A saved mass cut at a line's end, edited off the box, or with tags or figures that are no
+// numbers is refused before the run folder is made, naming the file.
+TEST(Validation, ReleaseFromACutOrEditedFileIsRefused) {
+    Scenario s = short_geometry_a();
+    namespace fs = std::filesystem;
+    const auto tmp = fs::temp_directory_path();
+    const auto first = tmp / ("demlab-cut-" + std::to_string(::getpid())), second = tmp / ("demlab-cut2-" + std::to_string(::getpid()));
+    const std::string edited = (tmp / ("demlab-cut-" + std::to_string(::getpid()) + ".csv")).string();
+    fs::remove_all(first);
+    fs::remove_all(second);
+    run_scenario(s, {first.string(), false, {}});
+    std::vector<std::string> lines;
+    {
+        std::ifstream in(first / "release.csv");
+        for (std::string l; std::getline(in, l);) lines.push_back(l);
+    }
+    size_t row0 = 0;  // the first disc row
+    while (row0 < lines.size() && (lines[row0].empty() || lines[row0][0] == '#' || lines[row0][0] == 'i')) ++row0;
+    ASSERT_LT(row0 + 2, lines.size());
+    auto refused = [&](std::vector<std::string> text, const std::vector<std::string>& words) {
+        std::string all;
+        for (const std::string& l : text) all += l + "\n";
+        write_file_atomic(edited, all);
+        Scenario t = s;
+        t.release.from_file = edited;
+        try {
+            run_scenario(t, {second.string(), false, {}});
+            ADD_FAILURE() << "accepted: " << words.back();
+        } catch (const InputError& e) {
+            for (const std::string& w : words) EXPECT_NE(std::string(e.what()).find(w), std::string::npos) << e.what();
+        }
+        EXPECT_FALSE(fs::exists(second));
+    };
+    auto with_cell = [&](size_t row, int column, const std::string& value) {
+        std::vector<std::string> text = lines;
+        std::vector<std::string> cells;
+        std::istringstream in(text[row]);
+        for (std::string c; std::getline(in, c, ',');) cells.push_back(c);
+        cells[size_t(column)] = value;
+        text[row].clear();
+        for (size_t c = 0; c < cells.size(); ++c) text[row] += (c ? "," : "") + cells[c];
+        return text;
+    };
+    std::vector<std::string> cut(lines.begin(), lines.end() - 1);
+    refused(cut, {edited, "disc rows", "'# n'"});
+    refused(with_cell(row0 + 1, 2, "5.0"), {edited, "outside", "row 1"});
+    refused(with_cell(row0 + 1, 2, "100000"), {edited, "outside"});
+    refused(with_cell(row0, 4, "nan"), {edited, "layer"});
+    refused(with_cell(row0, 5, "1e30"), {edited, "grid"});
+    refused(with_cell(row0, 4, "-3"), {edited, "layer"});
+    std::vector<std::string> header = lines;
+    for (std::string& l : header)
+        if (l.rfind("# porosity_generated ", 0) == 0) l = "# porosity_generated nan";
+    refused(header, {edited, "porosity_generated"});
+    fs::remove(edited);
+    fs::remove_all(first);
 }
 
 // --force replaces a folder's content: a shorter run over a longer one leaves none of the old

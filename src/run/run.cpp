@@ -97,6 +97,7 @@ ReleaseMass start_mass(const Scenario& s, const Setup& setup, BinaryReader* rest
         // discs that overlap more than the run allows would stop it at its first step, blamed
         // on the step: named here, with the file
         refuse_overlapping_discs(mass, s.world.max_overlap_ratio, s.release.from_file);
+        refuse_loaded_mass_outside_box(setup.release_box(), mass, s.release.from_file);
     } else {
         if (terminal) std::fprintf(stderr, "generating the release mass ...\n");
         mass = generate_release(s);

@@ -104,6 +104,17 @@ std::vector<Vec2> place_without_overlap(const Polygon& tri, const std::vector<do
 }  // namespace
 
 namespace {
+// text to a finite double, all of it
+bool parse_finite(const std::string& text, double& v) {
+    try {
+        size_t used = 0;
+        v = std::stod(text, &used);
+        return used == text.size() && std::isfinite(v);
+    } catch (...) {
+        return false;
+    }
+}
+
 // The generation is not checkpointed (minutes at scale 4): a signal ends it
 // here, and `demlab resume` starts the run again (the seed gives the same mass).
 // Settling steps at most: the real sand size (145,615 discs) settles in about 3e6.
@@ -114,22 +125,36 @@ constexpr double kMaxSettleSteps = 1e8;
 // before t = 0, and the run would start from discs anywhere, under the ground too. A disc whose
 // centre lies more than its radius beyond an edge that stays (the lid's side is open: the mass
 // may heave above it once it is gone) is refused, naming the lid.
-void refuse_mass_outside_box(const Scenario& s, const ReleaseBox& box, const Polygon& poly, const std::vector<Vec2>& pos,
-                             const std::vector<double>& radius) {
-    Vec2 centroid = Vec2::Zero();
-    for (const Vec2& q : poly.v) centroid += q;
-    centroid /= double(poly.v.size());
-    size_t out = 0, first = 0;
+// How many discs lie with their centre more than their radius beyond an edge of the box (the
+// side facing away from `centroid`), and the first of them; beyond the lid only by more than
+// lid_heave as well (a negative lid_heave: the lid's side is open).
+size_t count_outside_box(const ReleaseBox& box, const Vec2& centroid, const std::vector<Vec2>& pos,
+                         const std::vector<double>& radius, size_t& first, double lid_heave = -1.0) {
+    size_t out = 0;
     for (size_t i = 0; i < pos.size(); ++i) {
         bool beyond = false;
         for (size_t k = 0; k < box.walls.size() && !beyond; ++k) {
-            if (int(k) == box.lid) continue;
+            const bool lid = int(k) == box.lid;
+            if (lid && lid_heave < 0.0) continue;
             const Vec2 a = box.walls[k].p0, n = perp((box.walls[k].p1 - a).normalized());
             const double inward = (centroid - a).dot(n) > 0.0 ? 1.0 : -1.0;
-            beyond = !(inward * (pos[i] - a).dot(n) >= -radius[i]);
+            beyond = !(inward * (pos[i] - a).dot(n) >= -radius[i] - (lid ? lid_heave : 0.0));
         }
         if (beyond && out++ == 0) first = i;
     }
+    return out;
+}
+
+Vec2 centroid_of(const std::vector<Vec2>& v) {
+    Vec2 c = Vec2::Zero();
+    for (const Vec2& q : v) c += q;
+    return v.empty() ? c : Vec2(c / double(v.size()));
+}
+
+void refuse_mass_outside_box(const Scenario& s, const ReleaseBox& box, const Polygon& poly, const std::vector<Vec2>& pos,
+                             const std::vector<double>& radius) {
+    size_t first = 0;
+    const size_t out = count_outside_box(box, centroid_of(poly.v), pos, radius, first);
     if (out == 0) return;
     const std::string what = s.terrain.enabled ? "terrain.release's polygon" : "the release box";
     std::string lid;
@@ -454,12 +479,27 @@ void refuse_overlapping_discs(const ReleaseMass& m, double ratio, const std::str
     }
 }
 
+void refuse_loaded_mass_outside_box(const ReleaseBox& box, const ReleaseMass& m, const std::string& path) {
+    // a settled mass may heave a little above its lid once the lid is gone (a few mm at scale
+    // 20), never by more than two of its largest discs
+    double r_max = 0.0;
+    for (double r : m.radius) r_max = std::max(r_max, r);
+    size_t first = 0;
+    const size_t out = count_outside_box(box, centroid_of(box.polygon), m.pos, m.radius, first, 4.0 * r_max);
+    if (out == 0) return;
+    throw InputError(path + ": " + std::to_string(out) + " of its " + std::to_string(m.pos.size()) +
+                     " discs lie outside this scenario's release box (the first: row " + std::to_string(first) + ", at [" +
+                     format_number(m.pos[first].x()) + ", " + format_number(m.pos[first].y()) +
+                     "], more than its radius beyond an edge); a saved mass must lie in the box it settled in");
+}
+
 ReleaseMass load_release(const std::string& path) {
     std::istringstream in(read_input_file(path, kMaxTableBytes, "release mass file"));
     ReleaseMass m;
     std::string line;
-    long lineno = 0;
+    long lineno = 0, rows_declared = -1;
     bool header = false;
+    auto at = [&](long l) { return path + ":" + std::to_string(l) + ": "; };
     while (std::getline(in, line)) {
         ++lineno;
         if (line.empty()) continue;
@@ -475,7 +515,20 @@ ReleaseMass load_release(const std::string& path) {
                 m.box_walls.push_back({Vec2(x0, y0), Vec2(x1, y1)});
                 continue;
             }
-            if (h >> k >> v) {
+            if (h >> k) {
+                static const char* const kKnown[] = {"n", "box_area_m2", "porosity_target", "porosity_generated", "porosity_settled",
+                                                     "settle_time_s", "settle_steps", "settle_ratio", "settled", "lid_load_fraction"};
+                const bool known = std::find(std::begin(kKnown), std::end(kKnown), k) != std::end(kKnown);
+                std::string value;
+                h >> value;
+                if (!known) continue;  // (other comments are free)
+                if (!parse_finite(value, v))
+                    throw InputError(at(lineno) + "'# " + k + "' needs a finite number, not '" + value + "'");
+                if (k == "n") {
+                    if (!(v >= 1.0 && v <= kMaxReleaseDiscs && v == std::floor(v)))
+                        throw InputError(at(lineno) + "'# n " + value + "' is not a disc count");
+                    rows_declared = long(v);
+                }
                 if (k == "box_area_m2") m.box_area = v;
                 else if (k == "porosity_target") m.porosity_target = v;
                 else if (k == "porosity_generated") m.porosity_generated = v;
@@ -506,12 +559,22 @@ ReleaseMass load_release(const std::string& path) {
         }
         if (v.size() != 6 || !(v[3] > 0) || !std::isfinite(v[1]) || !std::isfinite(v[2]))
             throw InputError(path + ":" + std::to_string(lineno) + ": expected id,x,y,r,layer,grid with r > 0");
+        // the layer and grid tags colour the discs: whole numbers from 0 (a NaN or 1e30 would
+        // not convert to an int at all)
+        for (int c : {4, 5})
+            if (!(v[size_t(c)] >= 0.0 && v[size_t(c)] <= 1e9 && v[size_t(c)] == std::floor(v[size_t(c)])))
+                throw InputError(at(lineno) + "its " + (c == 4 ? "layer" : "grid") + " '" + format_number(v[size_t(c)]) +
+                                 "' is not a whole number from 0 to 1e9");
         m.pos.emplace_back(v[1], v[2]);
         m.radius.push_back(v[3]);
         m.layer.push_back(int(v[4]));
         m.grid.push_back(int(v[5]));
     }
     if (m.pos.empty()) throw InputError(path + ": no discs in the release mass file");
+    // a file cut at a line's end reads as a smaller mass: the count it was written with says so
+    if (rows_declared >= 0 && long(m.pos.size()) != rows_declared)
+        throw InputError(path + ": it has " + std::to_string(m.pos.size()) + " disc rows where its '# n' line says " +
+                         std::to_string(rows_declared) + ": the file is cut short or edited");
     return m;
 }
 

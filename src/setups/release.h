@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "scenario/scenario.h"
+#include "setups/flume.h"
 
 namespace demlab {
 
@@ -52,7 +53,13 @@ void order_in_space(ReleaseMass& m, double strip);
 
 // release.csv: id, x, y, r, layer, grid and the generation figures as comments.
 void save_release(const ReleaseMass& m, const std::string& path);
+// Refused (InputError naming the file and line): a header value that is not a finite number,
+// layer or grid tags that are not whole numbers from 0, fewer or more disc rows than '# n'.
 ReleaseMass load_release(const std::string& path);
+// An InputError naming the file and the first disc (by its row, 0-based) whose centre lies
+// more than its radius beyond an edge of the box (release_box), or beyond its lid by two of the
+// largest diameters more (a settled mass heaves a little once the lid is gone).
+void refuse_loaded_mass_outside_box(const ReleaseBox& box, const ReleaseMass& m, const std::string& path);
 // An InputError naming the file and the first two discs (by their row, 0-based) that overlap
 // by more than `ratio` of the smaller radius (world.max_overlap_ratio).
 void refuse_overlapping_discs(const ReleaseMass& m, double ratio, const std::string& path);
