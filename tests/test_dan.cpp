@@ -9,6 +9,7 @@
 #include <random>
 
 #include "core/error.h"
+#include "core/fileio.h"
 #include "dan/dan_solver.h"
 #include "files.h"
 #include "helpers.h"
@@ -386,6 +387,26 @@ TEST(Dan, RefusalsAndGeometryAReference) {
     // a barrier leaning back over its foot: x decreases along it
     expect_refused([&] { run_scenario(load("geometry-A.toml", {"flume.w3_end=[1.45, 1.2]"}), {dir.string(), false, {}}); },
                    {"dan.columns", "normal"});
+    // a reference front that stops before dan.sync_time (0.4 s), or holds no number, is
+    // refused before the run, not extended by its last row or found out at the end
+    const fs::path refs = temp_dir("dan-sync-refs");
+    fs::create_directories(refs);
+    write_file_atomic((refs / "short.csv").string(), "t_s,s_front_m\n0,0.6\n0.1,0.7\n");
+    write_file_atomic((refs / "nan.csv").string(), "t_s,s_front_m\n0,0.6\n0.5,nan\n");
+    write_file_atomic((refs / "back.csv").string(), "t_s,s_front_m\n0,0.6\n0.5,0.9\n0.5,1.0\n");
+    const std::string at_short = "dan.sync_front=\"" + (refs / "short.csv").string() + "\"";
+    const std::string at_nan = "dan.sync_front=\"" + (refs / "nan.csv").string() + "\"";
+    const std::string at_back = "dan.sync_front=\"" + (refs / "back.csv").string() + "\"";
+    expect_refused([&] { run_scenario(load("geometry-A.toml", {at_short.c_str()}), {dir.string(), false, {}}); },
+                   {"short.csv", "covers t = 0 to 0.1 s", "dan.sync_time = 0.4"});
+    expect_refused([&] { run_scenario(load("geometry-A.toml", {at_nan.c_str()}), {dir.string(), false, {}}); },
+                   {"nan.csv:3", "finite"});
+    expect_refused([&] { run_scenario(load("geometry-A.toml", {at_back.c_str()}), {dir.string(), false, {}}); },
+                   {"back.csv:4", "grow"});
+    fs::remove_all(refs);
+    // a step limit too small for any run: refused at once, naming it
+    expect_refused([&] { run_scenario(load("geometry-A.toml", {"dan.dt_mode=\"auto\"", "dan.cfl_max=1e-7"}), {dir.string(), false, {}}); },
+                   {"dan.cfl_max = 1e-07", "below 1e-4 of dan.dt"});
     EXPECT_FALSE(fs::exists(dir));  // nothing written
     // geometry A by the defaults: the stored front.csv, bit for bit, and the landmarks
     const RunSummary r = run_scenario(load("geometry-A.toml", {}), {dir.string(), false, {}});

@@ -167,7 +167,7 @@ double DanSolver::choose_step() {
     // ten-thousandth of dan.dt
     if (dt < 1e-4 * d.dt)
         throw RunError("dan: the automatic step fell to " + format_number(dt) + " s at t = " + format_number(time_) +
-                       " s (below 1e-4 of dan.dt): the blocks crowd; use fewer dan.blocks");
+                       " s (below 1e-4 of dan.dt): the blocks crowd; use fewer dan.blocks (or a larger dan.cfl_max)");
     const double cfl = dt * rate;
     max_cfl_ = std::max(max_cfl_, cfl);
     if (cfl > d.cfl_max * (1.0 + 1e-12))

@@ -73,6 +73,10 @@ FrontSeries read_front(const std::string& path) {
         } catch (const std::exception&) {
             throw InputError(path + ":" + std::to_string(row) + ": no numbers in its t_s and s_front_m columns");
         }
+        if (!std::isfinite(f.t.back()) || !std::isfinite(f.s.back()))
+            throw InputError(path + ":" + std::to_string(row) + ": its t_s and s_front_m must be finite numbers");
+        if (f.t.size() > 1 && !(f.t.back() > f.t[f.t.size() - 2]))
+            throw InputError(path + ":" + std::to_string(row) + ": t_s must grow from row to row");
     }
     if (f.t.size() < 2) throw InputError(path + ": fewer than two rows");
     return f;
@@ -82,6 +86,17 @@ double value_at(const std::vector<double>& x, const std::vector<double>& y, doub
     for (size_t k = 1; k < x.size(); ++k)
         if (x[k] >= at) return y[k - 1] + (y[k] - y[k - 1]) * (at - x[k - 1]) / (x[k] - x[k - 1]);
     return y.back();
+}
+// The reference's s at dan.sync_time (NaN without dan.sync_front), read once before the run:
+// a reference that does not reach dan.sync_time is refused, not extended by its last value.
+double sync_target(const DanDef& d) {
+    if (d.sync_front.empty()) return NAN;
+    const FrontSeries reference = read_front(d.sync_front);
+    if (d.sync_time < reference.t.front() || d.sync_time > reference.t.back())
+        throw InputError(d.sync_front + ": the reference front covers t = " + format_number(reference.t.front()) + " to " +
+                         format_number(reference.t.back()) + " s, not dan.sync_time = " + format_number(d.sync_time) +
+                         " s: give a reference that does, or another dan.sync_time");
+    return value_at(reference.t, reference.s, d.sync_time);
 }
 // the first time the series reaches s (linear between samples); NaN if never
 double first_time_at(const std::vector<double>& t, const std::vector<double>& s, double target) {
@@ -143,7 +158,7 @@ public:
     DanRun(const Scenario& s, DanSolver& dan, const std::string& dir)
         : s_(s), dan_(dan), dir_(dir), n_(dan.blocks()), s_arc_(dan.path().part_start(1)),
           s_barrier_(dan.path().part_start(2)), foot_(dan.path().at(s_barrier_).p), s_front0_(dan.s().back()),
-          extremes_(walls()), filter_(s.output.load_window), design_(s.output.approach_length) {
+          extremes_(walls()), filter_(s.output.load_window), design_(s.output.approach_length), sync_target_(sync_target(s.dan)) {
         const DanEnergy e0 = dan.energy();
         balance0_ = e0.kinetic + e0.potential;
         max_front_ = s_front0_;
@@ -197,6 +212,7 @@ private:
     ForceExtremes extremes_;
     LoadFilter filter_;
     DesignLoads design_;
+    double sync_target_;  // the reference front's s at dan.sync_time (read once, before the run)
     SeriesFile forces_, front_, energy_, blocks_;
 };
 
@@ -368,10 +384,8 @@ std::string dan_deposit(const DanSolver& dan, double bin) {
 
 // front_synced.csv: DAN's front shifted in time to meet the reference at dan.sync_time; the
 // shift (NaN: none)
-double write_synced_front(const DanDef& d, const std::string& dir) {
+double write_synced_front(const DanDef& d, double target, const std::string& dir) {
     if (d.sync_front.empty()) return NAN;
-    const FrontSeries reference = read_front(d.sync_front);
-    const double target = value_at(reference.t, reference.s, d.sync_time);
     std::vector<double> ft, fs;
     std::istringstream rows(read_whole(dir + "/front.csv"));
     std::string line;
@@ -420,7 +434,7 @@ RunSummary DanRun::finish(const std::vector<ScenarioInput>& inputs, double wall_
     sum.wall_seconds = wall_seconds;
     sum.particle_steps_per_second = double(n_) * double(sum.steps) / std::max(sum.wall_seconds, 1e-9);
     write_file_atomic(dir_ + "/deposit.csv", dan_deposit(dan_, s_.output.deposit_bin));
-    const double sync_shift = write_synced_front(d, dir_);
+    const double sync_shift = write_synced_front(d, sync_target_, dir_);
     SummaryJson j;
     j.text("scenario", s_.name);
     j.text("scenario_fingerprint", scenario_fingerprint(s_, inputs));  // what a sweep's reuse compares
@@ -500,7 +514,12 @@ std::unique_ptr<SolverRun> make_dan_run(const Scenario& s, const RunOptions& o) 
         std::fprintf(stderr, "demlab: warning: dan.phi_basal_deg %.4g > dan.phi_internal_deg %.4g: the earth-pressure limits "
                              "(D5) are clamped to 2/cos^2(phi_i) - 1\n", d.phi_basal_deg, d.phi_internal_deg);
     DanSolver dan = dan_of_scenario(s);  // every refusal before the folder is touched
-    if (!d.sync_front.empty()) read_front(d.sync_front);
+    // the automatic step at t = 0 already below the floor choose_step refuses (1e-4 dan.dt):
+    // a dan.cfl_max too small for any run, refused here rather than at the first step
+    if (d.dt_mode == DanStep::Auto && d.cfl_max < 1e-4 * dan.cfl_now())
+        throw InputError(s.source + ": dan.cfl_max = " + format_number(d.cfl_max) + " gives a step of " +
+                         format_number(d.dt * d.cfl_max / dan.cfl_now()) + " s at t = 0, below 1e-4 of dan.dt = " +
+                         format_number(d.dt) + " s: raise dan.cfl_max (0.5 by default), or use fewer dan.blocks");
     return std::make_unique<DanSolverRun>(s, o, std::move(dan));
 }
 
