@@ -415,6 +415,17 @@ TEST(Dan, RefusalsAndGeometryAReference) {
     EXPECT_NEAR(r.runout_s, 2.2192, 1e-4);
     EXPECT_NEAR(r.runup_height, 0.2598, 1e-4);
     EXPECT_EQ(r.stop_reason, "rest");
+    {  // dan.width spans the blocks; the outputs stay per metre of it (as the 1 m default's)
+        const fs::path wide = temp_dir("dan-wide");
+        fs::remove_all(wide);
+        const RunSummary w = run_scenario(load("geometry-A.toml", {"dan.width=100"}), {wide.string(), false, {}});
+        for (const auto& [a, b] : {std::pair{r.total_mass, w.total_mass}, {r.peak_fx_barrier, w.peak_fx_barrier},
+                                   {r.peak_fx_barrier_filtered, w.peak_fx_barrier_filtered},
+                                   {r.impact_coefficient_alpha, w.impact_coefficient_alpha},
+                                   {r.static_coefficient_k, w.static_coefficient_k}})
+            EXPECT_NEAR(b, a, 1e-9 * std::abs(a));
+        fs::remove_all(wide);
+    }
     // its frames come from blocks.csv (one a snapshot interval, the flow as filled quads)
     const std::vector<Frame> frames = read_dan_frames(dir.string());
     EXPECT_EQ(frames.size(), size_t(std::floor(r.t_end / 0.02)) + 1);

@@ -124,6 +124,15 @@ DanSolver dan_of_scenario(const Scenario& s) {
 
 namespace {
 
+// DAN's blocks span its width B (dan.width); its outputs are per metre of it, as a PFC2D run's
+// (B = 1 m by default, where the division changes no bit).
+DanEnergy per_metre(DanEnergy e, double width) {
+    e.kinetic /= width;
+    e.potential /= width;
+    e.dissipated_friction /= width;
+    return e;
+}
+
 // DAN as the run loop's solver; its ledger in the DEM's terms: the kinetic energy, the
 // potential, and the basal and internal friction's dissipation in dissipated_contacts.
 class DanLoopSolver final : public Solver {
@@ -133,9 +142,9 @@ public:
     double time() const override { return dan_.time(); }
     double dt() const override { return dan_.dt(); }
     long step_count() const override { return dan_.step_count(); }
-    double kinetic_energy() const override { return dan_.kinetic_energy(); }
+    double kinetic_energy() const override { return dan_.kinetic_energy() / dan_.def().width; }
     EnergyReport energy() const override {
-        const DanEnergy e = dan_.energy();
+        const DanEnergy e = per_metre(dan_.energy(), dan_.def().width);
         EnergyReport r;
         r.kinetic_translation = e.kinetic;
         r.potential = e.potential;
@@ -159,7 +168,7 @@ public:
         : s_(s), dan_(dan), dir_(dir), n_(dan.blocks()), s_arc_(dan.path().part_start(1)),
           s_barrier_(dan.path().part_start(2)), foot_(dan.path().at(s_barrier_).p), s_front0_(dan.s().back()),
           extremes_(walls()), filter_(s.output.load_window), design_(s.output.approach_length), sync_target_(sync_target(s.dan)) {
-        const DanEnergy e0 = dan.energy();
+        const DanEnergy e0 = per_metre(dan.energy(), s.dan.width);
         balance0_ = e0.kinetic + e0.potential;
         max_front_ = s_front0_;
         split_loads();
@@ -225,12 +234,12 @@ void DanRun::split_loads() {
         const double b = i + 1 < n_ ? S[i] + 0.5 * (S[i + 1] - S[i]) : S[i];
         if (b <= a) {  // (a single block: all at its point)
             const int part = S[i] < s_arc_ ? 0 : S[i] < s_barrier_ ? 1 : 2;
-            load_[part] += dan_.bed_force()[i];
+            load_[part] += dan_.bed_force()[i] / s_.dan.width;
             continue;
         }
         for (int p = 0; p < 3; ++p) {
             const double overlap = std::max(0.0, std::min(b, edges[p + 1]) - std::max(a, edges[p]));
-            load_[p] += (overlap / (b - a)) * dan_.bed_force()[i];
+            load_[p] += (overlap / (b - a)) * dan_.bed_force()[i] / s_.dan.width;
         }
     }
 }
@@ -288,7 +297,7 @@ void DanRun::sample() {
     }
     front_.out() << t << ',' << dan_.s().back() << ',' << dan_.s().back() - s_front0_ << ',' << dan_.s().front() << ','
                  << dan_.v().back() << '\n';
-    const DanEnergy e = dan_.energy();
+    const DanEnergy e = per_metre(dan_.energy(), s_.dan.width);
     const double balance = e.kinetic + e.potential + e.dissipated_friction;
     energy_.out() << t << ',' << e.kinetic << ',' << e.potential << ',' << e.dissipated_friction << ',' << balance0_ - balance << ','
                   << balance << '\n';
@@ -418,6 +427,8 @@ RunSummary DanRun::finish(const std::vector<ScenarioInput>& inputs, double wall_
     double total_mass = 0.0, volume = 0.0;
     for (double m : dan_.mass()) total_mass += m;
     for (double v : dan_.volume()) volume += v;
+    total_mass /= d.width;  // per metre of width, as the loads
+    volume /= d.width;
     sum.total_mass = total_mass;
     sum.t_end = dan_.time();
     sum.steps = dan_.step_count();
@@ -459,7 +470,7 @@ RunSummary DanRun::finish(const std::vector<ScenarioInput>& inputs, double wall_
     j.boolean("runout_lower_bound", left_flume_);  // (the front passed the flume's end: as a DEM run says it)
     j.number("sync_shift", sync_shift, "s");
     j.number("max_cfl", dan_.max_cfl(), "-");
-    j.number("momentum_corrected", dan_.momentum_corrected(), "kg/s");  // momentum per metre of width
+    j.number("momentum_corrected", dan_.momentum_corrected() / d.width, "kg/s");  // momentum per metre of width
     j.text("note", "DAN releases the mass at once: release.variant (the gate) does not apply");
     write_file_atomic(dir_ + "/summary.json", j.str());
     return sum;
