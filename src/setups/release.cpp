@@ -488,7 +488,7 @@ void refuse_loaded_mass_outside_box(const ReleaseBox& box, const ReleaseMass& m,
     const size_t out = count_outside_box(box, centroid_of(box.polygon), m.pos, m.radius, first, 4.0 * r_max);
     if (out == 0) return;
     throw InputError(path + ": " + std::to_string(out) + " of its " + std::to_string(m.pos.size()) +
-                     " discs lie outside this scenario's release box (the first: row " + std::to_string(first) + ", at [" +
+                     " discs lie outside this scenario's release box (the first: disc row " + std::to_string(first) + ", counted from 0, at [" +
                      format_number(m.pos[first].x()) + ", " + format_number(m.pos[first].y()) +
                      "], more than its radius beyond an edge); a saved mass must lie in the box it settled in");
 }
