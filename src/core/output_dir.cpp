@@ -27,9 +27,8 @@ constexpr const char* kMarkerHead = "made by demlab; `--force` may replace this 
 constexpr const char* kFilesLine = "files it wrote (a --force keeps off any other):\n";
 
 // Every file and folder below dir (relative, '/'-separated, sorted), its marker and a run's
-// lock left out. A
-// folder that carries its own marker (frames/, plots/ made by a later command) is listed, its
-// content not: it is demlab's as a whole.
+// lock left out. A folder that carries its own marker (frames/, plots/, made by a later
+// command) is listed, its content not: that folder keeps its own list.
 std::vector<std::string> listed_entries(const std::string& dir) {
     std::vector<std::string> out;
     std::error_code ec;

@@ -120,11 +120,6 @@ bool parse_finite(const std::string& text, double& v) {
 // Settling steps at most: the real sand size (145,615 discs) settles in about 3e6.
 constexpr double kMaxSettleSteps = 1e8;
 
-// A settled mass lies in its box. The second settling phase goes without the lid (the box's
-// top), so the mass in a polygon whose top slopes towards a low side pours out over that side
-// before t = 0, and the run would start from discs anywhere, under the ground too. A disc whose
-// centre lies more than its radius beyond an edge that stays (the lid's side is open: the mass
-// may heave above it once it is gone) is refused, naming the lid.
 // How many discs lie with their centre more than their radius beyond an edge of the box (the
 // side facing away from `centroid`), and the first of them; beyond the lid only by more than
 // lid_heave as well (a negative lid_heave: the lid's side is open).
@@ -151,6 +146,11 @@ Vec2 centroid_of(const std::vector<Vec2>& v) {
     return v.empty() ? c : Vec2(c / double(v.size()));
 }
 
+// A settled mass lies in its box. The second settling phase goes without the lid (the box's
+// top), so the mass in a polygon whose top slopes towards a low side pours out over that side
+// before t = 0, and the run would start from discs anywhere, under the ground too. A disc whose
+// centre lies more than its radius beyond an edge that stays (the lid's side is open: the mass
+// may heave above it once it is gone) is refused, naming the lid.
 void refuse_mass_outside_box(const Scenario& s, const ReleaseBox& box, const Polygon& poly, const std::vector<Vec2>& pos,
                              const std::vector<double>& radius) {
     size_t first = 0;
