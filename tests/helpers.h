@@ -5,6 +5,7 @@
 #include <cmath>
 #include <functional>
 #include <string>
+#include <vector>
 
 #include "core/error.h"
 #include "dem/world.h"
@@ -66,15 +67,18 @@ inline MaterialDef material(double friction, double k = 1e8, double density = 26
     return m;
 }
 
-// Runs f and expects an InputError whose message contains every fragment.
-inline void expect_refused(const std::function<void()>& f, std::initializer_list<const char*> fragments) {
+// Runs f and expects an InputError whose message contains every fragment; the message (empty
+// when f went ahead), for further checks.
+inline std::string expect_refused(const std::function<void()>& f, const std::vector<std::string>& fragments) {
     try {
         f();
         ADD_FAILURE() << "accepted, expected an InputError";
     } catch (const InputError& e) {
         const std::string msg = e.what();
-        for (const char* frag : fragments) EXPECT_NE(msg.find(frag), std::string::npos) << "message: " << msg;
+        for (const std::string& frag : fragments) EXPECT_NE(msg.find(frag), std::string::npos) << "message: " << msg;
+        return msg;
     }
+    return "";
 }
 
 // Restitution coefficient of the linear spring-dashpot for a damping ratio beta.
