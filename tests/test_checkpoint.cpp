@@ -350,6 +350,7 @@ TEST(Checkpoint, ALockedRunFolderIsRefused) {
                   }};
     ro.handle_signals = true;
     EXPECT_THROW(run_scenario(s, ro), Interrupted);
+    EXPECT_FALSE(fs::exists(dir / ".demlab.lock")) << "an interrupted run takes its lock file with it";
     // another process takes the lock (as a running `demlab resume` would)
     const int fd = ::open((dir / ".demlab.lock").c_str(), O_RDWR | O_CREAT, 0644);
     ASSERT_GE(fd, 0);
@@ -363,6 +364,7 @@ TEST(Checkpoint, ALockedRunFolderIsRefused) {
         EXPECT_NE(std::string(e.what()).find("another demlab process is running in this folder"), std::string::npos) << e.what();
     }
     EXPECT_TRUE(fs::exists(dir / kCheckpointFile)) << "the refused resume touched nothing";
+    EXPECT_TRUE(fs::exists(dir / ".demlab.lock")) << "the refused resume removed the other process' lock";
     ::close(fd);  // the other process ends: its lock goes with it
     run_scenario(s, rr);
     EXPECT_FALSE(fs::exists(dir / ".demlab.lock"));
@@ -401,6 +403,7 @@ TEST(Checkpoint, EditedInputFileIsRefusedNamingIt) {
         EXPECT_NE(m.find("has changed since the checkpoint"), std::string::npos) << m;
     }
     EXPECT_TRUE(fs::exists(run / kCheckpointFile));
+    EXPECT_FALSE(fs::exists(run / ".demlab.lock")) << "a resume refused after it locked the folder left its lock file";
     std::ofstream(profile) << ground;
     EXPECT_NO_THROW(test::resume_run(run, 1));
     EXPECT_TRUE(fs::exists(run / "summary.json"));
