@@ -43,9 +43,12 @@ struct KernelCase {
         const size_t side = 30;
         for (size_t d = 0; d < n_discs; ++d) {
             const double r = 0.001 + 0.0005 * u(rng);
-            pos.emplace_back(0.0024 * double(d % side) + 0.0006 * u(rng), 0.0024 * double(d / side) + 0.0006 * u(rng));
+            // (y drawn first: the draws once left to the order of a call's arguments, GCC's)
+            const double y = 0.0024 * double(d / side) + 0.0006 * u(rng);
+            pos.emplace_back(0.0024 * double(d % side) + 0.0006 * u(rng), y);
             radius.push_back(r);
-            vel.emplace_back(6.0 * u(rng) - 3.0, 6.0 * u(rng) - 3.0);
+            const double vy = 6.0 * u(rng) - 3.0;
+            vel.emplace_back(6.0 * u(rng) - 3.0, vy);
             omega.push_back(400.0 * u(rng) - 200.0);
             material.push_back(int32_t(d % 3 == 0));
         }

@@ -58,7 +58,10 @@ struct Polygon {
             hi = hi.cwiseMax(q);
         }
         while (true) {
-            const Vec2 p(lo.x() + (hi.x() - lo.x()) * uniform01(rng), lo.y() + (hi.y() - lo.y()) * uniform01(rng));
+            // y is drawn first: the order the releases (and the references) were made with, once
+            // left to the compiler's order of a call's arguments (GCC's: the last first)
+            const double uy = uniform01(rng), ux = uniform01(rng);
+            const Vec2 p(lo.x() + (hi.x() - lo.x()) * ux, lo.y() + (hi.y() - lo.y()) * uy);
             if (inset(p) >= 0) return p;
         }
     }
