@@ -11,6 +11,16 @@
 #include "dem/world.h"
 #include "scenario/scenario.h"
 
+// The sanitizer pass (scripts/test.sh) runs the suite some ten times slower than the Release
+// pass. A test that only repeats at length what lighter tests also take through the sanitizers
+// is left to the Release pass there, naming the tests that cover its code under the sanitizers.
+#ifdef DEMLAB_SANITIZED
+#define DEMLAB_RELEASE_PASS_ONLY(covered_by) \
+    GTEST_SKIP() << "left to the Release pass: under the sanitizers " covered_by " take the same code"
+#else
+#define DEMLAB_RELEASE_PASS_ONLY(covered_by) static_cast<void>(0)
+#endif
+
 namespace demlab::test {
 
 // A wall's geometry only (no material: for make_geom, or to be given one).

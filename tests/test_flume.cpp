@@ -7,6 +7,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "helpers.h"
 #include "core/error.h"
 #include "files.h"
 #include "core/machine.h"
@@ -85,6 +86,7 @@ TEST(ReleaseMass, SpaceOrderSettlesTheSameBitsOnAnyThreadCount) {
 // which the four keys still give: the same discs, settled, the porosity inside the mass within
 // 0.005, in fewer steps.
 TEST(ReleaseMass, SoftSettlingGivesTheEarlierPackingInFewerSteps) {
+    DEMLAB_RELEASE_PASS_ONLY("GeometryA20.GenerationToRestBalancesAndDeterminism (a release generated and settled)");
     auto generate = [](bool earlier) {
         Scenario s = load_scenario(std::string(DEMLAB_SOURCE_DIR) + "/scenarios/geometry-A.toml");
         apply_override(s, "release.scale=8");
