@@ -2,9 +2,12 @@
 
 #include <fcntl.h>
 #include <sys/file.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
+#include <cstdio>
 #include <filesystem>
+#include <string_view>
 
 #include "core/error.h"
 #include "core/fileio.h"
@@ -12,6 +15,47 @@
 #include "run/checkpoint_file.h"
 
 namespace demlab {
+
+// Whether `path` names the file open on `fd` (the same device and inode).
+static bool names_open_file(int fd, const std::string& path) {
+    struct stat held {}, named {};
+    return ::fstat(fd, &held) == 0 && ::stat(path.c_str(), &named) == 0 && held.st_dev == named.st_dev &&
+           held.st_ino == named.st_ino;
+}
+
+RunFolderLock::RunFolderLock(const std::string& dir) : path_(dir + "/" + kRunLockName) {
+    // Another process may remove the file between our open and our flock (it ends its run): the
+    // lock we got is then on a file no other process can find, so take the new one.
+    for (int attempt = 0; attempt < 8; ++attempt) {
+        fd_ = ::open(path_.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+        if (fd_ < 0) throw InputError(path_ + ": cannot create the run folder's lock");
+        if (::flock(fd_, LOCK_EX | LOCK_NB) != 0) {
+            ::close(fd_);
+            fd_ = -1;
+            throw InputError(dir + ": another demlab process is running in this folder (it holds " + path_ +
+                             "); wait for it to finish, or choose another --out");
+        }
+        if (names_open_file(fd_, path_)) return;
+        ::close(fd_);
+        fd_ = -1;
+    }
+    throw InputError(path_ + ": the run folder's lock keeps being replaced by another process");
+}
+
+void RunFolderLock::release_and_remove() noexcept {
+    if (fd_ < 0) return;
+    char link[64], where[4096];
+    std::snprintf(link, sizeof(link), "/proc/self/fd/%d", fd_);
+    const ssize_t len = ::readlink(link, where, sizeof(where) - 1);
+    if (len > 0) {
+        where[len] = 0;
+        if (std::string_view(where, size_t(len)).find(" (deleted)") == std::string_view::npos) ::unlink(where);
+    } else if (names_open_file(fd_, path_)) {  // no /proc: the path, if it still names the file
+        ::unlink(path_.c_str());
+    }
+    ::close(fd_);
+    fd_ = -1;
+}
 
 std::vector<std::string> run_inputs(const Scenario& s, const RunOptions& o, const std::vector<ScenarioInput>& inputs) {
     std::vector<std::string> files;
