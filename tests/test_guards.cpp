@@ -100,7 +100,7 @@ TEST(Guards, FastDiscIsSeenByTheFloorItHits) {
     fs::remove_all(dir);
 }
 
-// Row 8. A fixed timestep.dt of 0.1 s: the falling disc moves 10 cm in a step, ten radii; the
+// Row 8. A fixed step (timestep.fixed) of 0.1 s: the falling disc moves 10 cm in a step, ten radii; the
 // run is refused naming the disc and the key instead of letting it through the floor.
 TEST(Guards, FixedStepThatCarriesADiscFartherThanHalfItsRadiusIsRefused) {
     const Scenario s = one_disc("position = [0.0, 0.5]", "[timestep]\nautomatic = false\nfixed = 0.1\n");
@@ -111,7 +111,7 @@ TEST(Guards, FixedStepThatCarriesADiscFartherThanHalfItsRadiusIsRefused) {
     } catch (const RunError& e) {
         const std::string msg = e.what();
         EXPECT_NE(msg.find("disc 0 moved"), std::string::npos) << msg;
-        EXPECT_NE(msg.find("timestep.dt = 0.1"), std::string::npos) << msg;
+        EXPECT_NE(msg.find("timestep.fixed = 0.1 s"), std::string::npos) << msg;
     }
     fs::remove_all(dir);
     // the same world at a sound step falls onto the floor and stays there

@@ -470,7 +470,7 @@ void World::check_travel() {
     for (size_t i = 0; i < pos_.size(); ++i) {
         const double moved = vel_[i].norm() * dt_;
         if (!(moved > kMaxTravel * radius_[i]) || !std::isfinite(moved)) continue;
-        const std::string cause = "a time step too large for its speed (timestep.dt = " + format_number(dt_) +
+        const std::string cause = "a time step too large for its speed (timestep.fixed = " + format_number(dt_) +
                                   " s: use a smaller fixed step or the automatic one, timestep.automatic = true)";
         throw RunError("blow-up: disc " + std::to_string(id_[i]) + " moved " + format_number(moved) + " m in one step (speed " +
                        format_number(vel_[i].norm()) + " m/s), more than " + format_number(kMaxTravel) + " of its radius " +
