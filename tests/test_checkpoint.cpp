@@ -21,6 +21,7 @@
 #include "files.h"
 #include "resume.h"
 #include "core/interrupt.h"
+#include "core/output_dir.h"
 #include "run/run.h"
 #include "run/series_columns.h"
 #include "scenario/scenario.h"
@@ -368,6 +369,30 @@ TEST(Checkpoint, ALockedRunFolderIsRefused) {
     ::close(fd);  // the other process ends: its lock goes with it
     run_scenario(s, rr);
     EXPECT_FALSE(fs::exists(dir / ".demlab.lock"));
+    fs::remove_all(dir);
+}
+
+// A forced run locks the old folder, moves it aside with its lock inside, and locks the new one
+// at the same path: dropping the old lock removes its file where it now is, so the new folder's
+// lock stays in place, held, for the whole run (a second process is refused), and goes at its end.
+TEST(Checkpoint, AForcedRunKeepsItsOwnLock) {
+    const Scenario s = scenario();
+    const fs::path dir = temp_dir("ck-force-lock");
+    run_scenario(s, {dir.string(), false, {}});
+    int checked = 0;
+    RunOptions forced{dir.string(), true, [&](const std::string&, const std::string&, int index) {
+                          if (index != 1) return;
+                          ++checked;
+                          const int fd = ::open((dir / ".demlab.lock").c_str(), O_RDWR);
+                          EXPECT_GE(fd, 0) << "the forced run's lock file is gone while it runs";
+                          if (fd < 0) return;
+                          EXPECT_NE(::flock(fd, LOCK_EX | LOCK_NB), 0) << "another process could lock the running folder";
+                          ::close(fd);
+                      }};
+    run_scenario(s, forced);
+    EXPECT_EQ(checked, 1);
+    EXPECT_FALSE(fs::exists(dir / ".demlab.lock"));
+    EXPECT_FALSE(fs::exists(replaced_output_dir(dir.string()))) << "the old folder (and its lock) stayed aside";
     fs::remove_all(dir);
 }
 
