@@ -80,6 +80,22 @@ TEST(ReleaseMass, SpaceOrderSettlesTheSameBitsOnAnyThreadCount) {
     EXPECT_LT(near_share(off1), 0.5);
 }
 
+// Geometry A's release at scale 8 with the given keys, generated and settled on 2 threads, and
+// the porosity inside its mass.
+namespace {
+std::pair<ReleaseMass, double> settled_release_at_scale8(const std::vector<std::string>& overrides) {
+    Scenario s = load_scenario(std::string(DEMLAB_SOURCE_DIR) + "/scenarios/geometry-A.toml");
+    apply_override(s, "release.scale=8");
+    for (const std::string& a : overrides) apply_override(s, a);
+    s.world.threads = 2;
+    finish_scenario(s);
+    const ReleaseMass m = generate_release(s);
+    std::vector<std::array<Vec2, 2>> box;
+    for (const WallDef& wd : make_setup(s)->release_box().walls) box.push_back({wd.p0, wd.p1});
+    return {m, interior_porosity(m.pos, m.radius, box).porosity};
+}
+}  // namespace
+
 // The release settles soft, lightly damped and with lagged dashpots
 // (release.settle_stiffness_factor 0.25, settle_alpha 0.3, settle_friction_alpha 0.2,
 // settle_dashpots "lagged") into the packing of the earlier scheme (1, 0.7, 0, "centred"),
@@ -88,18 +104,9 @@ TEST(ReleaseMass, SpaceOrderSettlesTheSameBitsOnAnyThreadCount) {
 TEST(ReleaseMass, SoftSettlingGivesTheEarlierPackingInFewerSteps) {
     DEMLAB_RELEASE_PASS_ONLY("GeometryA20.GenerationToRestBalancesAndDeterminism (a release generated and settled)");
     auto generate = [](bool earlier) {
-        Scenario s = load_scenario(std::string(DEMLAB_SOURCE_DIR) + "/scenarios/geometry-A.toml");
-        apply_override(s, "release.scale=8");
-        if (earlier)
-            for (const char* a : {"release.settle_stiffness_factor=1", "release.settle_alpha=0.7",
-                                  "release.settle_friction_alpha=0", "release.settle_dashpots=\"centred\""})
-                apply_override(s, a);
-        s.world.threads = 2;
-        finish_scenario(s);
-        const ReleaseMass m = generate_release(s);
-        std::vector<std::array<Vec2, 2>> box;
-        for (const WallDef& wd : make_setup(s)->release_box().walls) box.push_back({wd.p0, wd.p1});
-        return std::make_pair(m, interior_porosity(m.pos, m.radius, box).porosity);
+        if (!earlier) return settled_release_at_scale8({});
+        return settled_release_at_scale8({"release.settle_stiffness_factor=1", "release.settle_alpha=0.7",
+                                           "release.settle_friction_alpha=0", "release.settle_dashpots=\"centred\""});
     };
     const auto [soft, soft_porosity] = generate(false);
     const auto [earlier, earlier_porosity] = generate(true);
@@ -111,6 +118,47 @@ TEST(ReleaseMass, SoftSettlingGivesTheEarlierPackingInFewerSteps) {
     EXPECT_NEAR(soft.porosity_settled, earlier.porosity_settled, 1e-12);  // the same discs in the same box
     EXPECT_LT(soft.settle_steps, 0.5 * double(earlier.settle_steps));
     EXPECT_LT(soft.lid_load_fraction, 0.01);
+}
+
+// release.settle_ramp: the compaction at a quarter of the stiffness factor and the stiffness
+// back by fours settles the same discs into the same packing (porosity inside the mass within
+// 0.005) in fewer steps; "auto" leaves a mass below kSettleRampDiscs as "off" settles it.
+TEST(ReleaseMass, StiffnessRampSettlesThePackingInFewerSteps) {
+    DEMLAB_RELEASE_PASS_ONLY("ReleaseMass.StiffnessRampStagesAtScale20 (the ramp's stages)");
+    auto generate = [](const std::string& ramp) { return settled_release_at_scale8({"release.settle_ramp=\"" + ramp + "\""}); };
+    const auto [ramped, ramped_porosity] = generate("on");
+    const auto [single, single_porosity] = generate("off");
+    ASSERT_LT(single.pos.size(), size_t(kSettleRampDiscs));
+    EXPECT_TRUE(ramped.settled);
+    EXPECT_LT(ramped.settle_ratio, 5e-4);
+    EXPECT_EQ(ramped.radius, single.radius);
+    EXPECT_NEAR(ramped_porosity, single_porosity, 0.005);
+    EXPECT_LT(ramped.settle_steps, 0.85 * double(single.settle_steps));  // 15,400 against 19,200
+    EXPECT_LT(ramped.lid_load_fraction, 0.01);
+    const auto [automatic, automatic_porosity] = generate("auto");
+    EXPECT_EQ(automatic.pos, single.pos);
+    EXPECT_EQ(automatic.settle_steps, single.settle_steps);
+}
+
+// The ramp's stages on a small mass, cheap enough for every pass: "on" settles, and differs
+// from "off" (the stages ran), and f = 1 (the earlier scheme) has nothing to ramp.
+TEST(ReleaseMass, StiffnessRampStagesAtScale20) {
+    auto generate = [](const char* ramp, bool earlier) {
+        Scenario s = load_scenario(std::string(DEMLAB_SOURCE_DIR) + "/scenarios/geometry-A.toml");
+        apply_override(s, "release.scale=20");
+        apply_override(s, std::string("release.settle_ramp=\"") + ramp + "\"");
+        if (earlier) apply_override(s, "release.settle_stiffness_factor=1");
+        finish_scenario(s);
+        return generate_release(s);
+    };
+    const ReleaseMass on = generate("on", false), off = generate("off", false);
+    EXPECT_TRUE(on.settled);
+    EXPECT_TRUE(off.settled);
+    EXPECT_EQ(on.radius, off.radius);
+    EXPECT_NE(on.pos, off.pos);
+    const ReleaseMass earlier_on = generate("on", true), earlier_off = generate("off", true);
+    EXPECT_EQ(earlier_on.pos, earlier_off.pos);
+    EXPECT_EQ(earlier_on.settle_steps, earlier_off.settle_steps);
 }
 
 TEST(ReleaseMass, OrderInSpaceMovesEachDiscWithItsData) {
