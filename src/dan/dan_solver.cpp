@@ -347,9 +347,19 @@ void DanSolver::update_k(const std::vector<double>& l_before) {
         std::fill(k_.begin(), k_.end(), d.k_fixed);
         return;
     }
+    size_t seg_a = 0, seg_b = 0;  // the windows' ends' segments, moved from block to block
     for (size_t j = 0; j < k_.size(); ++j) {
         const double strain = (l_[j] - l_before[j]) / l_before[j];  // D3, > 0 extension
-        const double tan_mod = tan_basal_ - d.lambda * k_[j] * (H_[j + 1] - H_[j]) / l_[j];  // D4
+        // D4 with the surface's slope rise / run: over the block (eq. 2.38), or over the window
+        double rise = H_[j + 1] - H_[j], run = l_[j];
+        const double window = d.slope_window * h_[j];
+        if (window > l_[j]) {
+            const double mid = 0.5 * (s_[j] + s_[j + 1]);
+            const double a = std::max(s_.front(), mid - 0.5 * window), b = std::min(s_.back(), mid + 0.5 * window);
+            rise = surface_height(b, seg_b) - surface_height(a, seg_a);
+            run = b - a;  // >= l_j: the window holds the block
+        }
+        const double tan_mod = tan_basal_ - d.lambda * k_[j] * rise / run;                 // D4
         const EarthPressure lim = earth_pressure_limits(phi_internal_, tan_mod);           // D5
         double k = k_[j];
         if (d.k_stiffness > 0.0) k -= d.k_stiffness * strain;                               // D6
@@ -357,6 +367,17 @@ void DanSolver::update_k(const std::vector<double>& l_before) {
         else if (strain < 0.0) k = lim.passive;
         k_[j] = std::clamp(k, lim.active, lim.passive);
     }
+}
+
+// The free surface H(x), linear between the boundary blocks, at x in [s_0, s_(n-1)]. seg is the
+// segment [s_seg, s_(seg+1)] found for the previous x; the windows of neighbouring blocks
+// overlap, so it moves by a block or two, not a search over all of them.
+double DanSolver::surface_height(double x, size_t& seg) const {
+    const size_t n = s_.size();
+    while (seg + 2 < n && s_[seg + 1] < x) ++seg;
+    while (seg > 0 && s_[seg] > x) --seg;
+    const double w = (x - s_[seg]) / (s_[seg + 1] - s_[seg]);
+    return H_[seg] + w * (H_[seg + 1] - H_[seg]);
 }
 
 double DanSolver::kinetic_energy() const {

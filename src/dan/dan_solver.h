@@ -75,6 +75,7 @@ private:
     void update_geometry();                // alpha, kappa, x at the blocks; l, h, H
     void update_k(const std::vector<double>& l_before);
     double stability_rate() const;         // max_j (sqrt(k g cos a h) + |dv|) / l, 1/s
+    double surface_height(double x, size_t& seg) const;  // m, H between the boundary blocks (D4's window)
     // one step's stages, in order
     double choose_step();                  // s, this step's dt (throws when it collapses or breaks the limit)
     bool bore_viscosity();                 // q_ (D16); false when it is off
