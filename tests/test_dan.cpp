@@ -411,9 +411,9 @@ TEST(Dan, RefusalsAndGeometryAReference) {
     // geometry A by the defaults: the stored front.csv, bit for bit, and the landmarks
     const RunSummary r = run_scenario(load("geometry-A.toml", {}), {dir.string(), false, {}});
     EXPECT_EQ(read_file(dir / "front.csv"), read_file(fs::path(root) / "tests/data/dan-geometry-A-front.csv"));
-    EXPECT_NEAR(r.t_front_at_barrier, 0.3879, 1e-9);
-    EXPECT_NEAR(r.runout_s, 2.2192, 1e-4);
-    EXPECT_NEAR(r.runup_height, 0.2598, 1e-4);
+    EXPECT_NEAR(r.t_front_at_barrier, 0.3854, 1e-9);
+    EXPECT_NEAR(r.runout_s, 2.2146, 1e-4);
+    EXPECT_NEAR(r.runup_height, 0.2573, 1e-4);
     EXPECT_EQ(r.stop_reason, "rest");
     {  // dan.width spans the blocks; the outputs stay per metre of it (as the 1 m default's)
         const fs::path wide = temp_dir("dan-wide");
@@ -446,7 +446,7 @@ TEST(Dan, RefusalsAndGeometryAReference) {
     c.runs = {dir.string(), dir.string()};
     const auto files = compare_runs(c);
     for (const std::string& f : files) EXPECT_GT(fs::file_size(f), 100u) << f;
-    EXPECT_NE(read_file(out / "comparison.md").find("(DAN, 41 blocks) | 0.388 | 2.219 | 0.260"), std::string::npos)
+    EXPECT_NE(read_file(out / "comparison.md").find("(DAN, 41 blocks) | 0.385 | 2.215 | 0.257"), std::string::npos)
         << read_file(out / "comparison.md");
     fs::remove_all(out);
     // runs on different flumes: each deposit over its own flume, in its colour, named by its
@@ -472,12 +472,14 @@ namespace demlab {
 // Refinement (docs/dan.md, "Refinement"): geometry A, B and C at 41, 82, 164, 328 and 656
 // blocks with the automatic step run to rest every time, and the step never falls below dan.dt
 // (the blocks do not crowd, so the fixed step runs too). The front's arrival converges on all
-// three: each refinement changes it less than the one before. A's run-out and run-up do so
-// from 164 blocks on, B's run-out from 41; B's run-up changes by 1.6-2.2 mm a doubling. C's
-// run-out and run-up at rest are only bounded: the finest two within 1 and 2.5 cm. Without the
-// linear term of the bore's viscosity (D16) A's deposit is remobilised from about 600 blocks
-// on (2.39 m at 656 blocks without the smoothing); without D16 the step fell to 8e-7 s at 656
-// blocks. (About 15 s in Release.)
+// three: each refinement changes it less than the one before. A's and C's run-out and run-up do
+// so from 164 blocks on (C's run-up from 82), B's run-out from 41; B's run-up changes by 1.2-2.1
+// mm a doubling. C's deposit on its 61-degree face converges because D4 reads the surface's
+// slope over one flow depth (dan.slope_window = 1): with the block's own slope (0) C's run-up
+// at rest jumps by 16 mm between 328 and 656 blocks and this test fails. Without the linear
+// term of the bore's viscosity (D16) A's deposit is remobilised from about 600 blocks on (2.39 m
+// at 656 blocks without the smoothing); without D16 the step fell to 8e-7 s at 656 blocks.
+// (About 15 s in Release.)
 TEST(Dan, RefinementConverges) {
     const std::string root = DEMLAB_SOURCE_DIR;
     struct Landmarks {
@@ -506,20 +508,17 @@ TEST(Dan, RefinementConverges) {
                 return std::abs(l[k].*m - l[k - 1].*m) < std::abs(l[k - 1].*m - l[k - 2].*m);
             };
             EXPECT_TRUE(shrinks(&Landmarks::arrival)) << geometry << " arrival, refinement " << k;
-            if (g == 'B' || (g == 'A' && k >= 4)) {
+            if (g == 'B' || k >= 4) {
                 EXPECT_TRUE(shrinks(&Landmarks::runout)) << geometry << " run-out, refinement " << k;
             }
-            // C's run-up (the surface at the barrier's foot) over 41-328 blocks; beyond, the
-            // wedge on its 61-degree face freezes in one of many equilibria, which moves in steps
-            // with the blocks (docs/dan.md, "Refinement"), and so does C's run-out throughout
-            if ((g == 'A' && k >= 4) || (g == 'C' && k <= 3)) {
+            if ((g == 'A' && k >= 4) || (g == 'C' && k >= 3)) {
                 EXPECT_TRUE(shrinks(&Landmarks::runup)) << geometry << " run-up, refinement " << k;
             }
         }
         // the finest two: within 10 ms, and the run-out and run-up within (A) 1.5 and 1 cm,
-        // (B) 2.5 cm and 2.5 mm, (C) 1 and 2.5 cm
+        // (B) 2.5 cm and 2.5 mm, (C) 6 and 2 mm
         EXPECT_LT(std::abs(l[4].arrival - l[3].arrival), 0.01) << geometry;
-        const double runout = g == 'A' ? 0.015 : g == 'B' ? 0.025 : 0.01, runup = g == 'A' ? 0.01 : g == 'B' ? 0.0025 : 0.025;
+        const double runout = g == 'A' ? 0.015 : g == 'B' ? 0.025 : 0.006, runup = g == 'A' ? 0.01 : g == 'B' ? 0.0025 : 0.002;
         EXPECT_LT(std::abs(l[4].runout - l[3].runout), runout) << geometry;
         EXPECT_LT(std::abs(l[4].runup - l[3].runup), runup) << geometry;
     }

@@ -30,7 +30,7 @@ struct DanDef {
     double lambda = 0.333;                 // -, D4 (eq. 2.38)
     // D4 reads the free surface's slope over this many flow depths h_j, centred on the block
     // (never less than the block itself); 0: the block's own slope, eq. 2.38 literally
-    double slope_window = 0.0;             // - (flow depths), [0, 10]
+    double slope_window = 1.0;             // - (flow depths), [0, 10]
     DanPressure pressure_form = DanPressure::Dan;
     DanEndHeight end_height = DanEndHeight::Half;
     bool pressure_centripetal = false;     // also scale p by (1 + kappa v^2 / (g cos alpha))
