@@ -479,7 +479,7 @@ namespace demlab {
 // at rest jumps by 16 mm between 328 and 656 blocks and this test fails. Without the linear
 // term of the bore's viscosity (D16) A's deposit is remobilised from about 600 blocks on (2.39 m
 // at 656 blocks without the smoothing); without D16 the step fell to 8e-7 s at 656 blocks.
-// (About 15 s in Release.)
+// (About 25 s in Release beside the rest of the suite, 80 s under the sanitizers.)
 TEST(Dan, RefinementConverges) {
     const std::string root = DEMLAB_SOURCE_DIR;
     struct Landmarks {
