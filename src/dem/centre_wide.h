@@ -41,6 +41,14 @@ DEMLAB_WIDE bool touching(const CentrePairArrays& a, const uint32_t* list, size_
         // cache (the force pass' switch): at the real sand size (145,615 discs, 9.3 MB of
         // records) disc j's row came from memory, and waiting for it was most of this pass
         if (a.prefetch) {
+            // and the contacts of the group four ahead, whose j the lines below read: found
+            // from the list only when their turn came, they were the next wait (a contact is
+            // 40 bytes, so its last byte may lie on the next line)
+            for (size_t l = 4 * N; l < 5 * N && g + l < n; ++l) {
+                const char* c = reinterpret_cast<const char*>(a.contacts + list[g + l]);
+                __builtin_prefetch(c);
+                __builtin_prefetch(c + sizeof(DiscContact) - 1);
+            }
             for (size_t l = 2 * N; l < 3 * N && g + l < n; ++l) {
                 const DiscContact& ahead = a.contacts[list[g + l]];
                 __builtin_prefetch(a.discs + 8 * size_t(ahead.j));
