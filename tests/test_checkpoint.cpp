@@ -322,6 +322,7 @@ TEST(Checkpoint, KilledAndSignalledProcessesResumeToTheSameBytes) {
             std::this_thread::sleep_for(std::chrono::milliseconds(100));
         std::this_thread::sleep_for(std::chrono::milliseconds(300));
         kill(pid, SIGTERM);
+        kill(pid, SIGTERM);  // the same request twice, as a process group's kill can deliver it
         EXPECT_EQ(wait_for(pid), int(kExitInterrupted));
         ASSERT_TRUE(fs::exists(stopped / kCheckpointFile));
         EXPECT_EQ(wait_for(spawn({"resume", stopped.string()})), 0);
@@ -339,6 +340,32 @@ TEST(Checkpoint, Crc32cCheckValueAndSighupIsCaught) {
     InterruptScope scope;
     std::raise(SIGHUP);
     EXPECT_EQ(pending_interrupt(), SIGHUP);
+}
+
+// One request delivered twice (`timeout` signals the command, then its process group) stops the
+// run as one: the repeat within half a second is ignored, where re-arming the default action at
+// the first signal let the copy end the process without its checkpoint. A second request later
+// than that ends the process at once. Each case in a child process, which the signal may end.
+TEST(Checkpoint, ARepeatedSignalIsOneRequestAndALaterOneEndsTheProcess) {
+    auto child_status = [](int pause_ms) {
+        const pid_t pid = fork();
+        if (pid == 0) {
+            InterruptScope scope;
+            std::raise(SIGINT);
+            std::this_thread::sleep_for(std::chrono::milliseconds(pause_ms));
+            std::raise(SIGINT);
+            _exit(pending_interrupt() == SIGINT ? 7 : 8);
+        }
+        int status = 0;
+        waitpid(pid, &status, 0);
+        return status;
+    };
+    const int repeated = child_status(0);
+    ASSERT_TRUE(WIFEXITED(repeated)) << "the repeat ended the process (signal " << WTERMSIG(repeated) << ")";
+    EXPECT_EQ(WEXITSTATUS(repeated), 7);
+    const int later = child_status(700);
+    ASSERT_TRUE(WIFSIGNALED(later)) << "a second request 0.7 s later did not end the process";
+    EXPECT_EQ(WTERMSIG(later), SIGINT);
 }
 
 // A second process on a running folder is refused (the run holds flock on RUN_DIR/.demlab.lock),

@@ -1,7 +1,8 @@
 // SIGINT, SIGTERM and SIGHUP during a run: the handler only records the signal; the run loop sees it
 // at the end of the step, writes a final checkpoint and throws Interrupted, which the
 // executable turns into exit code 4 (kExitInterrupted) with the command that resumes.
-// The handler re-arms the default action, so a second signal ends the process at once.
+// A second signal ends the process at once, unless it comes within half a second of the first:
+// then it is the same request delivered twice (a process group's kill) and is ignored.
 #pragma once
 #include <atomic>
 #include <stdexcept>
