@@ -424,6 +424,30 @@ TEST(ForcePassBalance, StepFallsBackToOneRangeBesideBusyThreads) {
     EXPECT_EQ(state_hash(w), db9k_hash_after(discs, 1, steps + 100));
 }
 
+// The lists of a flow are rebuilt every few steps (geometry A at scale 4: every 11 on
+// average), each time with a new cut. The balancing window must outlive those cuts: restarted
+// at each, it never reached its 64 steps and the shares never moved. Here the pad is small, so
+// the collapsing column rebuilds its lists more often than once a window, and a cut far from
+// the ranges' speeds (0.85 of the work to the first range) has to move towards them.
+TEST(ForcePassBalance, SharesMoveWhenTheListsAreRebuiltEveryFewSteps) {
+    auto discs = read_xyr(default_db9k_path());
+    WorldDef def = db9k_world_def();
+    def.threads = 2;
+    def.broadphase_margin = 1e-6;
+    World w(def);
+    w.set_busy_fallback(false);  // (tests run side by side)
+    build_db9k(w, discs);
+    w.finalize();
+    w.run(200);  // the column starts to fall
+    const long updates_before = w.broad_phase_stats().updates;
+    w.cut_force_pass({0.85, 0.15});
+    w.run(640);
+    const long updates = w.broad_phase_stats().updates - updates_before;
+    ASSERT_GT(updates, 640 / 32) << "the lists were not rebuilt every few steps: the test tests nothing";
+    EXPECT_GT(w.force_pass_rebalances(), 0);
+    EXPECT_LT(w.force_pass_shares()[0], 0.75) << "after " << updates << " list rebuilds in 640 steps";
+}
+
 TEST(ForcePassBalance, CutSharesAreChecked) {
     auto discs = read_xyr(default_db9k_path());
     WorldDef def = db9k_world_def();

@@ -38,7 +38,12 @@ void World::split_force_pass() {
         ++one_range_cuts_;
         cut_ranges(1);
     }
-    restart_balance_window();
+    // A new cut of the same number of ranges keeps the balancing window: the lists are rebuilt
+    // every few steps in a flow (geometry A at scale 4: every 11 steps on average), and a
+    // window restarted at each of them never reached its kBalanceWindow steps, so the flume's
+    // ranges were never balanced (their times 25 % apart). The shares are fractions of the work
+    // model, so times measured under one cut still say how to move them under the next.
+    if (range_clock_.size() != size_t(force_ranges_)) restart_balance_window();
 }
 
 void World::cut_ranges(size_t r) {
@@ -149,7 +154,8 @@ void World::balance_force_pass() {
     const auto seconds = [this](size_t t) { return range_clock_[t].seconds; };
     if (rebalance_shares(range_share_.data(), seconds, r, kBalanceTolerance)) {
         ++rebalances_;
-        split_force_pass();  // also restarts the window
+        split_force_pass();
+        restart_balance_window();
     } else {
         restart_balance_window();
     }
@@ -187,6 +193,7 @@ void World::cut_force_pass(const std::vector<double>& shares) {
                          " finite shares >= 0 summing to 1 expected (one per range)");
     range_share_ = shares;
     split_force_pass();
+    restart_balance_window();  // times measured under other shares
 }
 
 void World::set_cross_share_limit(double share) {
