@@ -122,7 +122,8 @@ TEST(ReleaseMass, SoftSettlingGivesTheEarlierPackingInFewerSteps) {
 
 // release.settle_ramp: the compaction at a quarter of the stiffness factor and the stiffness
 // back by fours settles the same discs into the same packing (porosity inside the mass within
-// 0.005) in fewer steps; "auto" leaves a mass below kSettleRampDiscs as "off" settles it.
+// 0.005) in fewer steps, and raised smoothly in fewer still; "auto" leaves a mass below
+// kSettleRampDiscs as "off" settles it.
 TEST(ReleaseMass, StiffnessRampSettlesThePackingInFewerSteps) {
     DEMLAB_RELEASE_PASS_ONLY("ReleaseMass.StiffnessRampStagesAtScale20 (the ramp's stages)");
     auto generate = [](const std::string& ramp) { return settled_release_at_scale8({"release.settle_ramp=\"" + ramp + "\""}); };
@@ -135,13 +136,21 @@ TEST(ReleaseMass, StiffnessRampSettlesThePackingInFewerSteps) {
     EXPECT_NEAR(ramped_porosity, single_porosity, 0.005);
     EXPECT_LT(ramped.settle_steps, 0.85 * double(single.settle_steps));  // 15,400 against 19,200
     EXPECT_LT(ramped.lid_load_fraction, 0.01);
+    const auto [smooth, smooth_porosity] = generate("smooth");
+    EXPECT_TRUE(smooth.settled);
+    EXPECT_LT(smooth.settle_ratio, 5e-4);
+    EXPECT_EQ(smooth.radius, single.radius);
+    EXPECT_NEAR(smooth_porosity, single_porosity, 0.005);
+    EXPECT_LT(smooth.settle_steps, ramped.settle_steps);  // 10,800 against 15,400
+    EXPECT_LT(smooth.lid_load_fraction, 0.01);
     const auto [automatic, automatic_porosity] = generate("auto");
     EXPECT_EQ(automatic.pos, single.pos);
     EXPECT_EQ(automatic.settle_steps, single.settle_steps);
 }
 
-// The ramp's stages on a small mass, cheap enough for every pass: "on" settles, and differs
-// from "off" (the stages ran), and f = 1 (the earlier scheme) has nothing to ramp.
+// The ramps' stages on a small mass, cheap enough for every pass: "on" and "smooth" settle and
+// differ from "off" and from each other (the stages ran), and f = 1 (the earlier scheme) has
+// nothing to ramp.
 TEST(ReleaseMass, StiffnessRampStagesAtScale20) {
     auto generate = [](const char* ramp, bool earlier) {
         Scenario s = load_scenario(std::string(DEMLAB_SOURCE_DIR) + "/scenarios/geometry-A.toml");
@@ -151,14 +160,19 @@ TEST(ReleaseMass, StiffnessRampStagesAtScale20) {
         finish_scenario(s);
         return generate_release(s);
     };
-    const ReleaseMass on = generate("on", false), off = generate("off", false);
+    const ReleaseMass on = generate("on", false), off = generate("off", false), smooth = generate("smooth", false);
     EXPECT_TRUE(on.settled);
     EXPECT_TRUE(off.settled);
+    EXPECT_TRUE(smooth.settled);
     EXPECT_EQ(on.radius, off.radius);
     EXPECT_NE(on.pos, off.pos);
-    const ReleaseMass earlier_on = generate("on", true), earlier_off = generate("off", true);
+    EXPECT_NE(smooth.pos, on.pos);
+    EXPECT_NE(smooth.pos, off.pos);
+    const ReleaseMass earlier_on = generate("on", true), earlier_off = generate("off", true),
+                      earlier_smooth = generate("smooth", true);
     EXPECT_EQ(earlier_on.pos, earlier_off.pos);
     EXPECT_EQ(earlier_on.settle_steps, earlier_off.settle_steps);
+    EXPECT_EQ(earlier_smooth.pos, earlier_off.pos);
 }
 
 TEST(ReleaseMass, OrderInSpaceMovesEachDiscWithItsData) {

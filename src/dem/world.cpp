@@ -140,6 +140,20 @@ void World::refresh_dashpots_with() {
     }
 }
 
+void World::scale_stiffness(double factor) {
+    require_positive("stiffness factor", factor, "(ratio)");
+    for (MaterialDef& m : materials_) {
+        m.kn *= factor;
+        m.ks *= factor;
+    }
+    with_contact_law(def_.law, [&](auto law) {
+        using Law = decltype(law);
+        build_law_tables<Law>();
+        Law::fill_tables(tables<Law>(), def_.law_def<Law>());
+        refresh_dashpots_with<Law>();
+    });
+}
+
 double World::unbalanced_force_ratio() const {
     double net = 0.0, contact = 0.0;
     long touching = 0;

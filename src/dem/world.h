@@ -289,6 +289,10 @@ public:
     // Changes a disc's radius (mass and inertia follow); call refresh_dashpots() after a batch.
     void set_radius(int i, double r);
     void refresh_dashpots();
+    // Multiplies every material's kn and ks by factor (the pair tables, the contacts' dashpots
+    // and the automatic step follow): the release's settling raises the stiffness of a mass
+    // in equilibrium gradually, which a new world at the higher stiffness would jolt.
+    void scale_stiffness(double factor);
     // Mean |net force| (contact + gravity) over mean |contact force| of the last step: PFC's
     // equilibrium ratio (0 when nothing touches).
     double unbalanced_force_ratio() const;

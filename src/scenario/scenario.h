@@ -100,8 +100,9 @@ struct ReleaseDef {
     std::string space_order = "auto";      // number the discs in space order before settling: on, off,
                                            // auto (on above kSpaceOrderDiscs discs; release.cpp)
     std::string settle_ramp = "auto";      // compaction at a quarter of settle_stiffness_factor, then
-                                           // the stiffness back by fours: on, off, auto (on above
-                                           // kSettleRampDiscs discs; release.cpp)
+                                           // the stiffness raised continuously (smooth) or by fours
+                                           // (on); off; auto (smooth above kSettleRampDiscs discs;
+                                           // release.cpp)
 };
 
 struct StopDef {

@@ -228,9 +228,11 @@ struct SettleStage {
     Stage stage;
     double stiffness_factor;  // of the materials' kn and ks
     double ratio_factor;      // of release.settle_ratio, where the stage stops
+    double ramp_to = 0.0;     // > 0: the stiffness factor raised from stiffness_factor to this
+    long ramp_steps = 0;      // over these steps
 };
 
-// With release.settle_ramp the compaction runs at a quarter of the factor (steps twice as
+// With release.settle_ramp = "on" the compaction runs at a quarter of the factor (steps twice as
 // large) and the stiffness comes back by fours, one frictionless stage each. Every stage
 // starts from rest and its jump of stiffness sets off waves that must die out, some
 // 6,000-10,000 steps at scale 4 whatever the jump, so one stage at the real stiffness after
@@ -241,10 +243,47 @@ struct SettleStage {
 // the mass 0.1583 -> 0.1578 and 0.1578 -> 0.1574. Stopping the same stages at 10 times
 // the ratio, or ramping by twos, gave 44,600-45,400 at scale 4; the compaction at 1/64,
 // 76,000 at scale 2 (porosity 0.1566).
+//
+// With release.settle_ramp = "smooth" (and "auto" above kSettleRampDiscs) the compaction runs
+// at a quarter of the factor as with "on", and one frictionless stage without the lid then
+// raises the stiffness continuously to the real one. Each of "on"'s stages starts at four
+// times the last one's stiffness from the same positions: the contact forces jump fourfold
+// (the unbalanced-force ratio 0.67 at the stage's start) and the mass rings through several
+// periods of its slowest mode. Raised over two of those periods, the stiffness keeps the mass
+// near its equilibrium while its overlaps shrink: geometry A's restiffening (after the same
+// compaction as "on"'s) at scale 8 6,600 -> 4,800 steps, at scale 4 15,200 -> 12,200, at scale
+// 2 33,200 -> 24,600. Over one period 5,800 and 13,400, over three 5,600 and 10,800 (scales 8
+// and 4): the counts move by a thousand or two with any change. In this stage more local damping (0.5, 0.7, 0.9) took 12,000, 19,400
+// and 65,600 steps at scale 4, less (0, 0.1, 0.2) 10,600-11,600; every velocity scaled by
+// 0.3-0.9 at each check (a viscous damping) kept the ratio above 10 times the settle ratio for
+// 150,000 steps: a frictionless mass settles by creeping into its gaps, and damping slows the
+// creep. That stage being frictionless too, the compaction hands on at 20 times the settle
+// ratio: its tail's creep goes on under the ramp (at 10 times, the compaction's last 30,000 of
+// 81,800 steps at scale 1 took the ratio from 0.009 to 0.005). Settling steps against "on",
+// geometry A: scale 8 15,400 -> 10,800, scale 4 32,600 -> 25,400, scale 2 74,400 -> 55,800
+// (seeds 2 and 3: 76,800 -> 58,600 and 78,400 -> 60,200; at 10 times 65,800, 69,000 and
+// 73,000), porosity inside the mass 0.0003-0.0005 higher; scale 1 in docs/flume.md.
+//
+// The slowest mode (the mass' height ringing on its floor) shows in the ratio's oscillation: a
+// period of about 2,000 steps at scale 4 (9,101 discs) and 4,000 at scale 2 (36,404). In steps
+// it grows with the mass' height in discs, sqrt(N) (the period goes as that height times
+// sqrt(m / k), the step as sqrt(m / k)): about 21 sqrt(N) steps.
+constexpr double kSlowestModeStepsPerSqrtDisc = 21.0;
+constexpr double kSmoothRampPeriods = 2.0;
+
 std::vector<SettleStage> settle_stages(const ReleaseDef& rd, size_t discs) {
-    const bool ramp = rd.settle_stiffness_factor < 1.0 &&
-                      (rd.settle_ramp == "on" || (rd.settle_ramp == "auto" && long(discs) > kSettleRampDiscs));
+    const bool large = long(discs) > kSettleRampDiscs;
+    const bool smooth = rd.settle_stiffness_factor < 1.0 && (rd.settle_ramp == "smooth" || (rd.settle_ramp == "auto" && large));
+    const bool ramp = rd.settle_stiffness_factor < 1.0 && rd.settle_ramp == "on";
     std::vector<SettleStage> stages;
+    if (smooth) {
+        const double f = 0.25 * rd.settle_stiffness_factor;
+        const long ramp_steps = std::lround(kSmoothRampPeriods * kSlowestModeStepsPerSqrtDisc * std::sqrt(double(discs)));
+        stages.push_back({Stage::Compaction, f, 20.0});
+        stages.push_back({Stage::Restiffen, f, 10.0, 1.0, ramp_steps});
+        stages.push_back({Stage::Friction, 1.0, 1.0});
+        return stages;
+    }
     if (ramp) {
         stages.push_back({Stage::Compaction, 0.25 * rd.settle_stiffness_factor, 10.0});
         for (double f = rd.settle_stiffness_factor; f < 1.0; f *= 4.0) stages.push_back({Stage::Restiffen, f, 50.0});
@@ -337,7 +376,18 @@ void settle_release(const Scenario& s, const ReleaseBox& box, std::vector<Vec2>&
         // the frictionless stages only compact: they may stop at ten times the final ratio
         rule.ratio = def.ratio_factor * rd.settle_ratio;
         rule.interrupted = kGenerationInterrupted;
+        // a smooth ramp (settle_stages) raises the stiffness at every check, geometrically from
+        // the stage's factor to ramp_to over ramp_steps (jumps of 16^(200 / ramp_steps), 1.06
+        // at scale 4); the stage may stop from the check after the last jump
+        rule.min_steps = def.ramp_steps > 0 ? def.ramp_steps + 1 : 0;
+        double stiffness_now = def.stiffness_factor;
         rule.on_check = [&](double t, long steps, double) {
+            if (def.ramp_to > 0.0 && stiffness_now != def.ramp_to) {
+                const double x = std::min(1.0, double(steps) / double(def.ramp_steps));
+                const double next = x >= 1.0 ? def.ramp_to : def.stiffness_factor * std::pow(def.ramp_to / def.stiffness_factor, x);
+                w.scale_stiffness(next / stiffness_now);
+                stiffness_now = next;
+            }
             // a step so small that settling would not end in any time (an absurd stiffness or
             // density) is refused at once instead of running for ever
             if (steps <= 200 && (t_stage - t) / w.dt() > kMaxSettleSteps)

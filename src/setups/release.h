@@ -44,9 +44,10 @@ ReleaseMass generate_release(const Scenario& s);
 // many discs (generate_release).
 constexpr long kSpaceOrderDiscs = 1000;
 
-// release.settle_ramp = auto ramps the settling's stiffness above this many discs: the masses
-// that take minutes to settle (geometry A at scale 2 and 1), while the smaller ones, seconds to
-// settle, keep the releases (and the regression references) of the single restiffening.
+// release.settle_ramp = auto raises the settling's stiffness smoothly above this many discs: the
+// masses that take minutes to settle (geometry A at scale 2 and 1), while the smaller ones,
+// seconds to settle, keep the releases (and the regression references) of the single
+// restiffening.
 constexpr long kSettleRampDiscs = 20000;
 
 // Renumbers the discs in space order: strips across x, `strip` metres wide, from left to

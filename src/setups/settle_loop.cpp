@@ -41,7 +41,7 @@ SettleResult settle_through_loop(World& w, const Scenario& s, const SettleRule& 
         if (w.step_count() != check_at) return "";
         result.ratio = w.unbalanced_force_ratio();
         if (rule.on_check) rule.on_check(w.time(), w.step_count(), result.ratio);
-        if (w.time() > rule.min_time && result.ratio < rule.ratio) {
+        if (w.time() > rule.min_time && w.step_count() >= rule.min_steps && result.ratio < rule.ratio) {
             result.settled = true;
             return "settled";
         }

@@ -14,6 +14,7 @@ struct SettleRule {
     double t_end = 0.0;        // s, settling stops here whether settled or not
     double ratio = 0.0;        // settled: the unbalanced force ratio below this ...
     double min_time = 0.02;    // s, ... after this much settling
+    long min_steps = 0;        // ... and this many steps
     long chunk = 200;          // steps between two checks (settle_chunk)
     std::string interrupted;   // the Interrupted message (settling is not checkpointed)
     // after each check: the time, the steps and the ratio (progress; may throw to refuse)
