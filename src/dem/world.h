@@ -291,7 +291,8 @@ public:
     void refresh_dashpots();
     // Multiplies every material's kn and ks by factor (the pair tables, the contacts' dashpots
     // and the automatic step follow): the release's settling raises the stiffness of a mass
-    // in equilibrium gradually, which a new world at the higher stiffness would jolt.
+    // in equilibrium gradually, which a new world at the higher stiffness would jolt. The
+    // Hertz and DEBRIS laws take their stiffness from their own keys and do not read kn, ks.
     void scale_stiffness(double factor);
     // Mean |net force| (contact + gravity) over mean |contact force| of the last step: PFC's
     // equilibrium ratio (0 when nothing touches).

@@ -377,8 +377,8 @@ void settle_release(const Scenario& s, const ReleaseBox& box, std::vector<Vec2>&
         rule.ratio = def.ratio_factor * rd.settle_ratio;
         rule.interrupted = kGenerationInterrupted;
         // a smooth ramp (settle_stages) raises the stiffness at every check, geometrically from
-        // the stage's factor to ramp_to over ramp_steps (jumps of 16^(200 / ramp_steps), 1.06
-        // at scale 4); the stage may stop from the check after the last jump
+        // the stage's factor to ramp_to over ramp_steps (jumps of 16^(200 / ramp_steps): 1.15 at
+        // scale 4, 1.04 at scale 1); the stage may stop from the check after the last jump
         rule.min_steps = def.ramp_steps > 0 ? def.ramp_steps + 1 : 0;
         double stiffness_now = def.stiffness_factor;
         rule.on_check = [&](double t, long steps, double) {
