@@ -147,10 +147,8 @@ void World::scale_stiffness(double factor) {
         m.ks *= factor;
     }
     with_contact_law(def_.law, [&](auto law) {
-        using Law = decltype(law);
-        build_law_tables<Law>();
-        Law::fill_tables(tables<Law>(), def_.law_def<Law>());
-        refresh_dashpots_with<Law>();
+        build_law_tables<decltype(law)>();
+        refresh_dashpots_with<decltype(law)>();
     });
 }
 
@@ -230,8 +228,8 @@ void World::join_wall_ends() {
     }
 }
 
-// The chosen law's parameters per pair of materials and per material and wall, and the
-// stiffness a disc without contacts takes for its step.
+// The chosen law's parameters per pair of materials and per material and wall (with what the
+// law takes from its own keys), and the stiffness a disc without contacts takes for its step.
 template <typename Law>
 void World::build_law_tables() {
     const size_t nw = walls_.size(), nm = disc_materials_;
@@ -251,6 +249,7 @@ void World::build_law_tables() {
         default_k_tran_[m] = Law::default_k_tran(materials_[m].kn, materials_[m].ks);
         default_k_rot_[m] = Law::default_k_rot(materials_[m].kn, materials_[m].ks);
     }
+    Law::fill_tables(t, def_.law_def<Law>());
 }
 
 void World::finalize() {
@@ -274,11 +273,7 @@ void World::finalize() {
     for (size_t w = 0; w < nw; ++w)
         if (walls_[w].remove_at <= 0.0) wall_active_[w] = 0;
 
-    with_contact_law(def_.law, [&](auto law) {
-        using Law = decltype(law);
-        build_law_tables<Law>();
-        Law::fill_tables(tables<Law>(), def_.law_def<Law>());  // what the law takes from its own keys
-    });
+    with_contact_law(def_.law, [&](auto law) { build_law_tables<decltype(law)>(); });
     wall_reaction_.assign(n, Vec2::Zero());
     rr_factor_.assign(n, 0.0);
     if (def_.rotation.model >= 2 && def_.rotation.u_rr > 0.0)

@@ -253,10 +253,10 @@ struct SettleStage {
 // near its equilibrium while its overlaps shrink: geometry A's restiffening (after the same
 // compaction as "on"'s) at scale 8 6,600 -> 4,800 steps, at scale 4 15,200 -> 12,200, at scale
 // 2 33,200 -> 24,600. Over one period 5,800 and 13,400, over three 5,600 and 10,800 (scales 8
-// and 4): the counts move by a thousand or two with any change. In this stage more local damping (0.5, 0.7, 0.9) took 12,000, 19,400
-// and 65,600 steps at scale 4, less (0, 0.1, 0.2) 10,600-11,600; every velocity scaled by
-// 0.3-0.9 at each check (a viscous damping) kept the ratio above 10 times the settle ratio for
-// 150,000 steps: a frictionless mass settles by creeping into its gaps, and damping slows the
+// and 4): the counts move by a thousand or two with any change. In this stage more local
+// damping (0.5, 0.7, 0.9) took 12,000, 19,400 and 65,600 steps at scale 4, less (0, 0.1, 0.2)
+// 10,600-11,600; every velocity scaled by 0.3-0.9 at each check (a viscous damping) kept the
+// ratio above 10 times the settle ratio for 150,000 steps: a frictionless mass settles by creeping into its gaps, and damping slows the
 // creep. That stage being frictionless too, the compaction hands on at 20 times the settle
 // ratio: its tail's creep goes on under the ramp (at 10 times, the compaction's last 30,000 of
 // 81,800 steps at scale 1 took the ratio from 0.009 to 0.005). Settling steps against "on",
