@@ -256,13 +256,14 @@ struct SettleStage {
 // and 4): the counts move by a thousand or two with any change. In this stage more local
 // damping (0.5, 0.7, 0.9) took 12,000, 19,400 and 65,600 steps at scale 4, less (0, 0.1, 0.2)
 // 10,600-11,600; every velocity scaled by 0.3-0.9 at each check (a viscous damping) kept the
-// ratio above 10 times the settle ratio for 150,000 steps: a frictionless mass settles by creeping into its gaps, and damping slows the
-// creep. That stage being frictionless too, the compaction hands on at 20 times the settle
-// ratio: its tail's creep goes on under the ramp (at 10 times, the compaction's last 30,000 of
-// 81,800 steps at scale 1 took the ratio from 0.009 to 0.005). Settling steps against "on",
-// geometry A: scale 8 15,400 -> 10,800, scale 4 32,600 -> 25,400, scale 2 74,400 -> 55,800
-// (seeds 2 and 3: 76,800 -> 58,600 and 78,400 -> 60,200; at 10 times 65,800, 69,000 and
-// 73,000), porosity inside the mass 0.0003-0.0005 higher; scale 1 in docs/flume.md.
+// ratio above 10 times the settle ratio for 150,000 steps: a frictionless mass settles by
+// creeping into its gaps, and damping slows the creep. That stage being frictionless too,
+// the compaction hands on at 20 times the settle ratio: its tail's creep goes on under the
+// ramp (at 10 times, the compaction's last 30,000 of 81,800 steps at scale 1 took the ratio
+// from 0.009 to 0.005). Settling steps against "on", geometry A: scale 8 15,400 -> 10,800,
+// scale 4 32,600 -> 25,400, scale 2 74,400 -> 55,800 (seeds 2 and 3: 76,800 -> 58,600 and
+// 78,400 -> 60,200; at 10 times 65,800, 69,000 and 73,000), porosity inside the mass
+// 0.0003-0.0005 higher; scale 1 in docs/flume.md.
 //
 // The slowest mode (the mass' height ringing on its floor) shows in the ratio's oscillation: a
 // period of about 2,000 steps at scale 4 (9,101 discs) and 4,000 at scale 2 (36,404). In steps
