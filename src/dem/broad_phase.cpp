@@ -127,6 +127,10 @@ bool BroadPhase::may_touch(int32_t i, int32_t j) const {
     return gx * gx + gy * gy < reach * reach;
 }
 
+bool BroadPhase::pad_too_wide(size_t i, const Vec2& v, double dt) const {
+    return 2.0 * half_pad_[i] > kShrinkPadRatio * pad_for(v, dt);
+}
+
 double BroadPhase::pad_for(const Vec2& v, double dt) const {
     const double wanted = std::sqrt(v.norm() * dt * reach_length_);
     return wanted > margin_ ? std::min(wanted, kMaxMarginFactor * margin_) : margin_;  // NaN: the margin
@@ -324,7 +328,7 @@ bool BroadPhase::update(const std::vector<Vec2>& pos, const std::vector<double>&
         for (size_t i = 0; i < n; ++i)
             // a changed radius (World::set_radius) needs a new box and new candidates too
             if (!inside_fat_box(i, pos[i], radius[i]) || radius[i] != box_radius_[i] ||
-                (check_pads && half_pad_[i] > pad_for(vel ? (*vel)[i] : Vec2::Zero(), dt)))
+                (check_pads && pad_too_wide(i, vel ? (*vel)[i] : Vec2::Zero(), dt)))
                 escaped_list_.push_back(int32_t(i));
     if (escaped_list_.empty() && !any_wall) return false;
     // An update costs a pass over the candidate list whatever the number of escapes, so batch
@@ -332,15 +336,15 @@ bool BroadPhase::update(const std::vector<Vec2>& pos, const std::vector<double>&
     // kBatchPadUsed of its pad. The next update then waits until a disc moves the rest of its
     // pad, instead of coming on the next step for the next-fastest disc.
     if (!escaped_list_.empty()) {
-        // So is a disc whose pad is more than twice what its speed now asks for (it has slowed
-        // down; its box would keep candidates that cost a pass each step).
+        // So is a disc whose pad is more than kShrinkPadRatio times what its speed now asks
+        // for (it has slowed down; its box would keep candidates that cost a pass each step).
         for (size_t i = 0; i < n; ++i) {
             const Vec2 rr(radius[i], radius[i]);
             // the fat box less the unused part of the pad a disc may keep: (1 - used) * pad
             const double keep = 2.0 * (1.0 - kBatchPadUsed) * half_pad_[i];
             const Vec2 pad(keep, keep);
             if (!contains(fat_lo_[i] + pad, fat_hi_[i] - pad, pos[i] - rr, pos[i] + rr) ||
-                half_pad_[i] > pad_for(vel ? (*vel)[i] : Vec2::Zero(), dt))
+                pad_too_wide(i, vel ? (*vel)[i] : Vec2::Zero(), dt))
                 escaped_list_.push_back(int32_t(i));
         }
         std::sort(escaped_list_.begin(), escaped_list_.end());

@@ -19,6 +19,16 @@
 // disc a pad of one radius adds; L = kReachRadii r_min stands for (c_r / c_p) (r / beta),
 // measured on DB-9k (docs/performance.md). A still disc keeps the margin; a fast
 // one waits longer before it escapes. The candidates do not change any result (may_touch).
+// The pad is held to kMaxMarginFactor = 2 margins. c_p is not the same everywhere: once the
+// step's arrays outgrow the caches (the real sand size, 145,615 discs) a candidate costs a
+// miss. There the flow's fast discs (1 m/s) asked for pads that held 740,000-760,000
+// candidate pairs at 5 margins against 497,000 at 2 (168,000 of them touching; geometry A at
+// scale 1, t = 0.85 s), while the list updates took 7 % of the step at 5 margins and 10 % at
+// 2. At 2 margins that step ran faster, and DB-9k and the scale-4 flow no slower
+// (docs/performance.md).
+// A disc whose pad is more than kShrinkPadRatio times what its speed asks for is re-inserted
+// with the narrower pad at the next update (or the next pad check, World::step), so that a
+// mass come to rest goes back to the margin.
 //
 // Candidate pairs: every pair of discs (and disc-wall) whose fat boxes overlap, less the disc
 // pairs that cannot touch while both discs stay in their fat boxes (may_touch). The set is
@@ -68,8 +78,8 @@ public:
     // inside_fat_box() for every disc that moved).
     // vel, dt: the discs' velocities (m/s) and the step (s), for the re-inserted discs' pads
     // (nullptr: every pad is the margin). check_pads: also re-insert the discs whose pads are
-    // over twice what their speeds ask for, even if none escaped (a pile come to rest would
-    // otherwise keep the wide boxes, and their candidates, of its flow).
+    // over kShrinkPadRatio times what their speeds ask for, even if none escaped (a pile come
+    // to rest would otherwise keep the wide boxes, and their candidates, of its flow).
     bool update(const std::vector<Vec2>& pos, const std::vector<double>& radius,
                 const std::vector<WallGeom>& walls, const std::vector<uint8_t>& wall_active,
                 const std::vector<uint8_t>& wall_moving, bool discs_may_have_escaped = true,
@@ -77,7 +87,8 @@ public:
 
     // The speed rule's constants (see the top of this file).
     static constexpr double kReachRadii = 400.0;     // L / r_min
-    static constexpr double kMaxMarginFactor = 5.0;  // the largest pad, in margins
+    static constexpr double kMaxMarginFactor = 2.0;  // the largest pad, in margins
+    static constexpr double kShrinkPadRatio = 1.5;   // a pad wider than this times the asked one is shrunk
 
     // Is disc i (centre p, radius r) still inside its fat box? Thread-safe (read-only).
     bool inside_fat_box(size_t i, const Vec2& p, double r) const {
@@ -123,6 +134,7 @@ private:
     void query(const Vec2& lo, const Vec2& hi, std::vector<int32_t>& hits) const;
     bool may_touch(int32_t i, int32_t j) const;
     double pad_for(const Vec2& v, double dt) const;  // m, the speed rule's pad
+    bool pad_too_wide(size_t i, const Vec2& v, double dt) const;  // pad over kShrinkPadRatio times pad_for
     // the candidates of escaped discs escaped_list_[begin, end) into `out` (pairs sorted)
     struct QueryChunk {
         std::vector<int32_t> hits;
