@@ -23,9 +23,11 @@
 //
 // Each contact solves its own dashpot implicitly, as if its two bodies had no other dashpot:
 // exact for a pair or a disc on a wall; in a pack the other dashpots enter through u*. The
-// pass without integration has already applied the lagged forces (the law and the kernels
-// are the lagged scheme's); this pass adds the difference to the discs' sums, the walls'
-// records and the ledger, then the ranges integrate. Along the normal the effective mass is
+// force pass applies the lagged forces (the law and the kernels are the lagged scheme's);
+// behind it, block by block, each range adds the difference to the discs' sums, the walls'
+// records and the ledger, and integrates the block (force_pass.cpp, range_pass): a block is
+// centred once every disc its pairs reach has its sums, and integrated once its own discs
+// have every shift. Along the normal the effective mass is
 // m_i m_j / (m_i + m_j) (a wall's is infinite); along the tangent the contact point also
 // turns with each disc, 1/m = 1/m_i + 1/m_j + r_i^2/I_i + r_j^2/I_j (rotation free).
 //
@@ -79,7 +81,7 @@ inline DashpotShift shear_shift(double cs, double u_lag, double u_pred, double g
 // The discs' velocities at t - dt/2 and at t (v* from the pass' sums, gravity included), with
 // their inverse masses and inertias, one cache line per disc: the pairs then read two lines
 // where they read nine arrays (measured: the pairs' gathering was three quarters of the
-// centred pass).
+// centred pass). Their shifts' sums start from zero here, before any pair adds to them.
 void World::pack_centre_discs(size_t d0, size_t d1) {
     const double h = 0.5 * dt_;
     const bool rotation_free = def_.rotation.model != 1;
@@ -90,34 +92,58 @@ void World::pack_centre_discs(size_t d0, size_t d1) {
         centre_discs_[d] = CentreDisc{vel_[d].x(), vel_[d].y(), omega_[d], pv.x(), pv.y(),
                                       rotation_free ? omega_[d] + ld.torque * inv_inertia_[d] * h : 0.0,
                                       inv_mass_[d], inv_inertia_[d]};
+        dash_[d] = DashSum{};
     }
 }
 
-// One range's share (t): the shifts of its discs' contacts into dash_, in contact-list order
-// per disc, as a serial pass would add them: first the cross contacts whose second disc it
-// owns (their first disc lies in an earlier range, so they come first in the list), then its
-// own contacts (a cross contact's second disc is left to the range that owns it, which
-// computes the same shift again), then its wall contacts. The velocities at t are computed
-// where they are needed from the pass' sums, which nothing writes in this phase. The pairs go
-// through centre_lanes.h a block at a time: gathered in list order, computed lane by lane,
-// added in list order.
-bool World::centre_range(size_t tr, const PairPassParams& pp) {
-    const double dt = dt_;
-    const double h = 0.5 * dt;
-    const bool rotation_free = def_.rotation.model != 1;
+CentreConsts World::centre_consts(const PairPassParams& pp) const {
+    const DashpotMode mode = pp.mode;
+    const bool no_tension = mode == DashpotMode::NoTension || mode == DashpotMode::NoTensionNoShearWhileSliding;
+    const bool no_shear_sliding =
+        mode == DashpotMode::NoShearWhileSliding || mode == DashpotMode::NoTensionNoShearWhileSliding;
+    return CentreConsts{dt_, 0.5 * dt_, def_.rotation.model != 1, no_tension, no_shear_sliding};
+}
+
+// The step's arrays for the centred pass, sized before the ranges start (no allocation in
+// the ranges but a late share list's first growth).
+void World::prepare_centred_pass() {
+    const size_t r = size_t(force_ranges_);
+    touching_list_.resize(r);
+    touching_count_.assign(r, 0);
+    for (size_t t = 0; t < r; ++t) touching_list_[t].resize(contact_split_[t + 1] - contact_split_[t]);
+    dash_.resize(pos_.size());
+    centre_discs_.resize(pos_.size());
+    while (centre_blocks_.size() < r) centre_blocks_.push_back(std::make_unique<CentreBlock>());
+    late_shares_.resize(r);
+    dash_ok_.assign(r, 1);
+    cross_shift_.resize(cross_.size());
+    fuse_touching_end_.resize(fuse_blocks_.size());
+    fuse_sums_end_.resize(fuse_blocks_.size());
+}
+
+// Range t's touching pairs touching_list_[t][e0, e1), which the range's pass has listed and
+// whose discs it has packed. A disc adds its shifts in contact-list order, as a serial pass
+// over every pair would: first those of the cross contacts whose second disc it is (their
+// first disc lies in an earlier range, so they come first in the list), then its own pairs'.
+// So a share for a disc below late_end (the discs an earlier range's cross pairs reach) is
+// kept back in late_shares_ until the cross shifts are in (finish_late_discs); the others are
+// added now. A cross pair's second share goes to cross_shift_, for the range owning its disc.
+// The pairs go through centre_lanes.h a block at a time: gathered in list order, computed
+// lane by lane, added in list order.
+void World::centre_rows(size_t tr, const PairPassParams& pp, const CentreConsts& consts, size_t e0, size_t e1,
+                        size_t late_end, size_t& cross_cursor, bool prefetch) {
+    if (e0 >= e1) return;
     const Vec2* const pos = pos_.data();
     const double* const radius = radius_.data();
     const int32_t* const material = material_.data();
     DashSum* const dash = dash_.data();
     DiscContact* const dd = dd_.data();
-    const DashpotMode mode = pp.mode;
-    const bool no_tension = mode == DashpotMode::NoTension || mode == DashpotMode::NoTensionNoShearWhileSliding;
-    const bool no_shear_sliding =
-        mode == DashpotMode::NoShearWhileSliding || mode == DashpotMode::NoTensionNoShearWhileSliding;
-    const CentreConsts consts{dt, h, rotation_free, no_tension, no_shear_sliding};
+    const size_t d1 = disc_split_[tr + 1];
+    const uint64_t pass = cross_pass_;
+    std::vector<LateShare>& late = late_shares_[tr];
     CentreBlock& b = *centre_blocks_[tr];
     const CentreDisc* const cd = centre_discs_.data();
-    // a candidate pair into the block, kept if it touches
+    // a listed pair into the block, kept if it touches
     auto gather = [&](const DiscContact& c, size_t k) {
         const size_t i = size_t(c.i), j = size_t(c.j);
         const Vec2 dx = pos[j] - pos[i];
@@ -153,92 +179,109 @@ bool World::centre_range(size_t tr, const PairPassParams& pp) {
         b.i[l] = int32_t(i);
         b.j[l] = int32_t(j);
     };
-    const size_t d0 = disc_split_[tr], d1 = disc_split_[tr + 1];
-    std::fill(dash + d0, dash + d1, DashSum{});
-    // the cross contacts into this range: their second disc's share, and the cross copies
-    auto add_cross_in = [&]() {
-        centre_block(b, consts, avx2_, avx512_);
+    auto add = [&]() {
         for (size_t l = 0; l < b.count; ++l) {
-            DashSum& dj = dash[size_t(b.j[l])];
-            dj.force += Vec2(b.fx[l], b.fy[l]);
-            dj.torque += b.torque_j[l];
-            dj.dissipated += 0.5 * b.dissipated[l];
-            // the cross contact's own copy, which the next pass reads (force_pass.cpp)
-            if (!cross_copies_stale_) {
-                DiscContact& copy = cross_dd_[b.contact[l]];
-                copy.damp_n = float(b.damp_n[l]);
-                copy.damp_s = float(b.damp_s[l]);
-            }
-        }
-        b.count = 0;
-    };
-    // own contacts: both discs' shares (a cross contact's second disc is another range's)
-    auto add_own_computed = [&]() {
-        for (size_t l = 0; l < b.count; ++l) {
-            DiscContact& c = dd[b.contact[l]];
+            const size_t k = b.contact[l];
+            DiscContact& c = dd[k];
             c.damp_n = float(b.damp_n[l]);
             c.damp_s = float(b.damp_s[l]);
-            const Vec2 f(b.fx[l], b.fy[l]);
-            DashSum& di = dash[size_t(b.i[l])];
-            di.force -= f;
-            di.torque += b.torque_i[l];
-            di.dissipated += 0.5 * b.dissipated[l];
-            if (size_t(b.j[l]) >= d1) continue;
-            DashSum& dj = dash[size_t(b.j[l])];
-            dj.force += f;
+            const size_t i = size_t(b.i[l]), j = size_t(b.j[l]);
+            const double fx = b.fx[l], fy = b.fy[l];
+            if (j >= d1) {  // a cross contact: its second share is the range owning j's
+                while (size_t(cross_[cross_cursor]) < k) ++cross_cursor;
+                cross_shift_[cross_cursor] = CrossShift{fx, fy, b.torque_j[l], b.dissipated[l], pass};
+                // the contact's own copy, which the owning range's next pass reads (force_pass.cpp)
+                if (!cross_copies_stale_) {
+                    DiscContact& copy = cross_dd_[size_t(cross_pos_[cross_cursor])];
+                    copy.damp_n = float(b.damp_n[l]);
+                    copy.damp_s = float(b.damp_s[l]);
+                }
+            }
+            if (i < late_end) {
+                late.push_back(LateShare{int32_t(i), int32_t(j), fx, fy, b.torque_i[l], b.torque_j[l], b.dissipated[l]});
+                if (j < late_end || j >= d1) continue;
+            } else {
+                DashSum& di = dash[i];
+                di.force -= Vec2(fx, fy);
+                di.torque += b.torque_i[l];
+                di.dissipated += 0.5 * b.dissipated[l];
+                if (j >= d1) continue;
+            }
+            DashSum& dj = dash[j];
+            dj.force += Vec2(fx, fy);
             dj.torque += b.torque_j[l];
             dj.dissipated += 0.5 * b.dissipated[l];
         }
         b.count = 0;
     };
-    auto add_own = [&]() {
-        centre_block(b, consts, avx2_, avx512_);
-        add_own_computed();
-    };
+    const CentreConsts& k = consts;
     b.count = 0;
-    if (force_ranges_ > 1) {
-        for (int32_t e = cross_in_start_[tr]; e < cross_in_start_[tr + 1]; ++e) {
-            gather(dd[size_t(cross_[size_t(cross_in_[size_t(e)])])], size_t(e));
-            if (b.count == CentreBlock::kSize) add_cross_in();
-        }
-        if (b.count > 0) add_cross_in();
-    }
-    // the pass listed its touching pairs (its own and its cross ones, in list order): the
-    // others add nothing, and testing every candidate here cost more than the shifts
     const uint32_t* const touching = touching_list_[tr].data();
-    const size_t n_touching = touching_count_[tr];
     if (avx2_) {
         // gathered into lanes a block at a time (centre_wide.h); the same bits
         static_assert(sizeof(CentreDisc) == 64 && alignof(CentreDisc) == 64, "one aligned row of eight doubles");
         // (the arrays as raw doubles without a member call: a world without discs has none)
         static_assert(sizeof(Vec2) == 2 * sizeof(double), "(x, y) side by side");
         const CentrePairArrays arrays{reinterpret_cast<const double*>(pos_.data()), radius, material, pp.materials,
-                                      pp.n_materials, dd, reinterpret_cast<const double*>(cd), prefetching()};
-        for (size_t e = 0; e < n_touching; e += CentreBlock::kSize) {
-            const size_t n = std::min(CentreBlock::kSize, n_touching - e);
-            const bool done = avx512_ ? centre_touching_avx512(arrays, touching + e, n, b, consts)
-                                      : centre_touching_avx2(arrays, touching + e, n, b, consts);
+                                      pp.n_materials, dd, reinterpret_cast<const double*>(cd), prefetch};
+        for (size_t e = e0; e < e1; e += CentreBlock::kSize) {
+            const size_t n = std::min(CentreBlock::kSize, e1 - e);
+            const bool done = avx512_ ? centre_touching_avx512(arrays, touching + e, n, b, k)
+                                      : centre_touching_avx2(arrays, touching + e, n, b, k);
             if (!done) {  // a listed pair that does not touch: the scalar gather leaves it out
                 for (size_t x = e; x < e + n; ++x) gather(dd[touching[x]], touching[x]);
-                centre_block(b, consts, avx2_, avx512_);
+                centre_block(b, k, avx2_, avx512_);
             }
-            add_own_computed();
+            add();
         }
-        return centre_walls(tr, consts);
+        return;
     }
-    for (size_t e = 0; e < n_touching; ++e) {
-        const size_t k = touching[e];
-        gather(dd[k], k);
-        if (b.count == CentreBlock::kSize) add_own();
+    for (size_t e = e0; e < e1; ++e) {
+        gather(dd[touching[e]], touching[e]);
+        if (b.count == CentreBlock::kSize) {
+            centre_block(b, k, avx2_, avx512_);
+            add();
+        }
     }
-    if (b.count > 0) add_own();
-    return centre_walls(tr, consts);
+    if (b.count > 0) {
+        centre_block(b, k, avx2_, avx512_);
+        add();
+    }
 }
 
-// One range's wall contacts (centre_range's last share): their shifts into dash_ and their
-// records (WallSum: one per touching contact, in list order, among those of open contacts
-// that still dissipate). False: a touching contact without its record.
-bool World::centre_walls(size_t tr, const CentreConsts& k) {
+// Range t's discs below its late end: first the cross shifts into them (cross_in_ order, their
+// list order), then the shares kept back, in list order.
+void World::finish_late_discs(size_t tr) {
+    DashSum* const dash = dash_.data();
+    const uint64_t pass = cross_pass_;
+    for (int32_t e = cross_in_start_[tr]; e < cross_in_start_[tr + 1]; ++e) {
+        const CrossShift& s = cross_shift_[size_t(cross_in_[size_t(e)])];
+        if (s.pass != pass) continue;  // not touching
+        DashSum& dj = dash[size_t(cross_dd_[size_t(e)].j)];
+        dj.force += Vec2(s.fx, s.fy);
+        dj.torque += s.torque_j;
+        dj.dissipated += 0.5 * s.dissipated;
+    }
+    const size_t late_end = cross_in_reach_[tr];
+    for (const LateShare& s : late_shares_[tr]) {
+        DashSum& di = dash[size_t(s.i)];
+        di.force -= Vec2(s.fx, s.fy);
+        di.torque += s.torque_i;
+        di.dissipated += 0.5 * s.dissipated;
+        if (size_t(s.j) >= late_end) continue;  // added already (or another range's)
+        DashSum& dj = dash[size_t(s.j)];
+        dj.force += Vec2(s.fx, s.fy);
+        dj.torque += s.torque_j;
+        dj.dissipated += 0.5 * s.dissipated;
+    }
+    late_shares_[tr].clear();
+}
+
+// Wall contacts dw_[kw0, kw1) of range t (the last shifts of their discs): their shifts into
+// dash_ and their records (WallSum: one per touching contact, in list order, among those of
+// open contacts that still dissipate), from sums[e] on. False: a touching contact without
+// its record.
+bool World::centre_walls(size_t tr, const CentreConsts& k, size_t kw0, size_t kw1, size_t& e) {
     const double dt = k.dt, h = k.half_dt;
     const bool rotation_free = k.rotation_free, no_tension = k.no_tension, no_shear_sliding = k.no_shear_sliding;
     const Vec2 g = def_.gravity;
@@ -257,8 +300,7 @@ bool World::centre_walls(size_t tr, const CentreConsts& k) {
     const auto& table = tables<LinearLaw>();
     WallSum* const sums = wall_sums_[tr].data();
     const size_t n_sums = range_clock_[tr].wall_sums;
-    size_t e = 0;
-    for (size_t kw = wall_split_[tr]; kw < wall_split_[tr + 1]; ++kw) {
+    for (size_t kw = kw0; kw < kw1; ++kw) {
         WallContact& c = dw_[kw];
         const size_t i = size_t(c.disc), w = size_t(c.wall);
         WallHit hit;
@@ -298,46 +340,18 @@ bool World::centre_walls(size_t tr, const CentreConsts& k) {
     return true;
 }
 
-// The shifts of every range (centre_range), then every range's discs: their shifts added to
-// their sums and integrated block by block as the fused pass does (the same chunks, so the
-// same ledger blocks and notes). Two phases: no disc moves while a range still reads it.
-void World::centre_dashpots(const PairPassParams& pp, const IntegrateConsts& ic) {
-    dash_.resize(pos_.size());
-    while (centre_blocks_.size() < size_t(force_ranges_)) centre_blocks_.push_back(std::make_unique<CentreBlock>());
-    const bool avx2 = avx2_integration();
-    auto integrate_range = [&](int t) {
-        const size_t tr = size_t(t);
-        range_clock_[tr].touching_dd = 0;
-        DiscLoad* const load = load_.data();
-        const DashSum* const dash = dash_.data();
-        size_t b0 = disc_split_[tr];
-        for (size_t fbi = fuse_start_[tr]; fbi < fuse_start_[tr + 1]; ++fbi) {
-            const size_t b1 = fuse_blocks_[fbi].disc_end;
-            for (size_t d = b0; d < b1; ++d) {
-                load[d].force += dash[d].force;
-                load[d].torque += dash[d].torque;
-                load[d].dissipated += dash[d].dissipated;
-            }
-            if (!avx2) block_ledger(b0, b1, tr);
-            integrate_discs(b0, b1, t, ic);
-            b0 = b1;
-        }
-    };
-    // (a wall contact without its record would be a bug of the pass: stop, naming it)
-    const char* const missing = "internal: a wall contact's record is missing (centred dashpots)";
-    centre_discs_.resize(pos_.size());
-    if (force_ranges_ == 1) {
-        pack_centre_discs(0, pos_.size());
-        if (!centre_range(0, pp)) throw RunError(missing);
-        integrate_range(0);
-        return;
+// Discs [b0, b1) of range t, their shifts complete: added to their sums, then integrated as
+// the fused pass does (the same ledger blocks and notes).
+void World::integrate_centred(size_t b0, size_t b1, int t, const IntegrateConsts& ic) {
+    DiscLoad* const load = load_.data();
+    const DashSum* const dash = dash_.data();
+    for (size_t d = b0; d < b1; ++d) {
+        load[d].force += dash[d].force;
+        load[d].torque += dash[d].torque;
+        load[d].dissipated += dash[d].dissipated;
     }
-    dash_ok_.resize(size_t(force_ranges_));
-    pool_->for_each_thread([&](int t) { pack_centre_discs(disc_split_[size_t(t)], disc_split_[size_t(t) + 1]); });
-    pool_->for_each_thread([&](int t) { dash_ok_[size_t(t)] = centre_range(size_t(t), pp) ? 1 : 0; });
-    for (const uint8_t ok : dash_ok_)
-        if (!ok) throw RunError(missing);
-    pool_->for_each_thread(integrate_range);
+    if (!avx2_integration()) block_ledger(b0, b1, size_t(t));
+    integrate_discs(b0, b1, t, ic);
 }
 
 }  // namespace demlab

@@ -163,7 +163,7 @@ void World::compute_forces_with(bool then_integrate) {
     const PassContext<Law> ctx{DiscArrays{pos_.data(), vel_.data(), radius_.data(), omega_.data(), material_.data()},
                           PairPassParamsT<typename Law::Params>{tables<Law>().disc_disc.data(), disc_materials_,
                                                                 def_.damping.dp_mode, dt_, last_dt_, def_.max_overlap_ratio},
-                          fused ? integrate_prepare() : IntegrateConsts{},
+                          then_integrate ? integrate_prepare() : IntegrateConsts{},
                           fused,
                           prefetching(),
                           ++cross_pass_,
@@ -171,11 +171,7 @@ void World::compute_forces_with(bool then_integrate) {
                           round_down_float(approach_),
                           round_up_float(approach_),
                           centred};
-    if (centred) {
-        touching_list_.resize(size_t(force_ranges_));
-        touching_count_.assign(size_t(force_ranges_), 0);
-        for (size_t r = 0; r < size_t(force_ranges_); ++r) touching_list_[r].resize(contact_split_[r + 1] - contact_split_[r]);
-    }
+    if (centred) prepare_centred_pass();
     if (!bonds_.empty()) compute_bond_forces();
     if (force_ranges_ == 1) {
         range_pass<Law>(0, ctx);
@@ -198,10 +194,10 @@ void World::compute_forces_with(bool then_integrate) {
             if (f.index != SIZE_MAX && (!first || f.index < first->index)) first = &f;
         if (first) throw RunError(first->message);
     }
-    if constexpr (Law::kCentredDashpots)
-        if (centred) {
-            centre_dashpots(ctx.pp, integrate_prepare());
-        }
+    // (a wall contact without its record would be a bug of the pass: stop, naming it)
+    if (centred)
+        for (const uint8_t ok : dash_ok_)
+            if (!ok) throw RunError("internal: a wall contact's record is missing (centred dashpots)");
     add_up_pass();
     if (!bonds_.empty()) {
         book_bond_dashpots();
@@ -285,11 +281,15 @@ void World::compute_cross_contacts(size_t t, const PassContext<Law>& ctx) {
 // short spin, as the pool does: with more threads than free cores the range it waits for may
 // need this core.
 double World::wait_for_cross(size_t t, uint64_t pass) const {
+    return wait_for(cross_done_.get(), t + 1, size_t(force_ranges_), pass);
+}
+
+double World::wait_for(const CrossDone* flags, size_t u0, size_t u1, uint64_t pass) {
     double waited = 0.0;
-    for (size_t u = t + 1; u < size_t(force_ranges_); ++u) {
-        if (cross_done_[u].pass.load(std::memory_order_acquire) == pass) continue;
+    for (size_t u = u0; u < u1; ++u) {
+        if (flags[u].pass.load(std::memory_order_acquire) == pass) continue;
         const auto w0 = std::chrono::steady_clock::now();
-        for (unsigned polls = 1; cross_done_[u].pass.load(std::memory_order_acquire) != pass; ++polls) {
+        for (unsigned polls = 1; flags[u].pass.load(std::memory_order_acquire) != pass; ++polls) {
             if (polls < 2048)
                 DEMLAB_CPU_RELAX();
             else
@@ -336,7 +336,7 @@ void World::range_pass(int t, const PassContext<Law>& ctx) {
     PairBatch* const batch = Law::kWideKernels && avx2_ ? &pair_batch_[tr] : nullptr;
     PairSkip skip_base{nullptr, ctx.approach_lo, ctx.approach_hi};
     range_clock_[tr].touching_dd = 0;
-    uint32_t* const touching_list = ctx.list_touching ? touching_list_[tr].data() : nullptr;
+    uint32_t* const touching_list = ctx.centred ? touching_list_[tr].data() : nullptr;
     size_t n_touching = 0;
     WallSum* const wall_sums = wall_sums_[tr].data();
     size_t n_wall_sums = 0;
@@ -369,6 +369,50 @@ void World::range_pass(int t, const PassContext<Law>& ctx) {
             prefetch_lines<false>(broad_.fat_lo_data() + a, broad_.fat_lo_data() + d_to);
             prefetch_lines<false>(broad_.fat_hi_data() + a, broad_.fat_hi_data() + d_to);
             asked_d = d_to;
+        }
+    };
+    // Centred dashpots: the range's blocks are packed as their sums complete, centred once
+    // every disc their pairs reach is packed, then integrated while their lines are still in
+    // the cache (one pass over the step's data, no join between the phases). The discs below
+    // the late end get cross shifts from earlier ranges, which come first in their order:
+    // their blocks finish last (finish_late_discs).
+    const size_t fb_first = fuse_start_[tr], fb_end = fuse_start_[tr + 1];
+    const size_t late_end = tr > 0 ? cross_in_reach_[tr] : d0;
+    size_t next_centre = fb_first, packed = d0, cross_cursor = cross_start_[tr];
+    const size_t first_cross_k = cross_start_[tr] < cross_start_[tr + 1] ? size_t(cross_[cross_start_[tr]]) : SIZE_MAX;
+    bool packed_told = !ctx.centred || tr == 0, later_packed = false;
+    auto tell_packed = [&]() {
+        if (packed_told || packed < late_end) return;
+        centre_packed_[tr].pass.store(ctx.pass, std::memory_order_release);
+        packed_told = true;
+    };
+    tell_packed();  // (no earlier range's cross pair reaches this range)
+    [[maybe_unused]] CentreConsts centre_k{};
+    if constexpr (Law::kCentredDashpots)
+        if (ctx.centred) centre_k = centre_consts(ctx.pp);
+    auto block_start = [&](size_t c) { return c == fb_first ? d0 : fuse_blocks_[c - 1].disc_end; };
+    auto block_walls = [&](size_t c, size_t& e) {
+        e = c == fb_first ? 0 : fuse_sums_end_[c - 1];
+        const size_t kw0 = c == fb_first ? wall_split_[tr] : fuse_blocks_[c - 1].wall_end;
+        if (!centre_walls(tr, centre_k, kw0, fuse_blocks_[c].wall_end, e)) dash_ok_[tr] = 0;
+    };
+    auto centre_up_to = [&](size_t c_end) {
+        if constexpr (Law::kCentredDashpots) {
+            for (; next_centre < c_end && fuse_blocks_[next_centre].reach <= packed; ++next_centre) {
+                const size_t c = next_centre;
+                if (fuse_blocks_[c].contact_end > first_cross_k && !later_packed) {
+                    // its cross pairs read the later ranges' first discs: packed, not yet moved
+                    waited += wait_for(centre_packed_.get(), tr + 1, size_t(force_ranges_), ctx.pass);
+                    later_packed = true;
+                }
+                centre_rows(tr, ctx.pp, centre_k, c == fb_first ? 0 : fuse_touching_end_[c - 1], fuse_touching_end_[c],
+                            late_end, cross_cursor, ctx.prefetch);
+                if (block_start(c) < late_end) continue;  // finished after the cross shifts
+                size_t e = 0;
+                block_walls(c, e);
+                if (dd_fault_[tr].index == SIZE_MAX && dw_fault_[tr].index == SIZE_MAX)
+                    integrate_centred(block_start(c), fuse_blocks_[c].disc_end, t, ctx.ic);
+            }
         }
     };
     for (size_t fbi = fuse_start_[tr]; fbi < fuse_start_[tr + 1]; ++fbi) {
@@ -425,6 +469,17 @@ void World::range_pass(int t, const PassContext<Law>& ctx) {
         // but goes on with its pairs (the pass then throws the first fault in list order,
         // whatever the blocks and ranges).
         const size_t b1 = fb.disc_end;
+        if (ctx.centred) {
+            fuse_touching_end_[fbi] = n_touching;
+            fuse_sums_end_[fbi] = n_wall_sums;
+            range_clock_[tr].wall_sums = n_wall_sums;  // (centre_walls reads it)
+            pack_centre_discs(b0, b1);
+            packed = b1;
+            tell_packed();
+            centre_up_to(fbi + 1);
+            b0 = b1;
+            continue;
+        }
         const bool integrate =
             ctx.then_integrate && dd_fault_[tr].index == SIZE_MAX && dw_fault_[tr].index == SIZE_MAX;
         // the AVX2 integration adds up the block's ledger terms as it goes
@@ -434,6 +489,21 @@ void World::range_pass(int t, const PassContext<Law>& ctx) {
     }
     range_clock_[tr].wall_sums = n_wall_sums;
     if (touching_list) touching_count_[tr] = n_touching;
+    if (ctx.centred) {
+        centre_up_to(fb_end);  // (every block's reach is packed now)
+        // every range tells, so that a range waits for all earlier (or later) ones alike
+        centre_shifted_[tr].pass.store(ctx.pass, std::memory_order_release);
+        if (late_end > d0) {
+            waited += wait_for(centre_shifted_.get(), 0, tr, ctx.pass);
+            finish_late_discs(tr);
+            const bool integrate = dd_fault_[tr].index == SIZE_MAX && dw_fault_[tr].index == SIZE_MAX;
+            for (size_t c = fb_first; c < fb_end && block_start(c) < late_end; ++c) {
+                size_t e = 0;
+                block_walls(c, e);
+                if (integrate) integrate_centred(block_start(c), fuse_blocks_[c].disc_end, t, ctx.ic);
+            }
+        }
+    }
     const double busy = std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count() - waited;
     range_clock_[tr].seconds += busy;
     range_clock_[tr].last = busy;

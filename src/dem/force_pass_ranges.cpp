@@ -103,6 +103,8 @@ void World::cut_ranges(size_t r) {
     cross_copies_stale_ = true;
     if (cross_done_size_ < r) {
         cross_done_ = std::make_unique<CrossDone[]>(r);  // a new array: no pass is marked done
+        centre_packed_ = std::make_unique<CrossDone[]>(r);
+        centre_shifted_ = std::make_unique<CrossDone[]>(r);
         cross_done_size_ = r;
     }
 

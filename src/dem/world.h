@@ -336,7 +336,8 @@ private:
         bool prefetch;
         uint64_t pass;                    // this pass' number (the cross contacts' flags)
         float approach_lo, approach_hi;   // the clearance test's bound (PairSkip)
-        bool list_touching;               // list each range's touching pairs (centred dashpots)
+        bool centred;                     // centred dashpots: each range centres and integrates its
+                                          // blocks behind its pass (centred_dashpots.cpp)
     };
     struct WallSum;
     template <typename Law>
@@ -344,24 +345,51 @@ private:
     template <typename Law>
     void compute_cross_contacts(size_t t, const PassContext<Law>& ctx);
     double wait_for_cross(size_t t, uint64_t pass) const;
+    struct CrossDone;
+    // s spent until flags[u0, u1) all hold this pass
+    static double wait_for(const CrossDone* flags, size_t u0, size_t u1, uint64_t pass);
     template <typename Law>
     size_t wall_contacts(size_t& kw, size_t end, int t, const PassContext<Law>& ctx, WallSum* sums, size_t n);
     void block_ledger(size_t b0, size_t b1, size_t t);
-    // centred dashpots (centred_dashpots.cpp): after a pass without integration, each touching
-    // contact's dashpot force moved to the step's centre, then every range integrated
+    // centred dashpots (centred_dashpots.cpp): each touching contact's dashpot force moved to
+    // the step's centre, block by block behind the range's pass, then the block integrated
     bool centred_dashpots() const;
     // the law applies its friction per disc in the integrator (DebrisLaw: integrate_debris.cpp)
     bool disc_friction() const { return with_contact_law(def_.law, [](auto law) { return decltype(law)::kDiscFriction; }); }
-    void centre_dashpots(const PairPassParams& pp, const IntegrateConsts& ic);
-    bool centre_range(size_t t, const PairPassParams& pp);  // false: a wall contact's record is missing
-    bool centre_walls(size_t t, const CentreConsts& k);     // centre_range's wall contacts
+    void prepare_centred_pass();
+    CentreConsts centre_consts(const PairPassParams& pp) const;
+    // range t's touching pairs touching_list_[t][e0, e1): their shifts into dash_ (or, for the
+    // discs below late_end, into late_shares_[t]; a cross pair's second share into cross_shift_)
+    void centre_rows(size_t t, const PairPassParams& pp, const CentreConsts& k, size_t e0, size_t e1, size_t late_end,
+                     size_t& cross_cursor, bool prefetch);
+    // range t's wall contacts dw_[kw0, kw1): their shifts into dash_ and their records from
+    // wall_sums_[t][e] on; false: a touching contact without its record
+    bool centre_walls(size_t t, const CentreConsts& k, size_t kw0, size_t kw1, size_t& e);
+    void finish_late_discs(size_t t);  // the cross shifts into range t, then its late shares
+    void integrate_centred(size_t b0, size_t b1, int t, const IntegrateConsts& ic);
     struct DashSum {  // a disc's shifts, added to its sums before it moves
         Vec2 force{0.0, 0.0};    // N/m
         double torque = 0.0;     // N m/m
         double dissipated = 0.0; // J/m
     };
     std::vector<DashSum> dash_;
-    std::vector<uint8_t> dash_ok_;  // per range: centre_range's result
+    std::vector<uint8_t> dash_ok_;  // per range: 0 once a wall contact's record was missing
+    // A pair's shares kept back for discs that also get cross shifts, which come first in
+    // their order (a disc adds its shifts in contact-list order, as the sums)
+    struct LateShare {
+        int32_t i, j;
+        double fx, fy;                // N, on j (i gets the opposite)
+        double torque_i, torque_j;    // N m
+        double dissipated;            // J
+    };
+    std::vector<std::vector<LateShare>> late_shares_;  // per range
+    struct CrossShift {  // a touching cross contact's share for its second disc
+        double fx, fy, torque_j, dissipated;
+        uint64_t pass;  // the pass that computed it
+    };
+    std::vector<CrossShift> cross_shift_;    // per cross contact (cross_ order)
+    std::vector<size_t> fuse_touching_end_;  // per FuseBlock: its range's touching pairs so far
+    std::vector<size_t> fuse_sums_end_;      // per FuseBlock: its range's wall records so far
     std::vector<std::unique_ptr<CentreBlock>> centre_blocks_;
     struct alignas(64) CentreDisc {
         double vx, vy, w;         // m/s, rad/s at t - dt/2
@@ -373,7 +401,7 @@ private:
     // list order, so that the centre pass reads only those
     std::vector<std::vector<uint32_t>> touching_list_;
     std::vector<size_t> touching_count_;
-    void pack_centre_discs(size_t d0, size_t d1);  // per range: its pairs' lanes (centre_lanes.h)
+    void pack_centre_discs(size_t d0, size_t d1);  // their pairs' lanes (centre_lanes.h); dash_ zeroed
     void add_up_pass();
     void copy_cross_contacts();
     void note_disc_fault(size_t k, double overlap, int chunk);
@@ -545,6 +573,10 @@ private:
         std::atomic<uint64_t> pass{0};
     };
     std::unique_ptr<CrossDone[]> cross_done_;
+    // per range, with centred dashpots: the last pass whose discs below cross_in_reach_ are
+    // packed (earlier ranges' cross pairs read them), and whose cross pairs' shifts are in
+    // cross_shift_ (later ranges add them)
+    std::unique_ptr<CrossDone[]> centre_packed_, centre_shifted_;
     size_t cross_done_size_ = 0;
     uint64_t cross_pass_ = 0;
     // measured balance of the ranges (balance_force_pass)
