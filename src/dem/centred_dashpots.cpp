@@ -109,7 +109,6 @@ CentreConsts World::centre_consts(const PairPassParams& pp) const {
 void World::prepare_centred_pass() {
     const size_t r = size_t(force_ranges_);
     touching_list_.resize(r);
-    touching_count_.assign(r, 0);
     for (size_t t = 0; t < r; ++t) touching_list_[t].resize(contact_split_[t + 1] - contact_split_[t]);
     dash_.resize(pos_.size());
     centre_discs_.resize(pos_.size());
@@ -130,7 +129,7 @@ void World::prepare_centred_pass() {
 // added now. A cross pair's second share goes to cross_shift_, for the range owning its disc.
 // The pairs go through centre_lanes.h a block at a time: gathered in list order, computed
 // lane by lane, added in list order.
-void World::centre_rows(size_t tr, const PairPassParams& pp, const CentreConsts& consts, size_t e0, size_t e1,
+void World::centre_rows(size_t tr, const PairPassParams& pp, const CentreConsts& k, size_t e0, size_t e1,
                         size_t late_end, size_t& cross_cursor, bool prefetch) {
     if (e0 >= e1) return;
     const Vec2* const pos = pos_.data();
@@ -214,7 +213,6 @@ void World::centre_rows(size_t tr, const PairPassParams& pp, const CentreConsts&
         }
         b.count = 0;
     };
-    const CentreConsts& k = consts;
     b.count = 0;
     const uint32_t* const touching = touching_list_[tr].data();
     if (avx2_) {

@@ -488,7 +488,6 @@ void World::range_pass(int t, const PassContext<Law>& ctx) {
         b0 = b1;
     }
     range_clock_[tr].wall_sums = n_wall_sums;
-    if (touching_list) touching_count_[tr] = n_touching;
     if (ctx.centred) {
         centre_up_to(fb_end);  // (every block's reach is packed now)
         // every range tells, so that a range waits for all earlier (or later) ones alike

@@ -400,7 +400,6 @@ private:
     // per range: the pass' touching pairs among its contacts (its own and its cross ones), in
     // list order, so that the centre pass reads only those
     std::vector<std::vector<uint32_t>> touching_list_;
-    std::vector<size_t> touching_count_;
     void pack_centre_discs(size_t d0, size_t d1);  // their pairs' lanes (centre_lanes.h); dash_ zeroed
     void add_up_pass();
     void copy_cross_contacts();
