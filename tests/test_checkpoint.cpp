@@ -37,9 +37,10 @@ namespace {
 const std::vector<std::string> kOverrides = {"release.scale=20", "stop.t_max=1.2", "output.snapshot_interval=0.2",
                                              "output.track=[5, 200]", "output.force_history_steps=50"};
 
-Scenario scenario() {
+Scenario scenario(const std::vector<std::string>& more = {}) {
     Scenario s = load_scenario(std::string(DEMLAB_SOURCE_DIR) + "/scenarios/geometry-A.toml");
     for (const std::string& a : kOverrides) apply_override(s, a);
+    for (const std::string& a : more) apply_override(s, a);
     finish_scenario(s);
     return s;
 }
@@ -148,6 +149,27 @@ TEST(Checkpoint, ResumedRunIsByteIdentical) {
 
     const RunSummary r = demlab::test::resume_run(cut, 2);
     EXPECT_NEAR(r.t_end, 1.2, 1e-4);
+    expect_same_outputs(ref, cut);
+    fs::remove_all(ref);
+    fs::remove_all(cut);
+}
+
+// The same with the discs renumbered in space order every 2,000 steps (world.space_order = on;
+// geometry A at scale 20 is below auto's threshold): the checkpoint falls between two
+// renumberings, holds the discs' order, and the resume renumbers at the same steps.
+TEST(Checkpoint, RenumberedRunResumesToTheSameBytes) {
+    const Scenario s = scenario({"world.space_order=on", "world.space_order_steps=2000"});
+    const fs::path ref = temp_dir("ck-order-ref"), cut = temp_dir("ck-order-cut");
+    const RunSummary whole = run_scenario(s, {ref.string(), false, {}});
+    EXPECT_GT(whole.space_orderings, 10);
+    RunOptions ro{cut.string(), false, [](const std::string&, const std::string&, int index) {
+                      if (index == 2) request_interrupt(SIGTERM);
+                  }};
+    ro.handle_signals = true;
+    EXPECT_THROW(run_scenario(s, ro), Interrupted);
+    ASSERT_TRUE(fs::exists(cut / kCheckpointFile));
+    const RunSummary r = demlab::test::resume_run(cut, 2);
+    EXPECT_EQ(r.space_orderings, whole.space_orderings);
     expect_same_outputs(ref, cut);
     fs::remove_all(ref);
     fs::remove_all(cut);

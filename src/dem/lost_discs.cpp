@@ -17,6 +17,7 @@
 namespace demlab {
 
 long World::disc_index(long id) const {
+    if (!ids_in_order_) return id >= 0 && size_t(id) < index_of_id_.size() ? index_of_id_[size_t(id)] : -1;
     const auto it = std::lower_bound(id_.begin(), id_.end(), int32_t(id));
     return it != id_.end() && *it == id ? long(it - id_.begin()) : -1;
 }
@@ -41,45 +42,66 @@ void World::take_out_lost_discs() {
 
 void World::compact_discs(const std::vector<size_t>& gone) {
     const size_t n = pos_.size();
-    std::vector<int32_t> to(n, 0);
-    for (size_t i : gone) to[i] = -1;
-    int32_t next = 0;
+    std::vector<uint8_t> lost(n, 0);
+    for (size_t i : gone) lost[i] = 1;
+    std::vector<int32_t> from;
+    from.reserve(n - gone.size());
     for (size_t i = 0; i < n; ++i)
-        if (to[i] == 0) to[i] = next++;
-        else to[i] = -1;
-    auto squeeze = [&](auto& v) {
-        size_t o = 0;
-        for (size_t i = 0; i < n; ++i)
-            if (to[i] >= 0) v[o++] = v[i];
-        v.resize(o);
+        if (!lost[i]) from.push_back(int32_t(i));
+    remap_discs(from);
+}
+
+void World::remap_discs(const std::vector<int32_t>& from) {
+    const size_t n = pos_.size();
+    std::vector<int32_t> to(n, -1);
+    for (size_t k = 0; k < from.size(); ++k) to[size_t(from[k])] = int32_t(k);
+    auto remap = [&](auto& v) {
+        auto old = std::move(v);
+        v.resize(from.size());
+        for (size_t k = 0; k < from.size(); ++k) v[k] = old[size_t(from[k])];
     };
-    squeeze(pos_);
-    squeeze(vel_);
-    squeeze(radius_);
-    squeeze(mass_);
-    squeeze(inv_mass_);
-    squeeze(inertia_);
-    squeeze(inv_inertia_);
-    squeeze(angle_);
-    squeeze(omega_);
-    squeeze(material_);
-    squeeze(id_);
-    squeeze(rr_factor_);
-    squeeze(load_);
-    squeeze(external_force_);
-    squeeze(wall_reaction_);
+    remap(pos_);
+    remap(vel_);
+    remap(radius_);
+    remap(mass_);
+    remap(inv_mass_);
+    remap(inertia_);
+    remap(inv_inertia_);
+    remap(angle_);
+    remap(omega_);
+    remap(material_);
+    remap(id_);
+    remap(rr_factor_);
+    remap(load_);
+    remap(external_force_);
+    remap(wall_reaction_);
     any_external_force_ = std::any_of(external_force_.begin(), external_force_.end(),
                                       [](const Vec2& f) { return f.squaredNorm() > 0.0; });
+    ids_in_order_ = std::is_sorted(id_.begin(), id_.end());
+    if (!ids_in_order_) {
+        index_of_id_.assign(id_.empty() ? 0 : size_t(*std::max_element(id_.begin(), id_.end())) + 1, -1);
+        for (size_t k = 0; k < id_.size(); ++k) index_of_id_[size_t(id_[k])] = int32_t(k);
+    } else {
+        index_of_id_.clear();
+    }
 
     // the others' contacts, renumbered (the map keeps the order: the lists stay sorted)
+    // A pair whose numbers change places keeps its history as it is: the law sees the pair
+    // from the other disc with n, t and the relative velocity all reversed, so the shear
+    // spring force along t, the dashpot forces and coefficients are the same numbers
+    // (pair_kernel.h). Taking discs out keeps the order and the lists stay sorted; a new order
+    // sorts them again by key, as the rebuilt candidate lists are.
     std::vector<DiscContact> dd;
     dd.reserve(dd_.size());
     for (DiscContact c : dd_) {
         if (to[size_t(c.i)] < 0 || to[size_t(c.j)] < 0) continue;
         c.i = to[size_t(c.i)];
         c.j = to[size_t(c.j)];
+        if (c.i > c.j) std::swap(c.i, c.j);
         dd.push_back(c);
     }
+    auto dd_key = [](const DiscContact& a, const DiscContact& b) { return pair_key(a.i, a.j) < pair_key(b.i, b.j); };
+    if (!std::is_sorted(dd.begin(), dd.end(), dd_key)) std::sort(dd.begin(), dd.end(), dd_key);
     std::vector<WallContact> dw;
     dw.reserve(dw_.size());
     for (WallContact c : dw_) {
@@ -87,9 +109,12 @@ void World::compact_discs(const std::vector<size_t>& gone) {
         c.disc = to[size_t(c.disc)];
         dw.push_back(c);
     }
+    auto dw_key = [](const WallContact& a, const WallContact& b) { return pair_key(a.disc, a.wall) < pair_key(b.disc, b.wall); };
+    if (!std::is_sorted(dw.begin(), dw.end(), dw_key)) std::sort(dw.begin(), dw.end(), dw_key);
 
     // the others' bonds; an intact bond of a lost disc goes with it (counted, its energy in the
-    // difference the caller books)
+    // difference the caller books). Only discs taken out change a bonded world's numbers
+    // (finalize refuses world.space_order = on with bonds), so every bond keeps k < l.
     if (!bonds_.empty()) {
         std::vector<Bond> bonds;
         std::vector<Vec2> dashpot_last;

@@ -33,6 +33,8 @@ void validate(const WorldDef& d, const std::string& where) {
     require_non_negative(where + ".wall_piece_length", d.wall_piece_length, "m");
     require_non_negative(where + ".joint_tolerance", d.joint_tolerance, "m");
     require_range(where + ".max_overlap_ratio", d.max_overlap_ratio, 1e-6, 2.0, false, "(ratio)");
+    if (d.space_order_steps < 1)
+        throw InputError(where + ".space_order_steps = " + std::to_string(d.space_order_steps) + ": must be at least 1");
     with_contact_law(d.law, [&](auto law) {
         using Law = decltype(law);
         Law::validate(d.template law_def<Law>(), d);
@@ -282,6 +284,14 @@ void World::finalize() {
     discs_may_have_escaped_ = true;
 
     prepare_bonds();
+    // renumbering in space order as the discs flow (space_order.cpp); a bonded world keeps its
+    // numbers, by which its checkpoints name the bonds
+    if (def_.space_order == SpaceOrder::On && !bonds_.empty())
+        throw InputError("world.space_order = on: a world with bonds (cohesion.enabled) keeps its disc numbers; use auto or off");
+    space_order_every_ = def_.space_order == SpaceOrder::On ||
+                                 (def_.space_order == SpaceOrder::Auto && n > kSpaceOrderFlowDiscs && bonds_.empty())
+                             ? long(def_.space_order_steps)
+                             : 0;
     broad_.init(margin_target(), wall_piece_target(), pos_, radius_, geom_, wall_active_);
     refresh_contacts();
     finalized_ = true;
@@ -402,6 +412,7 @@ void World::move_walls() {
 
 void World::step() {
     if (!finalized_) finalize();
+    if (space_order_due()) order_discs_in_space();
     // wall schedule at time t: removal and which walls move during this step
     bool wall_removed = false;
     for (size_t w = 0; w < walls_.size(); ++w) {

@@ -59,6 +59,14 @@ enum class Prefetch { Auto, Off, On };
 // the bytes a step must stream (World::step_bytes) above which Auto prefetches
 size_t prefetch_threshold_bytes();
 
+// Renumbering the discs in space order as they flow (space_order.cpp): Auto does it in worlds
+// of more than kSpaceOrderFlowDiscs discs without bonds, On in any world without bonds.
+enum class SpaceOrder { Auto, On, Off };
+// Above this many discs a world's arrays outgrow the caches, and a contact's second disc out
+// of order is a miss: geometry A at scale 2 (36,400) and 1 (145,615), not 4 (9,101); the
+// releases below 20,000 discs and the regression references keep their bits.
+constexpr size_t kSpaceOrderFlowDiscs = 20000;
+
 struct WorldDef {
     ContactLawKind law = law_kind<LinearLaw>();  // the contact law of every contact (contact_laws.h)
     Vec2 gravity{0.0, -9.81};              // m/s2
@@ -86,6 +94,8 @@ struct WorldDef {
                                            // friction and step ceiling; law_def<Law>())
     Prefetch prefetch = Prefetch::Auto;    // the force pass asks for its arrays' lines ahead of use
                                            // (force_pass.cpp, kPrefetchContacts); never changes a result
+    SpaceOrder space_order = SpaceOrder::Auto;  // renumber the discs in space order as they flow
+    int space_order_steps = 20000;         // -, steps between renumberings, >= 1
 
     template <typename Law>
     typename Law::Def& law_def() { return std::get<size_t(law_kind<Law>())>(laws); }
@@ -184,8 +194,8 @@ public:
     const std::vector<WallContact>& wall_contacts() const { return dw_; }
     const std::vector<Bond>& bonds() const { return bonds_; }                // sorted by (k, l)
     const std::vector<BondBreakEvent>& bond_breaks() const { return bond_breaks_; }  // in order, disc ids
-    // The index each disc had when it was added (disc_ids()[i] == i until a disc is lost;
-    // ascending), the discs taken out in order, and the bonds: how many there were at
+    // The index each disc had when it was added (disc_ids()[i] == i until a disc is lost or
+    // the discs are renumbered in space order), the discs taken out in order, and the bonds: how many there were at
     // finalize() and how many intact ones went with lost discs (bonds() holds the others).
     const std::vector<int32_t>& disc_ids() const { return id_; }
     const std::vector<LostDiscEvent>& lost_discs() const { return lost_; }
@@ -193,6 +203,8 @@ public:
     size_t bonds_lost_with_discs() const { return bonds_lost_; }
     // the present index of the disc added as `id`, or -1 if it was lost
     long disc_index(long id) const;
+    // how many times the discs were renumbered in space order (WorldDef::space_order)
+    long space_orderings() const { return space_orderings_; }
     const WallDef& wall_def(int w) const { return walls_[size_t(w)]; }
     const WallGeom& wall_geom(int w) const { return geom_[size_t(w)]; }
     bool wall_active(int w) const { return wall_active_[size_t(w)] != 0; }
@@ -430,6 +442,15 @@ private:
     void take_out_lost_discs();
     // takes the discs `gone` (present indices, ascending) out of every array, list and bond
     void compact_discs(const std::vector<size_t>& gone);
+    // disc k becomes the one that was from[k], the others are taken out (lost_discs.cpp)
+    void remap_discs(const std::vector<int32_t>& from);
+    // the renumbering in space order and when it is due (space_order.cpp)
+    bool space_order_due() const;
+    void order_discs_in_space();
+    long space_order_every_ = 0;  // steps between renumberings, 0: never (finalize)
+    long space_orderings_ = 0;
+    bool ids_in_order_ = true;             // id_ ascending (disc_index searches it)
+    std::vector<int32_t> index_of_id_;     // otherwise: the index of each id, -1 once lost
     // the broad phase and contact lists rebuilt for the present discs, with these histories
     void rebuild_lists(const std::vector<DiscContact>& dd, const std::vector<WallContact>& dw);
     void index_bonds();

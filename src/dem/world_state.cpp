@@ -28,6 +28,9 @@ namespace demlab {
 
 namespace {
 constexpr uint32_t kWorldStateVersion = 2;  // 2: the lost discs
+// A world whose discs were renumbered in space order writes 3: the discs' ids in their present
+// order follow the lost discs (ORDR). One never renumbered writes 2, the layout before.
+constexpr uint32_t kWorldStateVersionOrdered = 3;
 
 // A contact's history: the law's fields (LinearLaw::for_each_history_field).
 template <typename Fn, typename... Contact>
@@ -53,7 +56,7 @@ void copy_history(const Contact& from, Contact& to) {
 
 void World::save_state(BinaryWriter& out) const {
     out.tag("WRLD");
-    out.put(kWorldStateVersion);
+    out.put(ids_in_order_ ? kWorldStateVersion : kWorldStateVersionOrdered);
     // the discs taken out so far first: a world built from the set-up takes them out before
     // the rest is read (load_state)
     out.tag("LOST");
@@ -70,6 +73,11 @@ void World::save_state(BinaryWriter& out) const {
     out.put(uint64_t(bonds_lost_));
     out.put(lost_energy_);
     out.put(lost_potential_);
+    if (!ids_in_order_) {
+        out.tag("ORDR");
+        out.put(int64_t(space_orderings_));
+        out.put(id_);
+    }
     out.put(uint64_t(pos_.size()));
     out.put(uint64_t(walls_.size()));
     out.put(time_);
@@ -180,7 +188,9 @@ void merge_histories(const std::vector<Contact>& saved, std::vector<Contact>& fr
 void World::load_state(BinaryReader& in) {
     if (!finalized_) finalize();
     in.expect_tag("WRLD");
-    if (in.get<uint32_t>() != kWorldStateVersion) throw InputError("checkpoint: written by another version of demlab");
+    const uint32_t version = in.get<uint32_t>();
+    if (version != kWorldStateVersion && version != kWorldStateVersionOrdered)
+        throw InputError("checkpoint: written by another version of demlab");
     in.expect_tag("LOST");
     const uint64_t lost = in.get<uint64_t>();
     if (lost > pos_.size()) throw InputError("checkpoint: corrupt list of lost discs");
@@ -205,6 +215,22 @@ void World::load_state(BinaryReader& in) {
     bonds_lost_ = size_t(in.get<uint64_t>());
     in.get(lost_energy_);
     in.get(lost_potential_);
+    if (version == kWorldStateVersionOrdered) {
+        // the discs in the order they had (World::order_discs_in_space), by id
+        in.expect_tag("ORDR");
+        space_orderings_ = long(in.get<int64_t>());
+        std::vector<int32_t> ids;
+        in.get(ids, pos_.size());
+        std::vector<int32_t> from(ids.size());
+        std::vector<uint8_t> seen(ids.size(), 0);
+        for (size_t k = 0; k < ids.size(); ++k) {
+            const long i = disc_index(ids[k]);
+            if (i < 0 || seen[size_t(i)]) throw InputError("checkpoint: corrupt order of the discs");
+            seen[size_t(i)] = 1;
+            from[k] = int32_t(i);
+        }
+        remap_discs(from);
+    }
     const size_t n = pos_.size(), nw = walls_.size();
     if (in.get<uint64_t>() != n || in.get<uint64_t>() != nw)
         throw InputError("checkpoint: its disc or wall count differs from the scenario's");

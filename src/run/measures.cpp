@@ -580,6 +580,7 @@ SummaryJson summary_json(const Scenario& s, const RunSummary& sum, const Release
     j.number("broadphase_mean_touching", sum.broadphase_mean_touching, "-");
     j.number("broadphase_update_seconds", sum.broadphase_update_seconds, "s");
     j.integer("force_pass_one_range_cuts", sum.force_pass_one_range_cuts);
+    j.integer("space_orderings", sum.space_orderings);
     j.number("force_pass_busy_share", sum.force_pass_busy_share, "-");
     j.integer("force_pass_busy_fallbacks", sum.force_pass_busy_fallbacks);
     if (sum.bonds >= 0) {

@@ -213,6 +213,7 @@ void finish_summary(const World& w, RunSummary& sum, double candidate_sum, doubl
     sum.broadphase_mean_touching = pair_samples > 0 ? touching_sum / double(pair_samples) : 0.0;
     sum.broadphase_update_seconds = w.list_update_seconds();
     sum.force_pass_one_range_cuts = w.force_pass_one_range_cuts();
+    sum.space_orderings = w.space_orderings();
     sum.force_pass_busy_share = w.force_pass_busy_share();
     sum.force_pass_busy_fallbacks = w.force_pass_busy_fallbacks();
     sum.steps = w.step_count();

@@ -141,6 +141,7 @@ struct RunSummary {
     double broadphase_mean_touching = 0;      // of which touching
     double broadphase_update_seconds = 0;     // s, wall-clock in the candidate-list updates (mostly serial)
     long force_pass_one_range_cuts = 0;       // list updates whose force pass ran as one range (discs out of space order)
+    long space_orderings = 0;                 // times the discs were renumbered in space order (world.space_order)
     double force_pass_busy_share = 1;         // of the threads' time in the shared force passes, the share the ranges worked (World)
     long force_pass_busy_fallbacks = 0;       // times the pass fell back to one range for a busy machine (World)
     // Which landmarks the set-up has (measures.h, not_measured): a bed path (run-out, deposit

@@ -48,6 +48,7 @@ WorldDef db9k_world_def(int copies) {
     def.timestep.dashpots = DashpotScheme::Lagged;
     def.rotation.model = 2;
     def.rotation.u_rr = 0.0;  // free rotation, no rolling resistance
+    def.space_order = SpaceOrder::Off;  // the discs numbered as the file (its checksum; --file orders)
     def.friction_rule_disc_wall = FrictionRule::Max;
     def.broadphase_margin = 0.0;
     def.domain_lo = Vec2(-0.1, -0.1);

@@ -96,6 +96,7 @@ void settle_lattice(const Scenario& s, const std::vector<WallDef>& walls, Releas
     const ReleaseDef& rd = s.release;
     WorldDef def = s.world;
     def.rotation.model = 1;
+    def.space_order = SpaceOrder::Off;  // the lattice keeps its numbers (its layers, its bonds)
     def.damping.local_alpha = s.lattice_release.settle_alpha;
     def.damping.dp_mode = DashpotMode::NoTension;
     World w(def);

@@ -14,6 +14,7 @@
 #include "core/interrupt.h"
 #include "core/progress.h"
 #include "core/validate.h"
+#include "dem/space_order.h"
 #include "dem/world.h"
 #include "setups/settle_loop.h"
 
@@ -184,6 +185,7 @@ std::vector<Vec2> expand_to_size(const Scenario& s, const ReleaseBox& box, const
     // --- radius expansion: frictionless, no gravity, heavily damped, rotation locked
     WorldDef gen;
     gen.threads = s.world.threads;  // the same bits for any count
+    gen.space_order = SpaceOrder::Off;  // the placed discs' numbers are the mass' (order_in_space)
     gen.gravity = Vec2::Zero();
     gen.rotation.model = 1;
     gen.damping.beta_n = 0.5;
@@ -307,6 +309,7 @@ void settle_release(const Scenario& s, const ReleaseBox& box, std::vector<Vec2>&
     // generated density and would stay pressed against the lid), then with the real
     // friction until it is at rest
     WorldDef settle = s.world;
+    settle.space_order = SpaceOrder::Off;  // the mass keeps the numbers it settles with (layers, grid)
     settle.rotation.model = 1;  // settling is quasi-static; rotation does not change the state reached
     // the dashpots lagged (release.settle_dashpots): a centred step is a second pass over the
     // contacts and costs about twice a lagged one, which with the damping correction takes
@@ -501,19 +504,8 @@ ReleaseMass generate_release(const Scenario& s) {
 
 void order_in_space(ReleaseMass& m, double strip) {
     const size_t n = m.pos.size();
-    if (n == 0 || !(strip > 0.0)) return;
-    double x_min = INFINITY;
-    for (const Vec2& p : m.pos) x_min = std::min(x_min, p.x());
-    std::vector<size_t> order(n);
-    std::vector<long> column(n);
-    for (size_t i = 0; i < n; ++i) {
-        order[i] = i;
-        column[i] = long(std::floor((m.pos[i].x() - x_min) / strip));
-    }
-    std::stable_sort(order.begin(), order.end(), [&](size_t a, size_t b) {
-        if (column[a] != column[b]) return column[a] < column[b];
-        return m.pos[a].y() < m.pos[b].y();
-    });
+    const std::vector<size_t> order = space_order(m.pos, strip);
+    if (order.empty()) return;
     auto permute = [&](auto& v) {
         if (v.size() != n) return;
         auto old = v;

@@ -50,11 +50,8 @@ constexpr long kSpaceOrderDiscs = 1000;
 // restiffening.
 constexpr long kSettleRampDiscs = 20000;
 
-// Renumbers the discs in space order: strips across x, `strip` metres wide, from left to
-// right, and up each strip. The engine gives each thread a range of disc numbers and works
-// through its contacts in number order, so numbers that follow space keep a thread's discs
-// together (few pairs cross between threads) and a contact's two discs near in memory
-// (docs/performance.md). Deterministic: ties keep the old order.
+// Renumbers the discs in space order (dem/space_order.h): strips across x, `strip` metres
+// wide, from left to right, and up each strip. Deterministic: ties keep the old order.
 void order_in_space(ReleaseMass& m, double strip);
 
 // release.csv: id, x, y, r, layer, grid and the generation figures as comments.
