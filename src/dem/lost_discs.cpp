@@ -10,6 +10,8 @@
 // potential energy, its contacts' and intact bonds' elastic energy) leaves the ledger as
 // EnergyReport::lost_with_discs: the difference of the balance before and after, so the
 // balance stays where it was. Its record keeps the index it was added with (disc_ids()).
+// The renumbering in space order (space_order.cpp) goes through the same remap_discs, with a
+// new order instead of a squeeze.
 #include <algorithm>
 
 #include "dem/world.h"
@@ -85,8 +87,7 @@ void World::remap_discs(const std::vector<int32_t>& from) {
         index_of_id_.clear();
     }
 
-    // the others' contacts, renumbered (the map keeps the order: the lists stay sorted)
-    // A pair whose numbers change places keeps its history as it is: the law sees the pair
+    // The others' contacts, renumbered. A pair whose numbers change places keeps its history as it is: the law sees the pair
     // from the other disc with n, t and the relative velocity all reversed, so the shear
     // spring force along t, the dashpot forces and coefficients are the same numbers
     // (pair_kernel.h). Taking discs out keeps the order and the lists stay sorted; a new order

@@ -4,7 +4,8 @@
 // of the last step (read by outputs between steps); time, step count, this and the last time
 // step; each wall's geometry (moving walls have moved), activity, force, moment and impulse;
 // every candidate contact with its history (shear spring force, dashpot coefficients, last
-// dashpot forces); the energy ledger's sums.
+// dashpot forces); the energy ledger's sums; the discs' order, once they were renumbered in
+// space order (space_order.cpp).
 //
 // Not saved: the broad phase. Restoring rebuilds the b2DynamicTree from the current positions,
 // so its fat boxes, and so its candidate lists, differ from the uninterrupted run's. That
