@@ -143,7 +143,7 @@ void World::centre_rows(size_t tr, const PairPassParams& pp, const CentreConsts&
     CentreBlock& b = *centre_blocks_[tr];
     const CentreDisc* const cd = centre_discs_.data();
     // a listed pair into the block, kept if it touches
-    auto gather = [&](const DiscContact& c, size_t k) {
+    auto gather = [&](const DiscContact& c, size_t ck) {
         const size_t i = size_t(c.i), j = size_t(c.j);
         const Vec2 dx = pos[j] - pos[i];
         const double rsum = radius[i] + radius[j];
@@ -174,20 +174,20 @@ void World::centre_rows(size_t tr, const PairPassParams& pp, const CentreConsts&
         b.kn[l] = pm.kn;
         b.mu[l] = pm.mu;
         b.fs[l] = c.fs;
-        b.contact[l] = k;
+        b.contact[l] = ck;
         b.i[l] = int32_t(i);
         b.j[l] = int32_t(j);
     };
     auto add = [&]() {
         for (size_t l = 0; l < b.count; ++l) {
-            const size_t k = b.contact[l];
-            DiscContact& c = dd[k];
+            const size_t ck = b.contact[l];
+            DiscContact& c = dd[ck];
             c.damp_n = float(b.damp_n[l]);
             c.damp_s = float(b.damp_s[l]);
             const size_t i = size_t(b.i[l]), j = size_t(b.j[l]);
             const double fx = b.fx[l], fy = b.fy[l];
             if (j >= d1) {  // a cross contact: its second share is the range owning j's
-                while (size_t(cross_[cross_cursor]) < k) ++cross_cursor;
+                while (size_t(cross_[cross_cursor]) < ck) ++cross_cursor;
                 cross_shift_[cross_cursor] = CrossShift{fx, fy, b.torque_j[l], b.dissipated[l], pass};
                 // the contact's own copy, which the owning range's next pass reads (force_pass.cpp)
                 if (!cross_copies_stale_) {
