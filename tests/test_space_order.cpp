@@ -12,6 +12,7 @@
 #include "core/error.h"
 #include "dem/space_order.h"
 #include "helpers.h"
+#include "scenario/scenario.h"
 #include "setups/db9k.h"
 
 using namespace demlab;
@@ -140,13 +141,23 @@ TEST(SpaceOrder, CheckpointAfterARenumberingResumesToTheSameBits) {
     EXPECT_EQ(out.bytes().substr(4, 4), std::string("\x03\0\0\0", 4));
 }
 
-TEST(SpaceOrder, AutoLeavesSmallWorldsAsTheyAre) {
+TEST(SpaceOrder, AutoRenumbersOnlyWorldsAboveItsThreshold) {
     // DB-9k's 9,140 discs are below kSpaceOrderFlowDiscs: its bits stay the benchmark's
     World w = db9k_world(read_xyr(default_db9k_path()), SpaceOrder::Auto, 100);
     w.run(250);
     EXPECT_EQ(w.space_orderings(), 0);
     const std::vector<int32_t>& ids = w.disc_ids();
     EXPECT_TRUE(std::is_sorted(ids.begin(), ids.end()));
+    // three columns side by side (27,420 discs) are above it
+    WorldDef def = db9k_world_def(3);
+    def.space_order = SpaceOrder::Auto;
+    def.space_order_steps = 20;
+    World big(def);
+    build_db9k(big, read_xyr(default_db9k_path()), 3);
+    big.finalize();
+    ASSERT_GT(big.disc_count(), kSpaceOrderFlowDiscs);
+    big.run(30);
+    EXPECT_EQ(big.space_orderings(), 1);
 }
 
 TEST(SpaceOrder, RefusedWithoutAStepCountAndWithBonds) {
@@ -161,4 +172,10 @@ TEST(SpaceOrder, RefusedWithoutAStepCountAndWithBonds) {
     w.add_disc({Vec2(0.02, 0.0), 0.01, Vec2::Zero(), 0, 0, m});
     w.add_bond(0, 1);
     expect_refused([&] { w.finalize(); }, {"world.space_order = on", "bonds"});
+}
+
+TEST(SpaceOrder, OnWithCohesionIsRefusedNamingTheFile) {
+    Scenario s = load_scenario(std::string(DEMLAB_SOURCE_DIR) + "/scenarios/snow-slide-2d.toml");
+    apply_override(s, "world.space_order=on");
+    expect_refused([&] { finish_scenario(s); }, {"snow-slide-2d.toml", "world.space_order = \"on\"", "cohesion.enabled"});
 }

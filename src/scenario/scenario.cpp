@@ -630,6 +630,9 @@ void finish_scenario(Scenario& s) {
                                                     : "the discs are given ([[discs]]), not a release mass"));
     if (!c_enabled_or_no_bonds(s))
         throw InputError(where + "cohesion.bonds: given without cohesion.enabled = true; the bonds would not be made");
+    if (s.cohesion.enabled && s.world.space_order == SpaceOrder::On)
+        throw InputError(where + "world.space_order = \"on\": a world with bonds (cohesion.enabled = true) keeps its disc "
+                         "numbers (accepted: \"auto\" or \"off\")");
     if (has_release(s) && !(r.r_min <= r.r_max))
         throw InputError(where + "release.r_min = " + format_number(r.r_min) + " m must be <= release.r_max = " +
                          format_number(r.r_max) + " m");
