@@ -60,7 +60,7 @@ std::string summary_without_timing(const fs::path& p) {
 }
 
 void expect_same_outputs(const fs::path& a, const fs::path& b) {
-    for (const char* f : {"forces.csv", "front.csv", "energy.csv", "track.csv", "deposit.csv", "release.csv", "barrier_pressure.csv", "peaks.csv",
+    for (const char* f : {"forces.csv", "front.csv", "energy.csv", "track.csv", "deposit.csv", "surface.csv", "release.csv", "barrier_pressure.csv", "peaks.csv",
                           "force_history.csv",
                           "snapshots/discs.pvd", "snapshots/walls.pvd"}) {
         ASSERT_TRUE(fs::exists(a / f)) << f;
@@ -323,7 +323,7 @@ TEST(Checkpoint, KilledAndSignalledProcessesResumeToTheSameBytes) {
         kill(pid, SIGKILL);
         EXPECT_EQ(wait_for(pid), 128 + SIGKILL);
         // atomic outputs: series only as .part, whole-file outputs complete or absent
-        for (const char* f : {"forces.csv", "energy.csv", "front.csv", "track.csv", "deposit.csv", "barrier_pressure.csv", "peaks.csv", "summary.json"})
+        for (const char* f : {"forces.csv", "energy.csv", "front.csv", "track.csv", "deposit.csv", "surface.csv", "barrier_pressure.csv", "peaks.csv", "summary.json"})
             EXPECT_FALSE(fs::exists(killed / f)) << f << " exists under its final name in an unfinished run";
         EXPECT_TRUE(fs::exists(killed / "forces.csv.part"));
         for (const auto& e : fs::directory_iterator(killed / "snapshots")) {

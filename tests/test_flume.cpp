@@ -213,7 +213,7 @@ TEST(GeometryA20, GenerationToRestBalancesAndDeterminism) {
         // reached the barrier, stopped on the flume (a lost disc stops the run with an error)
         EXPECT_GT(s.t_front_at_barrier, 0.0);
         EXPECT_GT(s.runup_height, 0.05);
-        for (const char* f : {"scenario.toml", "release.csv", "forces.csv", "front.csv", "energy.csv", "deposit.csv",
+        for (const char* f : {"scenario.toml", "release.csv", "forces.csv", "front.csv", "energy.csv", "deposit.csv", "surface.csv",
                               "summary.json", "snapshots/discs.pvd", "snapshots/walls.pvd"})
             EXPECT_TRUE(fs::exists(first.dir / f)) << f;
         EXPECT_LT(s.energy_balance_error, 0.01);

@@ -317,7 +317,7 @@ class RunFolder:
     summary: summary.json as a dict (a landmark the run did not measure is None, and
     summary["not_measured"] says why). Every CSV file a run writes, as a dict of numpy arrays
     keyed by column name (the names carry the units, e.g. t_s, fx_barrier_N_per_m): forces,
-    front, energy, deposit, peaks, barrier_pressure, envelope, release, lost, bonds_broken,
+    front, energy, deposit, surface, peaks, barrier_pressure, envelope, release, lost, bonds_broken,
     track; DAN's blocks and front_synced. A file the run did not write raises
     FileNotFoundError, except track, which is {} for a run without tracers (output.track = []).
     snapshot_times: the instants of the snapshots, s; snapshot(i) reads one (negative i counts
@@ -348,6 +348,8 @@ class RunFolder:
     front = property(lambda self: self._csv("front.csv"), doc="front.csv: the front along the path, m")
     energy = property(lambda self: self._csv("energy.csv"), doc="energy.csv: the energy ledger, J/m")
     deposit = property(lambda self: self._csv("deposit.csv"), doc="deposit.csv: the deposit along the path, m")
+    surface = property(lambda self: self._csv("surface.csv"),
+                       doc="surface.csv: the deposit's surface over x above the bed (x_m, bed_m, surface_m, depth_m), m")
     lost = property(lambda self: self._csv("lost.csv"), doc="lost.csv: the discs that left the domain")
     peaks = property(lambda self: self._csv("peaks.csv"), doc="peaks.csv: along the path, the largest height, mean speed and bed pressure over the run")
     barrier_pressure = property(lambda self: self._csv("barrier_pressure.csv"),

@@ -65,4 +65,60 @@ void BedPath::at(double s, Vec2& point, Vec2& normal) const {
     }
 }
 
+bool BedPath::height_at(double x, double& y) const {
+    bool found = false;
+    auto consider = [&](double y_here) {
+        if (!found || y_here > y) y = y_here;
+        found = true;
+    };
+    // (a tolerance of a nanometre lets x at a joint or a path's end count, as rounding puts it)
+    constexpr double kTol = 1e-9;
+    for (const WallGeom& g : parts_) {
+        if (g.shape == WallShape::Segment) {
+            const double x0 = std::min(g.p0.x(), g.p1.x()), x1 = std::max(g.p0.x(), g.p1.x());
+            if (x1 - x0 <= kTol || x < x0 - kTol || x > x1 + kTol) continue;
+            // y along the segment, interpolated from its lower-x end
+            const Vec2& a = g.p0.x() <= g.p1.x() ? g.p0 : g.p1;
+            const Vec2& b = g.p0.x() <= g.p1.x() ? g.p1 : g.p0;
+            const double t = std::clamp((x - a.x()) / (b.x() - a.x()), 0.0, 1.0);
+            consider(a.y() + t * (b.y() - a.y()));
+        } else {
+            // the circle's two points at x, angles +-acos((x - cx) / R), each if on the arc
+            const double c = (x - g.centre.x()) / g.radius;
+            if (c < -1.0 - kTol / g.radius || c > 1.0 + kTol / g.radius) continue;
+            const double a = std::acos(std::clamp(c, -1.0, 1.0));
+            for (const double angle : {a, -a}) {
+                double off = std::fmod(angle - g.angle0, 2.0 * kPi);
+                if (off < 0) off += 2.0 * kPi;
+                // an end point of the arc within the tolerance counts (off just below 2 pi is
+                // just before the start)
+                const double tol = kTol / g.radius;
+                if (off <= g.extent + tol || off >= 2.0 * kPi - tol) consider(g.centre.y() + g.radius * std::sin(angle));
+            }
+        }
+    }
+    return found;
+}
+
+void BedPath::x_span(double& x_lo, double& x_hi) const {
+    x_lo = INFINITY;
+    x_hi = -INFINITY;
+    for (const WallGeom& g : parts_) {
+        x_lo = std::min({x_lo, g.p0.x(), g.p1.x()});
+        x_hi = std::max({x_hi, g.p0.x(), g.p1.x()});
+        if (g.shape == WallShape::Arc) {
+            // the arc's leftmost and rightmost points, where it passes them (angles pi and 0)
+            for (const double angle : {0.0, kPi}) {
+                double off = std::fmod(angle - g.angle0, 2.0 * kPi);
+                if (off < 0) off += 2.0 * kPi;
+                if (off <= g.extent) {
+                    const double xe = g.centre.x() + g.radius * std::cos(angle);
+                    x_lo = std::min(x_lo, xe);
+                    x_hi = std::max(x_hi, xe);
+                }
+            }
+        }
+    }
+}
+
 }  // namespace demlab

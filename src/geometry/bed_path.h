@@ -19,6 +19,13 @@ public:
     void project(const Vec2& p, double& s, double& h) const;
     // The point of the bed at s and the unit normal into the flow there.
     void at(double s, Vec2& point, Vec2& normal) const;
+    // The bed's height at x: the highest point at x of the parts that span x with a horizontal
+    // extent (a vertical segment spans none; a path that overhangs gives its upper part);
+    // false where no part spans x. The flume's W1, arc and W3, a dam break's floor and a
+    // terrain profile are single-valued in x, so the bed under the deposit.
+    bool height_at(double x, double& y) const;
+    // The x range the parts span, lowest to highest.
+    void x_span(double& x_lo, double& x_hi) const;
     size_t parts() const { return parts_.size(); }
     const WallGeom& part(size_t k) const { return parts_[k]; }
     double part_start(size_t k) const { return start_[k]; }  // m, s where part k starts (k = parts(): the end)

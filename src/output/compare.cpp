@@ -1,5 +1,6 @@
 #include "output/compare.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
@@ -99,6 +100,31 @@ std::string cell(double v, int digits = 3, const char* none = "-") {
 }  // namespace
 
 namespace {
+// A run's surface.csv as x_m,y_m rows for the plot: the surface where mass stands, a blank
+// line (a gap in gnuplot's line) where none does.
+std::string surface_over_x(const std::string& src) {
+    std::ifstream in(src);
+    std::string line;
+    if (!std::getline(in, line)) throw InputError(src + ": empty (a run's surface.csv has a header row)");
+    const CsvHeader header(line, src);
+    const size_t cx = header.column("x_m"), cs = header.column("surface_m"), cd = header.column("depth_m");
+    std::ostringstream out;
+    out << "x_m,y_m\n";
+    bool gap = false;
+    while (std::getline(in, line)) {
+        const std::vector<std::string> c = csv_cells(line);
+        if (std::max({cx, cs, cd}) >= c.size()) throw InputError(src + ": a short row '" + line + "'");
+        if (!(std::stod(c[cd]) > 0.0)) {
+            if (!gap) out << '\n';
+            gap = true;
+            continue;
+        }
+        gap = false;
+        out << c[cx] << ',' << c[cs] << '\n';
+    }
+    return out.str();
+}
+
 // deposit.png: the final deposits, over the flume in x, y (each run's surface from its own
 // path) when all runs are flume runs, else along s.
 void compare_deposits(const CompareOptions& o, const std::vector<RunInfo>& runs, bool all_flume, std::ostringstream& gp,
@@ -135,6 +161,19 @@ void compare_deposits(const CompareOptions& o, const std::vector<RunInfo>& runs,
     }
     for (size_t k = 0; k < runs.size(); ++k) {
         const RunInfo& r = runs[k];
+        const std::string file = "deposit_" + std::to_string(k) + ".csv";
+        auto add_line = [&] {
+            plot << (k > 0 || all_flume ? ", " : "") << "'" << file << "' using 1:2 with lines lw 2 lc " << k + 1 << " title "
+                 << quoted(r.label);
+        };
+        // over the flume a DEM run's own surface over x (surface.csv), which deposit.csv's
+        // height normal to the bed cannot give over the concave arc (docs/flume.md)
+        const std::string over_x = r.dir + "/surface.csv";
+        if (all_flume && fs::exists(over_x)) {
+            write_file_atomic(o.out + "/" + file, surface_over_x(over_x));
+            add_line();
+            continue;
+        }
         const std::string src = r.dir + "/deposit.csv";
         if (!fs::exists(src)) continue;
         std::ifstream in(src);
@@ -171,10 +210,8 @@ void compare_deposits(const CompareOptions& o, const std::vector<RunInfo>& runs,
                 surf << s << ',' << height << '\n';
             }
         }
-        const std::string file = "deposit_" + std::to_string(k) + ".csv";
         write_file_atomic(o.out + "/" + file, surf.str());
-        plot << (k > 0 || all_flume ? ", " : "") << "'" << file << "' using 1:2 with lines lw 2 lc " << k + 1 << " title "
-             << quoted(r.label);
+        add_line();
     }
     gp << "set output 'deposit.png'\nset title 'Final deposits'\n";
     if (all_flume) gp << "set size ratio -1\nset xlabel 'x (m)'\nset ylabel 'y (m)'\n";

@@ -414,6 +414,28 @@ void write_deposit(const World& w, const MeasureContext& m, const std::string& d
     write_file_atomic(dir + "/deposit.csv", d.str());
 }
 
+void write_surface(const World& w, const MeasureContext& m, const std::string& dir) {
+    const BedPath& path = *m.path;
+    const double dx = m.scenario.output.deposit_bin;
+    double x_lo, x_hi;
+    path.x_span(x_lo, x_hi);
+    const auto conn = connected_discs(w.positions(), w.radii(), m.front_gap);
+    // y(x) = max over discs covering x of y_c + sqrt(r^2 - (x - x_c)^2) (geometry/deposit.h),
+    // on the grid x_lo + k dx; the last sample at or before x_hi
+    const Envelope env = upper_envelope(w.positions(), w.radii(), conn, x_lo, x_hi, dx);
+    std::ostringstream d;
+    d << "x_m,bed_m,surface_m,depth_m\n";
+    for (size_t k = 0; k < env.y.size(); ++k) {
+        const double x = env.x(k);
+        double bed;
+        if (!path.height_at(x, bed)) continue;  // (a path with a gap in x: nothing to stand on)
+        // where no disc stands the surface is the bed's, 0 deep (as deposit.csv's empty bins)
+        const double top = std::isnan(env.y[k]) ? bed : std::max(env.y[k], bed);
+        d << x << ',' << bed << ',' << top << ',' << top - bed << '\n';
+    }
+    write_file_atomic(dir + "/surface.csv", d.str());
+}
+
 SlopeAngles write_envelope(const World& w, double gap, double length, double sections_start, const std::string& dir, RunSummary& sum) {
     const auto conn = connected_discs(w.positions(), w.radii(), gap);
     const Envelope env = upper_envelope(w.positions(), w.radii(), conn, 0.0, length, 0.001);

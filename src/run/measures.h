@@ -157,6 +157,11 @@ double energy_put_in(const EnergyReport& e, double e0);
 // deposit.csv: the deposit's top, normal to the bed, in bins along the path; the run-out and
 // final run-up into the summary.
 void write_deposit(const World& w, const MeasureContext& m, const std::string& dir, RunSummary& sum);
+// surface.csv: the deposit's surface over x (the upper envelope of the connected discs'
+// outlines) above the bed's height there, every output.deposit_bin of x over the bed path's
+// span: the section a designer draws. Unlike deposit.csv's height normal to the bed, it does
+// not stop at a concave arc's radius.
+void write_surface(const World& w, const MeasureContext& m, const std::string& dir);
 // envelope.csv and the slope angles of a dam break's deposit over [0, length].
 SlopeAngles write_envelope(const World& w, double gap, double length, double sections_start, const std::string& dir, RunSummary& sum);
 

@@ -312,12 +312,14 @@ void restore_run(BinaryReader& in, const std::string& checkpoint_path, RunState&
     if (!in.at_end()) throw InputError(checkpoint_path + ": corrupt checkpoint (trailing bytes)");
 }
 
-// The files of a finished run: the deposit along the bed path, the dam break's envelope, the
+// The files of a finished run: the deposit along the bed path and over x, the dam break's envelope, the
 // bonds that broke, and the summary.
 void write_results(const Scenario& s, const Setup& setup, const World& w, const MeasureContext& measure,
                    const ReleaseMass& mass, const std::string& dir, RunSummary& sum,
                    const std::function<void(RunSummary&)>& design_figures) {
     if (measure.path) write_deposit(w, measure, dir, sum);
+    // the surface over x; a dam break's is envelope.csv (its bed is the floor, y = 0)
+    if (measure.path && !setup.measures_envelope()) write_surface(w, measure, dir);
     SlopeAngles angles{};
     if (setup.measures_envelope()) angles = write_envelope(w, measure.front_gap, setup.envelope_length(), s.dam_break.sections_start, dir, sum);
     write_lost_discs(w, dir);

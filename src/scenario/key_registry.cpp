@@ -462,7 +462,7 @@ void add_run_keys(std::vector<Key>& k) {
     k.push_back(real("output.load_window", "s", "window W of the impulse-filtered loads: the mean force over the last W, the impulse gained over it divided by its length (summary.json's peak_fx_barrier_filtered, peak_fy_arc_filtered)", [](Scenario& s) -> double& { return s.output.load_window; }, 0, 10, true));
     k.push_back(real("output.approach_length", "m", "length of bed upstream of the barrier's foot where the arriving flow is measured when the front reaches the barrier (summary.json's approach_depth, approach_speed, approach_mass_per_length, impact_coefficient_alpha); 0 = 20 times the largest radius", [](Scenario& s) -> double& { return s.output.approach_length; }, 0, 1e4));
     k.push_back(integer("output.force_history_steps", "-", "steps between the rows of force_history.csv, the forces on the wall groups as PFC's dense wall-force history (1 = every step); 0 = none", [](Scenario& s) -> int& { return s.output.force_history_steps; }, 0, 1000000000));
-    k.push_back(real("output.deposit_bin", "m", "spacing of deposit.csv along the flume path", [](Scenario& s) -> double& { return s.output.deposit_bin; }, 0, 10, true));
+    k.push_back(real("output.deposit_bin", "m", "spacing of deposit.csv along the bed path (and of peaks.csv), and of surface.csv in x", [](Scenario& s) -> double& { return s.output.deposit_bin; }, 0, 10, true));
     k.push_back(real("output.front_neighbour_gap", "m", "a disc counts for the front only with a neighbour within this gap; 0 = r_max", [](Scenario& s) -> double& { return s.output.front_neighbour_gap; }, 0, 10));
     {
         Key track{"output.track", "-", "array of disc ids >= 0", "disc ids written to track.csv (tracer discs)", nullptr, nullptr};

@@ -118,7 +118,7 @@ struct OutputDef {
     double snapshot_interval = 0.05;       // s between snapshots (VTK)
     std::string snapshot_format = "binary";  // "binary" (appended, zlib) or "ascii"
     std::vector<long> track;               // disc ids whose path is written to track.csv
-    double deposit_bin = 0.01;             // m, spacing of deposit.csv (and peaks.csv) along the flume path
+    double deposit_bin = 0.01;             // m, spacing of deposit.csv (and peaks.csv) along the bed path, of surface.csv in x
     double pressure_bin = 0.01;            // m, bins of barrier_pressure.csv along the barrier
     double load_window = 0.05;             // s, the window of the impulse-filtered loads (summary's *_filtered)
     double approach_length = 0.0;          // m upstream of the barrier where the arriving flow is measured; 0 = 20 r_max

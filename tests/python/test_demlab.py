@@ -111,6 +111,7 @@ def test_every_file_a_run_writes_has_an_accessor(cli_run):
     generation figures (# lines) do not hide its table"""
     f = demlab.RunFolder(cli_run)
     accessors = {"forces.csv": "forces", "front.csv": "front", "energy.csv": "energy", "deposit.csv": "deposit",
+                 "surface.csv": "surface",
                  "peaks.csv": "peaks", "barrier_pressure.csv": "barrier_pressure", "release.csv": "release",
                  "lost.csv": "lost", "envelope.csv": "envelope", "track.csv": "track",
                  "bonds_broken.csv": "bonds_broken", "blocks.csv": "blocks", "front_synced.csv": "front_synced"}
