@@ -1,5 +1,5 @@
-// The barrier design outputs (barrier_pressure.csv, peaks.csv): the pressures integrate to
-// the barrier's normal force, a disc at rest on a flat barrier presses with its weight, and
+// The barrier design outputs (barrier_pressure.csv, peaks.csv, the deposit's section): the
+// pressures integrate to the barrier's normal force, a disc at rest on a flat barrier presses with its weight, and
 // one disc's peaks are its own track.
 #include <gtest/gtest.h>
 
@@ -92,6 +92,9 @@ TEST(BarrierOutputs, PressuresIntegrateToTheBarriersNormalForceAtEveryRow) {
         EXPECT_GT(top_kpa, 0.0);
         EXPECT_LT(top_kpa, r.peak_barrier_pressure / 1000.0);
         EXPECT_NE(gp.find("peak "), std::string::npos);
+        // the deposit's section, filled between the bed and its surface (surface.csv)
+        EXPECT_TRUE(fs::exists(dir / "plots/deposit_section.png"));
+        EXPECT_NE(gp.find("'../surface.csv' using 1:2:3 with filledcurves"), std::string::npos) << gp;
     }
     fs::remove_all(dir);
 }

@@ -291,6 +291,22 @@ void plot_peaks(const std::string& run_dir, const std::string& dir, std::ostring
     }
 }
 
+// deposit_section.png: the deposit at the end over x (surface.csv), filled between the bed and
+// its surface, to scale (one metre in x as long as one in y), as a designer draws the section.
+void plot_surface(const std::string& run_dir, const std::string& dir, std::ostringstream& gp, std::vector<std::string>& made) {
+    namespace fs = std::filesystem;
+    const std::string surface = run_dir + "/surface.csv";
+    if (!fs::exists(surface)) return;
+    const CsvHeader h = header_of(surface);
+    const size_t cx = h.column("x_m") + 1, cb = h.column("bed_m") + 1, cs = h.column("surface_m") + 1;
+    gp << "set output 'deposit_section.png'\nset title 'The deposit at the end of the run'\n"
+       << "set xlabel 'x (m)'\nset ylabel 'y (m)'\nset size ratio -1\n"
+       << "plot '../surface.csv' using " << cx << ":" << cb << ":" << cs
+       << " with filledcurves lc rgb '#c8a060' title 'deposit', '' using " << cx << ":" << cb
+       << " with lines lw 2 lc rgb '#303030' title 'bed'\nset size noratio\nset xlabel 't (s)'\n";
+    made.push_back(dir + "/deposit_section.png");
+}
+
 // motion.png and bonds.png of a 3-D run (series.csv of dem3/dem3_run.cpp): the fastest sphere
 // and the largest travel, and the intact bonds when there are any.
 void plot_spheres(const std::string& run_dir, const std::string& dir, std::ostringstream& gp, std::vector<std::string>& made) {
@@ -337,6 +353,7 @@ std::vector<std::string> make_plots(const std::string& run_dir, int width, int h
     plot_energy(run_dir, dir, gp, made);
     plot_pressure(run_dir, dir, gp, made);
     plot_peaks(run_dir, dir, gp, made);
+    plot_surface(run_dir, dir, gp, made);
     plot_spheres(run_dir, dir, gp, made);
     if (made.empty()) throw InputError(run_dir + ": no forces.csv, front.csv, energy.csv or series.csv to plot");
     const std::string script = dir + "/plots.gp";
