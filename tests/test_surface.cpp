@@ -108,8 +108,8 @@ TEST(DepositSurface, AMassFillingTheArcStandsAtItsTopRowOverTheWholeValley) {
     const MeasureContext mc{s, &path, BarrierMarks{path.part_start(2), v.arc_end()}, ForceWalls{}, r, start};
     const fs::path dir = temp_dir("surface");
     fs::create_directories(dir);
-    write_surface(w, mc, dir.string());
     RunSummary sum;
+    write_surface(w, mc, dir.string(), sum);
     write_deposit(w, mc, dir.string(), sum);
 
     const fs::path f = dir / "surface.csv";
@@ -119,7 +119,7 @@ TEST(DepositSurface, AMassFillingTheArcStandsAtItsTopRowOverTheWholeValley) {
     const double lo = v.top_left().x();
     ASSERT_EQ(xs.size(), size_t(std::floor((v.top_right().x() - lo) / 0.002)) + 1);
     int over_top_row = 0, bare = 0;
-    double depth_at_bottom = 0.0;
+    double depth_at_bottom = 0.0, deepest = 0.0, x_deepest = NAN;
     for (size_t k = 0; k < xs.size(); ++k) {
         const double x = lo + 0.002 * double(k);  // the grid (the file has 6 digits)
         EXPECT_NEAR(xs[k], x, 1e-6);
@@ -134,6 +134,10 @@ TEST(DepositSurface, AMassFillingTheArcStandsAtItsTopRowOverTheWholeValley) {
             ++over_top_row;
         }
         if (std::abs(x) < 0.001) depth_at_bottom = depth[k];
+        if (depth[k] > deepest) {
+            deepest = depth[k];
+            x_deepest = xs[k];
+        }
         // above the mass on either slope: the bed itself, no depth
         if (v.bed(x) > y_top + 2.0 * r) {
             EXPECT_EQ(depth[k], 0.0) << x;
@@ -153,5 +157,9 @@ TEST(DepositSurface, AMassFillingTheArcStandsAtItsTopRowOverTheWholeValley) {
         }
     }
     EXPECT_GT(depth_at_bottom, 1.4 * v.R);
+    // the summary's deepest point is the file's (which has 6 digits), at the arc's bottom
+    EXPECT_NEAR(sum.deposit_max_depth, deepest, 2e-6);
+    EXPECT_NEAR(sum.x_deposit_max_depth, x_deepest, 1e-6);
+    EXPECT_LT(std::abs(sum.x_deposit_max_depth), r);
     fs::remove_all(dir);
 }

@@ -215,6 +215,9 @@ TEST(Units, TheDamBreakReportsItsOwnDeposit) {
     EXPECT_LE(sum.number("deposit_max_height"), 0.41);
     EXPECT_GT(sum.number("deposit_length"), 0.2);
     EXPECT_LE(sum.number("deposit_length"), sum.number("runout_s") + 1e-9);
+    // over the floor the height is the vertical depth
+    EXPECT_EQ(sum.number("deposit_max_depth"), sum.number("deposit_max_height"));
+    EXPECT_GE(sum.number("x_deposit_max_depth"), 0.0);
     // forces.csv holds the dam break's own walls (it held the flume's slope, arc and barrier,
     // all zeros): the floor and the back wall carry the column, whose weight they share
     const CsvTable f = read_csv_table((dir / "forces.csv").string());

@@ -61,9 +61,11 @@ void print_landmarks(const RunSummary& r) {
     if (r.has_path || r.has_envelope) {
         const std::string why = not_measured_reason(r, "deposit_max_height");
         if (why.empty())
-            std::printf("  run-out %s; deposit %s high, %s long\n", landmark(r, "runout_s", r.runout_s, "m").c_str(),
+            std::printf("  run-out %s; deposit %s high, %s long; %s deep at x = %s\n", landmark(r, "runout_s", r.runout_s, "m").c_str(),
                         landmark(r, "deposit_max_height", r.deposit_max_height, "m").c_str(),
-                        landmark(r, "deposit_length", r.deposit_length, "m").c_str());
+                        landmark(r, "deposit_length", r.deposit_length, "m").c_str(),
+                        landmark(r, "deposit_max_depth", r.deposit_max_depth, "m").c_str(),
+                        landmark(r, "x_deposit_max_depth", r.x_deposit_max_depth, "m").c_str());
         else
             std::printf("  run-out %s; deposit height and length none (%s)\n", landmark(r, "runout_s", r.runout_s, "m").c_str(), why.c_str());
     }

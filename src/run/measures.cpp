@@ -414,7 +414,7 @@ void write_deposit(const World& w, const MeasureContext& m, const std::string& d
     write_file_atomic(dir + "/deposit.csv", d.str());
 }
 
-void write_surface(const World& w, const MeasureContext& m, const std::string& dir) {
+void write_surface(const World& w, const MeasureContext& m, const std::string& dir, RunSummary& sum) {
     const BedPath& path = *m.path;
     const double dx = m.scenario.output.deposit_bin;
     double x_lo, x_hi;
@@ -432,6 +432,10 @@ void write_surface(const World& w, const MeasureContext& m, const std::string& d
         // where no disc stands the surface is the bed's, 0 deep (as deposit.csv's empty bins)
         const double top = std::isnan(env.y[k]) ? bed : std::max(env.y[k], bed);
         d << x << ',' << bed << ',' << top << ',' << top - bed << '\n';
+        if (top - bed > sum.deposit_max_depth) {
+            sum.deposit_max_depth = top - bed;
+            sum.x_deposit_max_depth = x;
+        }
     }
     write_file_atomic(dir + "/surface.csv", d.str());
 }
@@ -449,6 +453,11 @@ SlopeAngles write_envelope(const World& w, double gap, double length, double sec
         if (!std::isnan(env.y[k]) && env.y[k] > 0.0) {
             if (std::isnan(first)) first = env.x(k);
             sum.deposit_max_height = std::max(sum.deposit_max_height, env.y[k]);
+            // over the floor (y = 0) the height is the vertical depth
+            if (env.y[k] > sum.deposit_max_depth) {
+                sum.deposit_max_depth = env.y[k];
+                sum.x_deposit_max_depth = env.x(k);
+            }
         }
     sum.deposit_length = std::isnan(first) ? 0.0 : std::max(0.0, angles.toe_x - first);
     std::ostringstream d;
@@ -472,9 +481,11 @@ std::vector<NotMeasured> not_measured(const RunSummary& sum) {
         for (const char* k : keys) out.push_back({k, reason});
     };
     if (!sum.has_path && !sum.has_envelope)
-        add({"runout_s", "deposit_max_height", "deposit_length"}, "the set-up has no bed path or floor to measure a deposit along");
+        add({"runout_s", "deposit_max_height", "deposit_length", "deposit_max_depth", "x_deposit_max_depth"},
+            "the set-up has no bed path or floor to measure a deposit along");
     else if (!sum.has_deposit)
-        add({"deposit_max_height", "deposit_length"}, "DAN gives the deposit as deposit.csv's depths along the path");
+        add({"deposit_max_height", "deposit_length", "deposit_max_depth", "x_deposit_max_depth"},
+            "DAN gives the deposit as deposit.csv's depths along the path");
     if (!sum.has_barrier)
         add({"t_front_at_barrier", "runup_height", "max_runup_height_during_run"}, "the set-up has no barrier");
     else if (sum.t_front_at_barrier < 0)
@@ -587,6 +598,8 @@ SummaryJson summary_json(const Scenario& s, const RunSummary& sum, const Release
     j.number("t_left_flume", sum.t_left_flume >= 0 ? sum.t_left_flume : NAN, "s");
     j.number("deposit_max_height", measured("deposit_max_height", sum.deposit_max_height), "m");
     j.number("deposit_length", measured("deposit_length", sum.deposit_length), "m");
+    j.number("deposit_max_depth", measured("deposit_max_depth", sum.deposit_max_depth), "m");
+    j.number("x_deposit_max_depth", measured("x_deposit_max_depth", sum.x_deposit_max_depth), "m");
     put_landmarks(j, sum);
     if (sum.s_peak_barrier_pressure >= 0) {  // a barrier (barrier_pressure.csv)
         j.number("peak_barrier_pressure", sum.peak_barrier_pressure, "Pa");

@@ -161,7 +161,8 @@ void write_deposit(const World& w, const MeasureContext& m, const std::string& d
 // outlines) above the bed's height there, every output.deposit_bin of x over the bed path's
 // span: the section a designer draws. Unlike deposit.csv's height normal to the bed, it does
 // not stop at a concave arc's radius.
-void write_surface(const World& w, const MeasureContext& m, const std::string& dir);
+// Its deepest sample into the summary (deposit_max_depth, x_deposit_max_depth).
+void write_surface(const World& w, const MeasureContext& m, const std::string& dir, RunSummary& sum);
 // envelope.csv and the slope angles of a dam break's deposit over [0, length].
 SlopeAngles write_envelope(const World& w, double gap, double length, double sections_start, const std::string& dir, RunSummary& sum);
 

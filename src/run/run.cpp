@@ -319,7 +319,7 @@ void write_results(const Scenario& s, const Setup& setup, const World& w, const 
                    const std::function<void(RunSummary&)>& design_figures) {
     if (measure.path) write_deposit(w, measure, dir, sum);
     // the surface over x; a dam break's is envelope.csv (its bed is the floor, y = 0)
-    if (measure.path && !setup.measures_envelope()) write_surface(w, measure, dir);
+    if (measure.path && !setup.measures_envelope()) write_surface(w, measure, dir, sum);
     SlopeAngles angles{};
     if (setup.measures_envelope()) angles = write_envelope(w, measure.front_gap, setup.envelope_length(), s.dam_break.sections_start, dir, sum);
     write_lost_discs(w, dir);

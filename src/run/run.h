@@ -98,6 +98,9 @@ struct RunSummary {
     bool runout_lower_bound = false;
     double deposit_max_height = 0;      // m, the deposit's thickest point normal to the bed (deposit.csv)
     double deposit_length = 0;          // m along the path, from its first bin with mass to its last
+    // m, the deposit's largest vertical depth above the bed (surface.csv; a dam break's: its
+    // envelope's highest point over the floor) and its x
+    double deposit_max_depth = 0, x_deposit_max_depth = 0;
     double runup_height = 0;            // m: highest point of the deposit on the barrier above its foot
     double max_runup_height_during_run = 0;
     double t_front_at_barrier = -1;     // s, -1 if never
