@@ -121,16 +121,16 @@ TEST(DepositSurface, AMassFillingTheArcStandsAtItsTopRowOverTheWholeValley) {
     int over_top_row = 0, bare = 0;
     double depth_at_bottom = 0.0, deepest = 0.0, x_deepest = NAN;
     for (size_t k = 0; k < xs.size(); ++k) {
-        const double x = lo + 0.002 * double(k);  // the grid (the file has 6 digits)
-        EXPECT_NEAR(xs[k], x, 1e-6);
-        EXPECT_NEAR(bed[k], v.bed(x), 1e-6) << x;
-        EXPECT_NEAR(depth[k], surf[k] - bed[k], 2e-6) << x;
+        const double x = lo + 0.002 * double(k);  // the grid (the file has 10 digits)
+        EXPECT_NEAR(xs[k], x, 1e-9);
+        EXPECT_NEAR(bed[k], v.bed(x), 1e-9) << x;
+        EXPECT_NEAR(depth[k], surf[k] - bed[k], 1e-9) << x;
         // the top row's outline, where one of its discs covers x: no lower disc reaches it
         double top = -1.0;
         for (const double xc : top_row_x)
             if (std::abs(x - xc) <= r) top = std::max(top, y_top + std::sqrt(r * r - (x - xc) * (x - xc)));
         if (top > 0.0 && x > top_row_x.front() + r && x < top_row_x.back() - r) {
-            EXPECT_NEAR(surf[k], top, 1e-6) << x;
+            EXPECT_NEAR(surf[k], top, 1e-9) << x;
             ++over_top_row;
         }
         if (std::abs(x) < 0.001) depth_at_bottom = depth[k];
@@ -157,9 +157,9 @@ TEST(DepositSurface, AMassFillingTheArcStandsAtItsTopRowOverTheWholeValley) {
         }
     }
     EXPECT_GT(depth_at_bottom, 1.4 * v.R);
-    // the summary's deepest point is the file's (which has 6 digits), at the arc's bottom
-    EXPECT_NEAR(sum.deposit_max_depth, deepest, 2e-6);
-    EXPECT_NEAR(sum.x_deposit_max_depth, x_deepest, 1e-6);
+    // the summary's deepest point is the file's, at the arc's bottom
+    EXPECT_NEAR(sum.deposit_max_depth, deepest, 1e-9);
+    EXPECT_NEAR(sum.x_deposit_max_depth, x_deepest, 1e-9);
     EXPECT_LT(std::abs(sum.x_deposit_max_depth), r);
     fs::remove_all(dir);
 }

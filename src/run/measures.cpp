@@ -424,6 +424,9 @@ void write_surface(const World& w, const MeasureContext& m, const std::string& d
     // on the grid x_lo + k dx; the last sample at or before x_hi
     const Envelope env = upper_envelope(w.positions(), w.radii(), conn, x_lo, x_hi, dx);
     std::ostringstream d;
+    // 10 digits: a terrain's x and y may be map coordinates (hundreds of kilometres, metres
+    // above the sea) whose depths are centimetres
+    d.precision(10);
     d << "x_m,bed_m,surface_m,depth_m\n";
     for (size_t k = 0; k < env.y.size(); ++k) {
         const double x = env.x(k);
