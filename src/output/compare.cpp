@@ -225,9 +225,11 @@ void compare_table(const CompareOptions& o, const std::vector<RunInfo>& runs, st
     // the landmarks side by side
     std::ostringstream md, csv;
     md << "# Comparison\n\n| run | front at the barrier (s) | run-out s (m) | run-up (m) | highest run-up (m) | peak fx on the "
-          "barrier (N/m) | at (s) | filtered peak fx (N/m) | static fx (N/m) | at rest (s) | stop |\n|---|---|---|---|---|---|---|---|---|---|---|\n";
+          "barrier (N/m) | at (s) | filtered peak fx (N/m) | static fx (N/m) | deposit's depth (m) | at rest (s) | stop |\n"
+          "|---|---|---|---|---|---|---|---|---|---|---|---|\n";
     csv << "run,model,t_front_at_barrier_s,runout_s_m,runup_height_m,max_runup_height_during_run_m,peak_fx_barrier_N_per_m,"
-           "t_peak_fx_barrier_s,t_end_s,stop_reason,peak_fx_barrier_filtered_N_per_m,static_fx_barrier_N_per_m\n";
+           "t_peak_fx_barrier_s,t_end_s,stop_reason,peak_fx_barrier_filtered_N_per_m,static_fx_barrier_N_per_m,"
+           "deposit_max_depth_m,x_deposit_max_depth_m\n";
     for (const RunInfo& r : runs) {
         const SummaryFile& s = r.summary;
         const double shift = s.number("sync_shift");
@@ -239,16 +241,18 @@ void compare_table(const CompareOptions& o, const std::vector<RunInfo>& runs, st
            << cell(s.number("runup_height")) << " | " << cell(s.number("max_runup_height_during_run")) << " | "
            << cell(s.number("peak_fx_barrier"), 1) << " | " << cell(s.number("t_peak_fx_barrier")) << " | "
            << cell(s.number("peak_fx_barrier_filtered"), 1) << " | " << cell(s.number("static_fx_barrier"), 1) << " | "
-           << cell(s.number("t_end")) << " | " << s.text("stop_reason") << " |\n";
+           << cell(s.number("deposit_max_depth")) << " | " << cell(s.number("t_end")) << " | " << s.text("stop_reason") << " |\n";
         csv << '"' << r.label << "\"," << (r.dan ? "dan" : "dem") << ',' << cell(s.number("t_front_at_barrier"), 6, "") << ','
             << cell(s.number("runout_s"), 6, "") << ',' << cell(s.number("runup_height"), 6, "") << ','
             << cell(s.number("max_runup_height_during_run"), 6, "") << ',' << cell(s.number("peak_fx_barrier"), 3, "") << ','
             << cell(s.number("t_peak_fx_barrier"), 6, "") << ',' << cell(s.number("t_end"), 6, "") << ',' << s.text("stop_reason") << ','
-            << cell(s.number("peak_fx_barrier_filtered"), 3, "") << ',' << cell(s.number("static_fx_barrier"), 3, "") << '\n';
+            << cell(s.number("peak_fx_barrier_filtered"), 3, "") << ',' << cell(s.number("static_fx_barrier"), 3, "") << ','
+            << cell(s.number("deposit_max_depth"), 6, "") << ',' << cell(s.number("x_deposit_max_depth"), 6, "") << '\n';
     }
     md << "\nRun-out: s of the deposit's front along the bed path (DEM: the foremost connected disc; DAN: the front "
-          "block). Run-up: the deposit's highest point on the barrier above its foot. \">=\": mass left the flume "
-          "(summary.json's left_flume), so the figure is a lower bound.\n";
+          "block). Run-up: the deposit's highest point on the barrier above its foot. Deposit's depth: its largest "
+          "vertical depth above the bed (the DEM's surface.csv). \">=\": mass left the flume (summary.json's left_flume), so "
+          "the figure is a lower bound.\n";
     // "-": a landmark the run did not measure; why, from its summary
     bool heading = false;
     for (const RunInfo& r : runs)
