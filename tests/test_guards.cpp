@@ -312,3 +312,24 @@ TEST(Guards, MistypedOptionsAndCommandsAreNamedWithTheNearest) {
     EXPECT_EQ(err.find("'--scale'"), std::string::npos) << err;
     EXPECT_FALSE(fs::exists(out));
 }
+
+// A bin of output.deposit_bin so small that the bed path would get billions of bins (deposit.csv,
+// peaks.csv, surface.csv) is an input error naming the file, the key and the smallest bin
+// allowed, for the discs and for DAN, before the run folder exists (it ended in an allocation
+// failure after release.csv and scenario.toml were written).
+TEST(Guards, DepositBinsThatWouldExhaustTheMemoryAreRefusedBeforeTheRun) {
+    const fs::path dir = temp_dir("deposit-bins");
+    fs::create_directories(dir);
+    const std::string geometry_a = std::string(DEMLAB_SOURCE_DIR) + "/scenarios/geometry-A.toml";
+    const std::string out = " --no-plots --out " + (dir / "run").string();
+    for (const char* solver : {"dem", "dan"}) {
+        std::string err;
+        EXPECT_EQ(run_exe("run " + geometry_a + " --solver " + solver + " --scale 20 --set output.deposit_bin=1e-12" + out, err), 2)
+            << solver;
+        for (const char* part : {"geometry-A.toml: output.deposit_bin = 1e-12 m", "2.823 m long", "more than 1e+07",
+                                 "at least 2.823e-07 m"})
+            EXPECT_NE(err.find(part), std::string::npos) << solver << ": " << err;
+        EXPECT_FALSE(fs::exists(dir / "run")) << solver;
+    }
+    fs::remove_all(dir);
+}

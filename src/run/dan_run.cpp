@@ -109,6 +109,7 @@ double first_time_at(const std::vector<double>& t, const std::vector<double>& s,
 
 DanSolver dan_of_scenario(const Scenario& s) {
     DanPath path = flume_dan_path(s);
+    refuse_too_many_deposit_bins(s, path.length(), 0.0);  // (deposit.csv along the path)
     const DanDef& d = s.dan;
     if (d.columns == DanColumns::Vertical && !path.x_increasing(-d.path_extension, path.length() + d.path_extension, 0.05))
         throw InputError(s.source + ": dan.columns = \"vertical\" needs a path whose x increases everywhere (cos alpha >= "

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <sstream>
 
@@ -412,6 +413,19 @@ void write_deposit(const World& w, const MeasureContext& m, const std::string& d
     }
     sum.deposit_length = first < 0 ? 0.0 : double(last - first + 1) * bin;
     write_file_atomic(dir + "/deposit.csv", d.str());
+}
+
+void refuse_too_many_deposit_bins(const Scenario& s, double along, double span_x) {
+    const double bin = s.output.deposit_bin, longest = std::max(along, span_x);
+    if (longest / bin <= kMaxDepositBins) return;
+    auto g4 = [](double v) {  // (the figures of a message, to 4 digits)
+        char b[32];
+        std::snprintf(b, sizeof b, "%.4g", v);
+        return std::string(b);
+    };
+    throw InputError(s.source + ": output.deposit_bin = " + format_number(bin) + " m would cut the bed path (" + g4(along) +
+                     " m long" + (span_x > 0.0 ? ", " + g4(span_x) + " m in x" : std::string()) + ") into " + g4(longest / bin) + " bins, more than " +
+                     g4(kMaxDepositBins) + ": it must be at least " + g4(longest / kMaxDepositBins) + " m (and at most 10 m)");
 }
 
 void write_surface(const World& w, const MeasureContext& m, const std::string& dir, RunSummary& sum) {

@@ -157,6 +157,14 @@ double energy_put_in(const EnergyReport& e, double e0);
 // deposit.csv: the deposit's top, normal to the bed, in bins along the path; the run-out and
 // final run-up into the summary.
 void write_deposit(const World& w, const MeasureContext& m, const std::string& dir, RunSummary& sum);
+// The most bins output.deposit_bin may make along a bed path (deposit.csv, peaks.csv) or over its
+// span in x (surface.csv): ten million rows, some 300 MB of text.
+constexpr double kMaxDepositBins = 1e7;
+// An InputError naming the scenario file, the key, its value and the smallest bin allowed when
+// a path `along` metres long, or spanning `span_x` metres in x, would get more bins: refused
+// before the run writes anything (a bin of a nanometre over a flume asked for 1e9 rows and
+// ended the run in an allocation failure).
+void refuse_too_many_deposit_bins(const Scenario& s, double along, double span_x);
 // surface.csv: the deposit's surface over x (the upper envelope of the connected discs'
 // outlines) above the bed's height there, every output.deposit_bin of x over the bed path's
 // span: the section a designer draws. Unlike deposit.csv's height normal to the bed, it does

@@ -449,6 +449,12 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
     const ReleaseMass mass = start_mass(s, *setup, restore.get(), dir, terminal);
     std::vector<int> layer, grid;
     World w = build_world(s, *setup, mass, restore != nullptr, layer, grid);
+    const std::unique_ptr<BedPath> path = setup->bed_path(w);
+    if (path) {
+        double x_lo, x_hi;
+        path->x_span(x_lo, x_hi);
+        refuse_too_many_deposit_bins(s, path->length(), x_hi - x_lo);
+    }
     if (!o.resume) {
         open_run_folder(o, scenario_text, inputs, lock, held);
         if (setup->has_release() && !s.lattice_release.enabled) save_release(mass, dir + "/release.csv");
@@ -462,7 +468,6 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
     const DiscTotals totals = disc_totals(w);
     const double r_max = totals.r_max, total_mass = totals.mass;
     const double noise = ledger_noise(w, s.world.gravity.norm());  // (check_energy_growth)
-    const std::unique_ptr<BedPath> path = setup->bed_path(w);
     const MeasureContext measure{s, path.get(), path ? setup->barrier(*path) : BarrierMarks{}, setup->force_walls(),
                                  s.output.front_neighbour_gap > 0 ? s.output.front_neighbour_gap : r_max, start_pos};
 
