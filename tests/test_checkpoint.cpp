@@ -503,7 +503,7 @@ TEST(Checkpoint, DanRunResumesToTheSameBytes) {
     std::ofstream(cut / "forces.csv.part", std::ios::app) << "9.99,written after the checkpoint\n";
     const RunSummary r = demlab::test::resume_run(cut, 1);
     EXPECT_EQ(r.stop_reason, "rest");
-    for (const char* f : {"forces.csv", "front.csv", "energy.csv", "blocks.csv", "deposit.csv"})
+    for (const char* f : {"forces.csv", "front.csv", "energy.csv", "blocks.csv", "deposit.csv", "surface.csv"})
         EXPECT_EQ(read_file(ref / f), read_file(cut / f)) << f << " differs";
     EXPECT_EQ(summary_without_timing(ref / "summary.json"), summary_without_timing(cut / "summary.json"));
     EXPECT_FALSE(fs::exists(cut / kCheckpointFile));

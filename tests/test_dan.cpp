@@ -4,7 +4,11 @@
 // reference of geometry A.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstdio>
+#include <sstream>
 #include <filesystem>
 #include <random>
 
@@ -525,3 +529,82 @@ TEST(Dan, RefinementConverges) {
 }
 
 }  // namespace demlab
+
+// surface.csv of a DAN run: its free surface over x, through the boundary blocks' points
+// p(S) + H n(S). A uniform layer on a 30-degree incline stands H / cos 30 above the bed
+// vertically; on a flat bed, a layer of any shape stands at H interpolated linearly in s = x.
+TEST(Dan, SurfaceOverXStandsTheBlocksHeightsAboveTheBed) {
+    auto rows = [](const std::string& csv) {
+        std::vector<std::array<double, 4>> out;
+        std::istringstream in(csv);
+        std::string line;
+        std::getline(in, line);
+        EXPECT_EQ(line, "x_m,bed_m,surface_m,depth_m");
+        while (std::getline(in, line)) {
+            std::array<double, 4> r{};
+            EXPECT_EQ(std::sscanf(line.c_str(), "%lf,%lf,%lf,%lf", &r[0], &r[1], &r[2], &r[3]), 4) << line;
+            out.push_back(r);
+        }
+        return out;
+    };
+    {
+        SCOPED_TRACE("a uniform layer on an incline");
+        DanInitial init;
+        for (int i = 0; i <= 100; ++i) init.s.push_back(5.0 + 0.05 * i);
+        init.volume.assign(100, 0.05 * 0.1);
+        init.v.assign(101, 0.0);
+        const DanSolver dan(plain(30.0), incline(30.0), kDown, init);
+        const double H = dan.height()[50], c = std::cos(30.0 * kPi / 180.0);
+        for (size_t k = 2; k + 2 < dan.blocks(); ++k) ASSERT_NEAR(dan.height()[k], H, 1e-12 * H) << k;
+        RunSummary sum;
+        const auto r = rows(dan_surface(dan, 0.01, sum));
+        ASSERT_EQ(r.size(), size_t(std::floor(20.0 * c / 0.01)) + 1);
+        int inside = 0;
+        for (const auto& row : r) {
+            const double bed = 20.0 * std::sin(30.0 * kPi / 180.0) - row[0] * std::tan(30.0 * kPi / 180.0);
+            EXPECT_NEAR(row[1], bed, 1e-9) << row[0];
+            EXPECT_NEAR(row[3], row[2] - row[1], 1e-9) << row[0];
+            // well inside the layer (x of s = 5.5 to 9.5 m): H / cos above the bed
+            if (row[0] > 5.5 * c + 0.1 && row[0] < 9.5 * c) {
+                EXPECT_NEAR(row[3], H / c, 1e-9) << row[0];
+                ++inside;
+            }
+            // beyond the layer: the bed, no depth
+            if (row[0] < 4.5 * c || row[0] > 10.5 * c) {
+                EXPECT_EQ(row[3], 0.0) << row[0];
+            }
+        }
+        EXPECT_GT(inside, 300);
+        EXPECT_NEAR(sum.deposit_max_depth, H / c, 1e-6 * H);  // (the ends' H may differ a little)
+    }
+    {
+        SCOPED_TRACE("a layer of any shape on a flat bed");
+        std::mt19937 rng(7);
+        std::uniform_real_distribution<double> u(0.5, 1.5);
+        DanInitial init;
+        double s = 1.0;
+        for (int i = 0; i <= 40; ++i) {
+            init.s.push_back(s);
+            s += 0.05 * u(rng);
+            init.v.push_back(0.0);
+            if (i < 40) init.volume.push_back(4e-3 * u(rng));
+        }
+        const DanSolver dan(plain(30.0), DanPath(BedPath({segment_geom(Vec2(0, 0), Vec2(10, 0))})), kDown, init);
+        RunSummary sum;
+        const auto r = rows(dan_surface(dan, 0.01, sum));
+        const std::vector<double>&S = dan.s(), &Hs = dan.height();
+        double deepest = 0.0;
+        for (const auto& row : r) {
+            EXPECT_EQ(row[1], 0.0);
+            double expected = 0.0;
+            if (row[0] >= S.front() && row[0] <= S.back()) {
+                const size_t j = size_t(std::upper_bound(S.begin(), S.end(), row[0]) - S.begin()) - 1;
+                const size_t k = std::min(j, S.size() - 2);
+                expected = Hs[k] + (Hs[k + 1] - Hs[k]) * (row[0] - S[k]) / (S[k + 1] - S[k]);
+            }
+            EXPECT_NEAR(row[3], expected, 1e-9) << row[0];
+            deepest = std::max(deepest, row[3]);
+        }
+        EXPECT_NEAR(sum.deposit_max_depth, deepest, 1e-9);
+    }
+}

@@ -66,8 +66,11 @@ void print_landmarks(const RunSummary& r) {
                         landmark(r, "deposit_length", r.deposit_length, "m").c_str(),
                         landmark(r, "deposit_max_depth", r.deposit_max_depth, "m").c_str(),
                         landmark(r, "x_deposit_max_depth", r.x_deposit_max_depth, "m").c_str());
-        else
-            std::printf("  run-out %s; deposit height and length none (%s)\n", landmark(r, "runout_s", r.runout_s, "m").c_str(), why.c_str());
+        else  // (DAN: its depth over x, surface.csv, but no height normal to the bed)
+            std::printf("  run-out %s; deposit height and length none (%s); %s deep at x = %s\n",
+                        landmark(r, "runout_s", r.runout_s, "m").c_str(), why.c_str(),
+                        landmark(r, "deposit_max_depth", r.deposit_max_depth, "m").c_str(),
+                        landmark(r, "x_deposit_max_depth", r.x_deposit_max_depth, "m").c_str());
     }
     if (r.has_barrier_forces) {
         // the barrier's design loads (docs/barrier-loads.md): each figure, or none with its reason

@@ -166,8 +166,8 @@ void compare_deposits(const CompareOptions& o, const std::vector<RunInfo>& runs,
             plot << (k > 0 || all_flume ? ", " : "") << "'" << file << "' using 1:2 with lines lw 2 lc " << k + 1 << " title "
                  << quoted(r.label);
         };
-        // over the flume a DEM run's own surface over x (surface.csv), which deposit.csv's
-        // height normal to the bed cannot give over the concave arc (docs/flume.md)
+        // over the flume a run's own surface over x (surface.csv), which deposit.csv's height
+        // normal to the bed cannot give over the concave arc (docs/flume.md)
         const std::string over_x = r.dir + "/surface.csv";
         if (all_flume && fs::exists(over_x)) {
             write_file_atomic(o.out + "/" + file, surface_over_x(over_x));
@@ -251,7 +251,7 @@ void compare_table(const CompareOptions& o, const std::vector<RunInfo>& runs, st
     }
     md << "\nRun-out: s of the deposit's front along the bed path (DEM: the foremost connected disc; DAN: the front "
           "block). Run-up: the deposit's highest point on the barrier above its foot. Deposit's depth: its largest "
-          "vertical depth above the bed (the DEM's surface.csv). \">=\": mass left the flume (summary.json's left_flume), so "
+          "vertical depth above the bed (surface.csv). \">=\": mass left the flume (summary.json's left_flume), so "
           "the figure is a lower bound.\n";
     // "-": a landmark the run did not measure; why, from its summary
     bool heading = false;

@@ -123,6 +123,43 @@ DanSolver dan_of_scenario(const Scenario& s) {
     return solver;
 }
 
+// surface.csv of a DAN run, the DEM's columns: the free surface is the boundary blocks' points
+// p(S_k) + H_k n(S_k) (the heights are normal to the bed in both column modes), joined by
+// straight lines; over x its upper envelope, every `dx` over the path's span, above the bed's
+// height there. Over the concave arc the normals converge and the line may fold back; the
+// envelope takes its top. Its deepest sample into sum.
+std::string dan_surface(const DanSolver& dan, double dx, RunSummary& sum) {
+    const BedPath& bed_path = dan.path().bed();
+    double x_lo, x_hi;
+    bed_path.x_span(x_lo, x_hi);
+    Envelope top;
+    top.x0 = x_lo;
+    top.dx = dx;
+    top.y.assign(size_t(std::floor((x_hi - x_lo) / dx)) + 1, NAN);
+    const long last = long(top.y.size()) - 1;
+    const std::vector<double>&S = dan.s(), &H = dan.height();
+    std::vector<double> px(S.size()), py(S.size());
+    for (size_t k = 0; k < S.size(); ++k) {
+        const DanPathPoint q = dan.path().at(S[k]);
+        const Vec2 n = q.normal();
+        px[k] = q.p.x() + H[k] * n.x();
+        py[k] = q.p.y() + H[k] * n.y();
+    }
+    for (size_t k = 1; k < S.size(); ++k) {
+        // the segment between points k - 1 and k, from its lower x (l) to its higher (r)
+        const size_t l = px[k - 1] <= px[k] ? k - 1 : k, r = l == k ? k - 1 : k;
+        const long g0 = std::max(0L, long(std::ceil((px[l] - x_lo) / dx)));
+        const long g1 = std::min(last, long(std::floor((px[r] - x_lo) / dx)));
+        for (long g = g0; g <= g1; ++g) {
+            const double x = top.x(size_t(g)), run = px[r] - px[l];
+            const double y = run > 0.0 ? py[l] + (py[r] - py[l]) * (x - px[l]) / run : std::max(py[l], py[r]);
+            double& t = top.y[size_t(g)];
+            if (std::isnan(t) || y > t) t = y;
+        }
+    }
+    return surface_csv(bed_path, top, sum);
+}
+
 namespace {
 
 // DAN's blocks span its width B (dan.width); its outputs are per metre of it, as a PFC2D run's
@@ -446,6 +483,7 @@ RunSummary DanRun::finish(const std::vector<ScenarioInput>& inputs, double wall_
     sum.wall_seconds = wall_seconds;
     sum.particle_steps_per_second = double(n_) * double(sum.steps) / std::max(sum.wall_seconds, 1e-9);
     write_file_atomic(dir_ + "/deposit.csv", dan_deposit(dan_, s_.output.deposit_bin));
+    write_file_atomic(dir_ + "/surface.csv", dan_surface(dan_, s_.output.deposit_bin, sum));
     const double sync_shift = write_synced_front(d, sync_target_, dir_);
     SummaryJson j;
     j.text("scenario", s_.name);
@@ -465,6 +503,8 @@ RunSummary DanRun::finish(const std::vector<ScenarioInput>& inputs, double wall_
     j.text("machine", machine_summary(machine_info()));
     j.number("runout_s", sum.runout_s, "m");
     j.number("max_front_s", max_front_, "m");
+    j.number("deposit_max_depth", sum.deposit_max_depth, "m");  // (surface.csv, as a DEM run's)
+    j.number("x_deposit_max_depth", sum.x_deposit_max_depth, "m");
     put_landmarks(j, sum);  // the DEM's landmark keys, for `demlab compare`
     sum.runout_lower_bound = left_flume_;
     j.boolean("left_flume", left_flume_);

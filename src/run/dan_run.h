@@ -3,7 +3,8 @@
 // 2, "Outputs"): scenario.toml, front.csv (t, s_front, displacement, s_tail, v_front),
 // forces.csv (the DEM's columns: the bed's load on slope, arc and barrier), energy.csv (t,
 // kinetic, potential, dissipated_friction, other, balance), blocks.csv (every block at each
-// snapshot interval), deposit.csv (s, height, block_height), front_synced.csv (with
+// snapshot interval), deposit.csv (s, height, block_height), surface.csv (the DEM's columns:
+// the deposit over x), front_synced.csv (with
 // dan.sync_front) and summary.json. run_scenario takes it through the folder, the run loop
 // and its checkpoints as it does the discs.
 #pragma once
@@ -25,5 +26,10 @@ DanSolver dan_of_scenario(const Scenario& s);
 
 // A flume scenario's path (W1, arc, W3) as the DEM world joins its walls.
 DanPath flume_dan_path(const Scenario& s);
+
+// surface.csv of a DAN run (x_m, bed_m, surface_m, depth_m, as a DEM run's): the free surface
+// through the boundary blocks' points p(S_k) + H_k n(S_k), over x every dx of the path's
+// span; its deepest sample into sum (deposit_max_depth, x_deposit_max_depth).
+std::string dan_surface(const DanSolver& dan, double dx, RunSummary& sum);
 
 }  // namespace demlab

@@ -436,25 +436,30 @@ void write_surface(const World& w, const MeasureContext& m, const std::string& d
     const auto conn = connected_discs(w.positions(), w.radii(), m.front_gap);
     // y(x) = max over discs covering x of y_c + sqrt(r^2 - (x - x_c)^2) (geometry/deposit.h),
     // on the grid x_lo + k dx; the last sample at or before x_hi
-    const Envelope env = upper_envelope(w.positions(), w.radii(), conn, x_lo, x_hi, dx);
+    write_file_atomic(dir + "/surface.csv", surface_csv(path, upper_envelope(w.positions(), w.radii(), conn, x_lo, x_hi, dx), sum));
+}
+
+std::string surface_csv(const BedPath& path, const Envelope& top, RunSummary& sum) {
     std::ostringstream d;
     // 10 digits: a terrain's x and y may be map coordinates (hundreds of kilometres, metres
     // above the sea) whose depths are centimetres
     d.precision(10);
     d << "x_m,bed_m,surface_m,depth_m\n";
-    for (size_t k = 0; k < env.y.size(); ++k) {
-        const double x = env.x(k);
+    sum.deposit_max_depth = 0.0;
+    sum.x_deposit_max_depth = 0.0;
+    for (size_t k = 0; k < top.y.size(); ++k) {
+        const double x = top.x(k);
         double bed;
         if (!path.height_at(x, bed)) continue;  // (a path with a gap in x: nothing to stand on)
-        // where no disc stands the surface is the bed's, 0 deep (as deposit.csv's empty bins)
-        const double top = std::isnan(env.y[k]) ? bed : std::max(env.y[k], bed);
-        d << x << ',' << bed << ',' << top << ',' << top - bed << '\n';
-        if (top - bed > sum.deposit_max_depth) {
-            sum.deposit_max_depth = top - bed;
+        // where no mass stands the surface is the bed's, 0 deep (as deposit.csv's empty bins)
+        const double surface = std::isnan(top.y[k]) ? bed : std::max(top.y[k], bed);
+        d << x << ',' << bed << ',' << surface << ',' << surface - bed << '\n';
+        if (surface - bed > sum.deposit_max_depth) {
+            sum.deposit_max_depth = surface - bed;
             sum.x_deposit_max_depth = x;
         }
     }
-    write_file_atomic(dir + "/surface.csv", d.str());
+    return d.str();
 }
 
 SlopeAngles write_envelope(const World& w, double gap, double length, double sections_start, const std::string& dir, RunSummary& sum) {
@@ -501,8 +506,7 @@ std::vector<NotMeasured> not_measured(const RunSummary& sum) {
         add({"runout_s", "deposit_max_height", "deposit_length", "deposit_max_depth", "x_deposit_max_depth"},
             "the set-up has no bed path or floor to measure a deposit along");
     else if (!sum.has_deposit)
-        add({"deposit_max_height", "deposit_length", "deposit_max_depth", "x_deposit_max_depth"},
-            "DAN gives the deposit as deposit.csv's depths along the path");
+        add({"deposit_max_height", "deposit_length"}, "DAN gives the deposit as deposit.csv's depths along the path");
     if (!sum.has_barrier)
         add({"t_front_at_barrier", "runup_height", "max_runup_height_during_run"}, "the set-up has no barrier");
     else if (sum.t_front_at_barrier < 0)

@@ -171,6 +171,9 @@ void refuse_too_many_deposit_bins(const Scenario& s, double along, double span_x
 // not stop at a concave arc's radius.
 // Its deepest sample into the summary (deposit_max_depth, x_deposit_max_depth).
 void write_surface(const World& w, const MeasureContext& m, const std::string& dir, RunSummary& sum);
+// surface.csv's text for a top sampled over x (NaN where no mass stands) above a bed path, a
+// DEM run's or DAN's; its deepest sample into sum.
+std::string surface_csv(const BedPath& path, const Envelope& top, RunSummary& sum);
 // envelope.csv and the slope angles of a dam break's deposit over [0, length].
 SlopeAngles write_envelope(const World& w, double gap, double length, double sections_start, const std::string& dir, RunSummary& sum);
 
