@@ -419,6 +419,8 @@ TEST(Dan, RefusalsAndGeometryAReference) {
     EXPECT_NEAR(r.runout_s, 2.2146, 1e-4);
     EXPECT_NEAR(r.runup_height, 0.2573, 1e-4);
     EXPECT_EQ(r.stop_reason, "rest");
+    EXPECT_NEAR(r.deposit_max_depth, 0.1182, 1e-4);  // (surface.csv's deepest sample, over the arc)
+    EXPECT_NEAR(r.x_deposit_max_depth, 1.46, 1e-9);
     {  // dan.width spans the blocks; the outputs stay per metre of it (as the 1 m default's)
         const fs::path wide = temp_dir("dan-wide");
         fs::remove_all(wide);
@@ -452,6 +454,10 @@ TEST(Dan, RefusalsAndGeometryAReference) {
     for (const std::string& f : files) EXPECT_GT(fs::file_size(f), 100u) << f;
     EXPECT_NE(read_file(out / "comparison.md").find("(DAN, 41 blocks) | 0.385 | 2.215 | 0.257"), std::string::npos)
         << read_file(out / "comparison.md");
+    // the deposit's depth beside the loads (its cell, and the CSV's last two columns)
+    EXPECT_NE(read_file(out / "comparison.md").find("| 0.118 | 2.454 | rest |"), std::string::npos) << read_file(out / "comparison.md");
+    EXPECT_NE(read_file(out / "comparison.csv").find(",deposit_max_depth_m,x_deposit_max_depth_m\n"), std::string::npos);
+    EXPECT_NE(read_file(out / "comparison.csv").find(",0.118173,1.460000\n"), std::string::npos) << read_file(out / "comparison.csv");
     fs::remove_all(out);
     // runs on different flumes: each deposit over its own flume, in its colour, named by its
     // geometry (not every deposit over the first run's flume)

@@ -64,6 +64,28 @@ Envelope upper_envelope(const std::vector<Vec2>& pos, const std::vector<double>&
     return e;
 }
 
+Envelope upper_envelope(const std::vector<Vec2>& points, double x_from, double x_to, double dx) {
+    Envelope e;
+    e.x0 = x_from;
+    e.dx = dx;
+    const size_t m = size_t(std::floor((x_to - x_from) / dx)) + 1;
+    e.y.assign(m, NAN);
+    for (size_t k = 1; k < points.size(); ++k) {
+        // the segment from its lower x (l) to its higher (r)
+        const Vec2 &l = points[k - 1].x() <= points[k].x() ? points[k - 1] : points[k],
+                   &r = points[k - 1].x() <= points[k].x() ? points[k] : points[k - 1];
+        const long k0 = std::max(0L, long(std::ceil((l.x() - x_from) / dx)));
+        const long k1 = std::min(long(m) - 1, long(std::floor((r.x() - x_from) / dx)));
+        const double run = r.x() - l.x();
+        for (long g = k0; g <= k1; ++g) {
+            const double top = run > 0.0 ? l.y() + (r.y() - l.y()) * (e.x(size_t(g)) - l.x()) / run : std::max(l.y(), r.y());
+            double& y = e.y[size_t(g)];
+            if (std::isnan(y) || top > y) y = top;
+        }
+    }
+    return e;
+}
+
 bool fit_line(const Envelope& e, double lo, double hi, double& slope, double& intercept) {
     double sx = 0, sy = 0, sxx = 0, sxy = 0;
     long n = 0;

@@ -27,6 +27,9 @@ struct Envelope {
 
 Envelope upper_envelope(const std::vector<Vec2>& pos, const std::vector<double>& radius,
                         const std::vector<uint8_t>& use, double x_from, double x_to, double dx);
+// The same grid's upper envelope of a polyline through `points` (a continuum's free surface,
+// which may fold back over x): at each x the highest of the segments over it.
+Envelope upper_envelope(const std::vector<Vec2>& points, double x_from, double x_to, double dx);
 
 // Slope angles of the surface, degrees (positive: falling towards +x).
 struct SlopeAngles {

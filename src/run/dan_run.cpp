@@ -132,32 +132,12 @@ std::string dan_surface(const DanSolver& dan, double dx, RunSummary& sum) {
     const BedPath& bed_path = dan.path().bed();
     double x_lo, x_hi;
     bed_path.x_span(x_lo, x_hi);
-    Envelope top;
-    top.x0 = x_lo;
-    top.dx = dx;
-    top.y.assign(size_t(std::floor((x_hi - x_lo) / dx)) + 1, NAN);
-    const long last = long(top.y.size()) - 1;
-    const std::vector<double>&S = dan.s(), &H = dan.height();
-    std::vector<double> px(S.size()), py(S.size());
-    for (size_t k = 0; k < S.size(); ++k) {
-        const DanPathPoint q = dan.path().at(S[k]);
-        const Vec2 n = q.normal();
-        px[k] = q.p.x() + H[k] * n.x();
-        py[k] = q.p.y() + H[k] * n.y();
+    std::vector<Vec2> points;
+    for (size_t k = 0; k < dan.blocks(); ++k) {
+        const DanPathPoint q = dan.path().at(dan.s()[k]);
+        points.push_back(q.p + dan.height()[k] * q.normal());
     }
-    for (size_t k = 1; k < S.size(); ++k) {
-        // the segment between points k - 1 and k, from its lower x (l) to its higher (r)
-        const size_t l = px[k - 1] <= px[k] ? k - 1 : k, r = l == k ? k - 1 : k;
-        const long g0 = std::max(0L, long(std::ceil((px[l] - x_lo) / dx)));
-        const long g1 = std::min(last, long(std::floor((px[r] - x_lo) / dx)));
-        for (long g = g0; g <= g1; ++g) {
-            const double x = top.x(size_t(g)), run = px[r] - px[l];
-            const double y = run > 0.0 ? py[l] + (py[r] - py[l]) * (x - px[l]) / run : std::max(py[l], py[r]);
-            double& t = top.y[size_t(g)];
-            if (std::isnan(t) || y > t) t = y;
-        }
-    }
-    return surface_csv(bed_path, top, sum);
+    return surface_csv(bed_path, upper_envelope(points, x_lo, x_hi, dx), sum);
 }
 
 namespace {
