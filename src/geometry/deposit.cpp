@@ -43,45 +43,49 @@ std::vector<uint8_t> connected_discs(const std::vector<Vec2>& p, const std::vect
     return ok;
 }
 
-Envelope upper_envelope(const std::vector<Vec2>& pos, const std::vector<double>& radius,
-                        const std::vector<uint8_t>& use, double x_from, double x_to, double dx) {
+namespace {
+// An envelope of the grid x_from + k dx up to x_to, no sample covered yet.
+Envelope empty_envelope(double x_from, double x_to, double dx) {
     Envelope e;
     e.x0 = x_from;
     e.dx = dx;
-    const size_t m = size_t(std::floor((x_to - x_from) / dx)) + 1;
-    e.y.assign(m, NAN);
+    e.y.assign(size_t(std::floor((x_to - x_from) / dx)) + 1, NAN);
+    return e;
+}
+// Raises the samples in [a, b] to top(x) where it is higher.
+template <typename Top>
+void raise_over(Envelope& e, double a, double b, Top top) {
+    const long k0 = std::max(0L, long(std::ceil((a - e.x0) / e.dx)));
+    const long k1 = std::min(long(e.y.size()) - 1, long(std::floor((b - e.x0) / e.dx)));
+    for (long k = k0; k <= k1; ++k) {
+        const double t = top(e.x(size_t(k)));
+        double& y = e.y[size_t(k)];
+        if (std::isnan(y) || t > y) y = t;
+    }
+}
+}  // namespace
+
+Envelope upper_envelope(const std::vector<Vec2>& pos, const std::vector<double>& radius,
+                        const std::vector<uint8_t>& use, double x_from, double x_to, double dx) {
+    Envelope e = empty_envelope(x_from, x_to, dx);
     for (size_t i = 0; i < pos.size(); ++i) {
         if (!use.empty() && !use[i]) continue;
-        const double r = radius[i], xc = pos[i].x();
-        const long k0 = std::max(0L, long(std::ceil((xc - r - x_from) / dx)));
-        const long k1 = std::min(long(m) - 1, long(std::floor((xc + r - x_from) / dx)));
-        for (long k = k0; k <= k1; ++k) {
-            const double u = e.x(size_t(k)) - xc;
-            const double top = pos[i].y() + std::sqrt(std::max(0.0, r * r - u * u));
-            if (std::isnan(e.y[size_t(k)]) || top > e.y[size_t(k)]) e.y[size_t(k)] = top;
-        }
+        const double r = radius[i], xc = pos[i].x(), yc = pos[i].y();
+        raise_over(e, xc - r, xc + r, [&](double x) { return yc + std::sqrt(std::max(0.0, r * r - (x - xc) * (x - xc))); });
     }
     return e;
 }
 
 Envelope upper_envelope(const std::vector<Vec2>& points, double x_from, double x_to, double dx) {
-    Envelope e;
-    e.x0 = x_from;
-    e.dx = dx;
-    const size_t m = size_t(std::floor((x_to - x_from) / dx)) + 1;
-    e.y.assign(m, NAN);
+    Envelope e = empty_envelope(x_from, x_to, dx);
     for (size_t k = 1; k < points.size(); ++k) {
         // the segment from its lower x (l) to its higher (r)
-        const Vec2 &l = points[k - 1].x() <= points[k].x() ? points[k - 1] : points[k],
-                   &r = points[k - 1].x() <= points[k].x() ? points[k] : points[k - 1];
-        const long k0 = std::max(0L, long(std::ceil((l.x() - x_from) / dx)));
-        const long k1 = std::min(long(m) - 1, long(std::floor((r.x() - x_from) / dx)));
+        const bool forward = points[k - 1].x() <= points[k].x();
+        const Vec2 l = forward ? points[k - 1] : points[k], r = forward ? points[k] : points[k - 1];
         const double run = r.x() - l.x();
-        for (long g = k0; g <= k1; ++g) {
-            const double top = run > 0.0 ? l.y() + (r.y() - l.y()) * (e.x(size_t(g)) - l.x()) / run : std::max(l.y(), r.y());
-            double& y = e.y[size_t(g)];
-            if (std::isnan(y) || top > y) y = top;
-        }
+        raise_over(e, l.x(), r.x(), [&](double x) {
+            return run > 0.0 ? l.y() + (r.y() - l.y()) * (x - l.x()) / run : std::max(l.y(), r.y());
+        });
     }
     return e;
 }
