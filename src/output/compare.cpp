@@ -103,24 +103,25 @@ namespace {
 // A run's surface.csv as x_m,y_m rows for the plot: the surface where mass stands, a blank
 // line (a gap in gnuplot's line) where none does.
 std::string surface_over_x(const std::string& src) {
-    std::ifstream in(src);
-    std::string line;
-    if (!std::getline(in, line)) throw InputError(src + ": empty (a run's surface.csv has a header row)");
-    const CsvHeader header(line, src);
-    const size_t cx = header.column("x_m"), cs = header.column("surface_m"), cd = header.column("depth_m");
+    const CsvTable t = read_csv_table(src);  // (a cut or malformed file: an InputError naming its line)
+    auto column = [&](const char* name) {
+        const auto at = std::find(t.names.begin(), t.names.end(), name);
+        if (at == t.names.end()) throw InputError(src + ": no column " + name + " (a run's surface.csv has x_m, surface_m, depth_m)");
+        return size_t(at - t.names.begin());
+    };
+    const size_t cx = column("x_m"), cs = column("surface_m"), cd = column("depth_m");
     std::ostringstream out;
+    out.precision(10);
     out << "x_m,y_m\n";
     bool gap = false;
-    while (std::getline(in, line)) {
-        const std::vector<std::string> c = csv_cells(line);
-        if (std::max({cx, cs, cd}) >= c.size()) throw InputError(src + ": a short row '" + line + "'");
-        if (!(std::stod(c[cd]) > 0.0)) {
+    for (const std::vector<double>& r : t.rows) {
+        if (!(r[cd] > 0.0)) {
             if (!gap) out << '\n';
             gap = true;
             continue;
         }
         gap = false;
-        out << c[cx] << ',' << c[cs] << '\n';
+        out << r[cx] << ',' << r[cs] << '\n';
     }
     return out.str();
 }
