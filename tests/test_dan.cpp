@@ -82,6 +82,44 @@ TEST(Dan, SlidesDownAnInclineAtTheBlockAcceleration) {
     }
 }
 
+// T2: with phi_b = 35 degrees the blocks stay exactly at rest and the bed carries their weight,
+// in either position update.
+TEST(Dan, StaticBlockStaysAndTheBedCarriesItsWeight) {
+    for (const DanPosition form : {DanPosition::Trapezoid, DanPosition::Symplectic}) {
+        DanDef d = plain(35.0);
+        d.position_update = form;
+        DanSolver dan(d, incline(29.0), kDown, {{0.5, 0.6, 0.7}, {1e-3, 1e-3}, {}});
+        for (int k = 0; k < 1000; ++k) dan.step();
+        double weight = 0.0;
+        Vec2 load = Vec2::Zero();
+        for (size_t i = 0; i < 3; ++i) {
+            EXPECT_EQ(dan.v()[i], 0.0);
+            EXPECT_EQ(dan.s()[i], 0.5 + 0.1 * double(i));
+            weight += dan.mass()[i] * kG;
+            load += dan.bed_force()[i];
+        }
+        EXPECT_NEAR(load.x(), 0.0, 1e-12 * weight);
+        EXPECT_NEAR(load.y(), -weight, 1e-12 * weight);
+    }
+}
+
+// T3: on an arc (R = 0.1 m) without gravity the centripetal friction alone slows the blocks:
+// v = v0 / (1 + mu v0 t / R), s = (R / mu) ln(1 + mu v0 t / R); at 0.5 s 0.401648 m/s and
+// 0.403401 m, within 5e-4 (first order in dt), in either position update.
+TEST(Dan, ArcWithoutGravitySlowsByTheCentripetalFriction) {
+    for (const DanPosition form : {DanPosition::Trapezoid, DanPosition::Symplectic}) {
+        DanDef d = plain(21.7);
+        d.columns = DanColumns::Normal;
+        d.position_update = form;
+        DanPath circle(BedPath({arc_geom(Vec2(0.0, 0.1), 0.1, 270.0, 270.0)}));  // a full circle from its bottom
+        DanSolver dan(d, circle, Vec2::Zero(), {{0.0, 1e-3, 2e-3}, {1e-6, 1e-6}, {2.0, 2.0, 2.0}});
+        for (int k = 0; k < 5000; ++k) dan.step();
+        EXPECT_NEAR(dan.v()[1], 0.401648, 5e-4 * 0.401648);
+        EXPECT_NEAR(dan.s()[1] - 1e-3, 0.403401, 5e-4 * 0.403401);
+    }
+}
+
+// T4: up the lower arc of a circle (R = 0.1 m) from its bottom at 2 m/s with gravity: u = v^2
 // = C e^(-2 mu theta) + A sin theta + B cos theta first vanishes at 73.5946 degrees (within
 // 0.05); at the bottom the bed's normal force per unit mass is g + v^2/R = 49.81 m/s2.
 TEST(Dan, ArcWithGravityStopsWhereTheClosedFormSays) {
