@@ -101,6 +101,61 @@ TEST(OutputPolicy, ForceNeverDeletesWhatDemlabDidNotMakeOrAnInput) {
     fs::remove_all(work);
 }
 
+// Row 1b: a folder that merely has the name a forced output would move its old folder to (a
+// user's run called X.replaced) is never removed or moved: not by a new output into X, not by
+// a forced one (which takes the next free name), not by one that fails; and the old folder a
+// forced run did move aside goes once the run is complete, also when it completes on resume.
+TEST(OutputPolicy, OnlyTheFolderAForcedOutputMovedAsideIsRemoved) {
+    const fs::path work = temp_dir("aside");
+    const fs::path mine = finished_run(work, "a.replaced");
+    write_text(mine / "notes.txt", "my notes\n");
+    const auto files_mine = listing(mine);
+    write_text(work / "b.toml", drop_scenario("b"));
+    // a new folder beside it: nothing moved aside, nothing removed
+    EXPECT_EQ(demlab({"run", "b.toml", "--out", "a"}, work), 0) << read_file(work / "stderr.txt");
+    EXPECT_EQ(listing(mine), files_mine);
+    // a forced run over `a`: its old folder goes to a.replaced-2, removed at the end
+    EXPECT_EQ(demlab({"run", "b.toml", "--out", "a", "--force"}, work), 0) << read_file(work / "stderr.txt");
+    EXPECT_EQ(listing(mine), files_mine);
+    EXPECT_FALSE(fs::exists(work / "a.replaced-2"));
+    // a render that fails once its folder is made (a snapshot cut short) removes only its own
+    // folder, and puts back no folder it did not move
+    fs::copy(work / "a", work / "cut", fs::copy_options::recursive);
+    write_text(work / "cut/snapshots/discs_00001.vtp", "<?xml version=\"1.0\"?>\n<VTKFile");
+    fs::copy(mine, work / "g.replaced", fs::copy_options::recursive);
+    EXPECT_NE(demlab({"render", "cut", "--size", "64x48", "--out", "g"}, work), 0);
+    EXPECT_FALSE(fs::exists(work / "g"));
+    EXPECT_EQ(listing(work / "g.replaced"), files_mine);
+    // a forced render over its own earlier folder, beside a user's f.replaced
+    EXPECT_EQ(demlab({"render", "a", "--size", "64x48", "--out", "f"}, work), 0) << read_file(work / "stderr.txt");
+    fs::copy(mine, work / "f.replaced", fs::copy_options::recursive);
+    EXPECT_EQ(demlab({"render", "a", "--size", "64x48", "--out", "f", "--force"}, work), 0);
+    EXPECT_EQ(listing(work / "f.replaced"), files_mine);
+    EXPECT_FALSE(fs::exists(work / "f.replaced-2"));
+    fs::remove_all(work);
+}
+
+// Row 1c: demlab plot writes into a run's plots/ only when it is demlab's and holds nothing else:
+// a user's file there is neither overwritten nor listed as demlab's (which a --force on the run
+// would then delete).
+TEST(OutputPolicy, PlotNeverAdoptsTheUsersFiles) {
+    const fs::path work = temp_dir("plot-adopt");
+    const fs::path run = finished_run(work, "r");
+    fs::remove_all(run / "plots");
+    write_text(run / "plots/front.png", "hand-drawn");
+    EXPECT_EQ(demlab({"plot", "r"}, work), kExitInput);
+    EXPECT_NE(read_file(work / "stderr.txt").find("not made by demlab"), std::string::npos) << read_file(work / "stderr.txt");
+    EXPECT_EQ(read_file(run / "plots/front.png"), "hand-drawn");
+    fs::remove_all(run / "plots");
+    EXPECT_EQ(demlab({"plot", "r"}, work), 0) << read_file(work / "stderr.txt");
+    write_text(run / "plots/my_fig.svg", "mine");
+    EXPECT_EQ(demlab({"plot", "r"}, work), kExitInput);
+    EXPECT_NE(read_file(work / "stderr.txt").find("my_fig.svg"), std::string::npos) << read_file(work / "stderr.txt");
+    EXPECT_EQ(demlab({"run", "r.toml", "--out", "r", "--force"}, work), kExitInput);
+    EXPECT_EQ(read_file(run / "plots/my_fig.svg"), "mine");
+    fs::remove_all(work);
+}
+
 // Row 2: render's --strip does not overwrite an existing file without --force, and never a
 // file of the run itself.
 TEST(OutputPolicy, RenderStripNeverOverwritesUnasked) {

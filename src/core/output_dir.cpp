@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <random>
+#include <sstream>
 
 #include "core/error.h"
 #include "core/fileio.h"
@@ -25,6 +27,63 @@ std::string marker_path(const std::string& dir) { return dir + "/" + kOutputMark
 
 constexpr const char* kMarkerHead = "made by demlab; `--force` may replace this folder\n";
 constexpr const char* kFilesLine = "files it wrote (a --force keeps off any other):\n";
+// The line by which a forced output and the old folder it moved aside name each other: the same
+// token in both markers. Only a folder carrying the token of the output in hand is ever removed
+// or moved back, never a folder that merely has the name (a user's own run called X.replaced).
+constexpr const char* kAsidePrefix = "old folder moved aside: ";
+
+// The marker's lines before its file list but its aside line (the head), and the list's lines;
+// whether it has the list.
+bool read_marker(const std::string& dir, std::string& head, std::vector<std::string>* files) {
+    std::ifstream in(marker_path(dir));
+    std::string line;
+    bool listed = false;
+    while (std::getline(in, line)) {
+        if (listed) {
+            if (files) files->push_back(line);
+        } else if (line + "\n" == kFilesLine) {
+            listed = true;
+        } else if (line.compare(0, std::string(kAsidePrefix).size(), kAsidePrefix) != 0) {
+            head += line + "\n";  // (an aside line is the caller's to write)
+        }
+    }
+    return listed;
+}
+
+// The aside token in dir's marker ("" for none).
+std::string aside_token(const std::string& dir) {
+    std::ifstream in(marker_path(dir));
+    const std::string prefix = kAsidePrefix;
+    for (std::string line; std::getline(in, line);) {
+        if (line + "\n" == kFilesLine) break;
+        if (line.compare(0, prefix.size(), prefix) == 0) return line.substr(prefix.size());
+    }
+    return "";
+}
+
+// A token no other folder carries: 128 random bits.
+std::string new_aside_token() {
+    std::random_device rd;
+    std::ostringstream t;
+    t << std::hex;
+    for (int k = 0; k < 4; ++k) t << rd();
+    return t.str();
+}
+
+// The old folder the output in dir moved aside, if it is still there and carries dir's token.
+std::string own_aside(const std::string& dir) {
+    std::error_code ec;
+    const std::string token = aside_token(dir);
+    if (token.empty()) return "";
+    const std::string base = replaced_output_dir(dir);
+    for (int k = 1; k <= 1000; ++k) {
+        const std::string aside = k == 1 ? base : base + "-" + std::to_string(k);
+        if (!fs::exists(fs::symlink_status(aside, ec))) continue;
+        if (!fs::is_symlink(fs::symlink_status(aside, ec)) && is_demlab_output(aside) && aside_token(aside) == token)
+            return aside;
+    }
+    return "";
+}
 
 // Every file and folder below dir (relative, '/'-separated, sorted), its marker and a run's
 // lock left out. A folder that carries its own marker (frames/, plots/, made by a later
@@ -56,6 +115,7 @@ bool recorded_entries(const std::string& dir, std::vector<std::string>& files) {
     return listed;
 }
 
+
 // The entries below dir that its marker does not list (prefixed with `prefix`), and those of
 // the folders with their own marker inside it (frames/, plots/), which keep their own lists.
 void collect_foreign(const std::string& dir, const std::string& prefix, std::vector<std::string>& foreign) {
@@ -70,7 +130,9 @@ void collect_foreign(const std::string& dir, const std::string& prefix, std::vec
 
 // Refuses a --force that would delete what the user put into a completed output folder (notes,
 // an analysis) beside demlab's own files: anything its marker does not list.
-void check_only_demlab_files(const std::string& dir) {
+void check_only_demlab_files(const std::string& dir,
+                             const std::string& consequence = "--force would delete them",
+                             const std::string& way_out = "choose another --out") {
     std::vector<std::string> foreign;
     collect_foreign(dir, "", foreign);
     if (foreign.empty()) return;
@@ -79,7 +141,7 @@ void check_only_demlab_files(const std::string& dir) {
     if (foreign.size() > 5) names += " and " + std::to_string(foreign.size() - 5) + " more";
     throw InputError("output folder '" + dir + "' holds " + std::to_string(foreign.size()) +
                      (foreign.size() == 1 ? " entry" : " entries") + " demlab did not write (" + names +
-                     "); --force would delete them: move them out of the folder first, or choose another --out");
+                     "); " + consequence + ": move them out of the folder first, or " + way_out);
 }
 
 }  // namespace
@@ -139,6 +201,16 @@ void check_output_dir(const std::string& dir, bool force, const std::vector<std:
     check_only_demlab_files(dir);
 }
 
+void check_regenerated_output_dir(const std::string& dir) {
+    std::error_code ec;
+    if (!fs::exists(fs::symlink_status(dir, ec))) return;
+    if (fs::is_symlink(fs::symlink_status(dir, ec)) || !fs::is_directory(dir, ec) || !is_demlab_output(dir))
+        throw InputError("'" + dir + "' exists and was not made by demlab (it has no " + kOutputMarker +
+                         " marker); demlab writes only into folders it made: move or rename it first");
+    check_only_demlab_files(dir, "writing there would overwrite them or count them as demlab's",
+                            "delete the folder to have it made anew");
+}
+
 void mark_output_dir(const std::string& dir) {
     if (!is_demlab_output(dir)) write_file_atomic(marker_path(dir), kMarkerHead);
 }
@@ -146,29 +218,46 @@ void mark_output_dir(const std::string& dir) {
 void prepare_output_dir(const std::string& dir, bool force, const std::vector<std::string>& inputs) {
     check_output_dir(dir, force, inputs);
     std::error_code ec;
+    std::string token;
     if (fs::exists(dir, ec)) {
-        // the old content aside (a leftover of an earlier forced run that failed goes first,
-        // if it too is demlab's)
-        const std::string aside = replaced_output_dir(dir);
-        if (fs::exists(fs::symlink_status(aside, ec))) {
-            if (!is_demlab_output(aside) || fs::is_symlink(fs::symlink_status(aside, ec)))
-                throw InputError("cannot move the old output folder '" + dir + "' aside: '" + aside +
-                                 "' exists and was not made by demlab; move or delete it yourself");
-            fs::remove_all(aside, ec);
+        // the old content aside, under the first free name (X.replaced, X.replaced-2, ...):
+        // whatever already has such a name (a forced run's old folder left by a failure, a
+        // user's own folder) stays as it is. Both markers get the same token, so that only
+        // this folder is removed once the new output is complete, or moved back if it fails.
+        const std::string base = replaced_output_dir(dir);
+        std::string aside;
+        for (int k = 1; k <= 1000 && aside.empty(); ++k) {
+            const std::string name = k == 1 ? base : base + "-" + std::to_string(k);
+            if (!fs::exists(fs::symlink_status(name, ec))) aside = name;
         }
+        if (aside.empty())
+            throw InputError("cannot move the old output folder '" + dir + "' aside: '" + base + "' and '" + base +
+                             "-2' to '" + base + "-1000' all exist; move or delete them yourself");
+        token = new_aside_token();
         fs::rename(dir, aside, ec);
         if (ec)
             throw InputError("cannot move the old output folder '" + dir + "' aside to '" + aside + "' for --force: " +
                              ec.message());
+        std::string head;
+        std::vector<std::string> files;
+        const bool listed = read_marker(aside, head, &files);
+        std::string marker = head + kAsidePrefix + token + "\n";
+        if (listed) {
+            marker += kFilesLine;
+            for (const std::string& f : files) marker += f + "\n";
+        }
+        write_file_atomic(marker_path(aside), marker);
     }
     fs::create_directories(dir, ec);
     if (ec) throw InputError("cannot create output folder '" + dir + "': " + ec.message());
-    mark_output_dir(dir);
+    if (!token.empty()) write_file_atomic(marker_path(dir), std::string(kMarkerHead) + kAsidePrefix + token + "\n");
+    else mark_output_dir(dir);
 }
 
 void record_output_files(const std::string& dir) {
     if (!is_demlab_output(dir)) return;
-    std::string marker = std::string(kMarkerHead) + kFilesLine;
+    const std::string token = aside_token(dir);
+    std::string marker = std::string(kMarkerHead) + (token.empty() ? "" : kAsidePrefix + token + "\n") + kFilesLine;
     for (const std::string& e : listed_entries(dir)) {
         marker += e + "\n";
         if (is_demlab_output(dir + "/" + e)) record_output_files(dir + "/" + e);
@@ -179,16 +268,16 @@ void record_output_files(const std::string& dir) {
 void remove_replaced_output(const std::string& dir) {
     record_output_files(dir);  // complete: what is in it now is demlab's
     std::error_code ec;
-    const std::string aside = replaced_output_dir(dir);
-    if (is_demlab_output(aside)) fs::remove_all(aside, ec);
+    const std::string aside = own_aside(dir);
+    if (!aside.empty()) fs::remove_all(aside, ec);
 }
 
 void abandon_output(const std::string& dir) {
     std::error_code ec;
     if (!is_demlab_output(dir)) return;
+    const std::string aside = own_aside(dir);
     fs::remove_all(dir, ec);
-    const std::string aside = replaced_output_dir(dir);
-    if (is_demlab_output(aside)) fs::rename(aside, dir, ec);
+    if (!aside.empty()) fs::rename(aside, dir, ec);
 }
 
 }  // namespace demlab

@@ -32,6 +32,11 @@ void check_output_dir(const std::string& dir, bool force, const std::vector<std:
 // moved aside first.
 void prepare_output_dir(const std::string& dir, bool force, const std::vector<std::string>& inputs = {});
 
+// Throws InputError unless dir may be written again by a later command (demlab plot's plots/,
+// demlab render's frames/): it does not exist, or it is a folder demlab made that holds only
+// the files demlab recorded there.
+void check_regenerated_output_dir(const std::string& dir);
+
 // Writes the marker into a folder demlab made by other means (a run's frames/, plots/).
 void mark_output_dir(const std::string& dir);
 

@@ -341,6 +341,9 @@ std::vector<std::string> make_plots(const std::string& run_dir, int width, int h
         throw RunError("gnuplot is not installed, so no plots were made (apt-get install gnuplot-nox, or "
                        "scripts/install-deps.sh)");
     const std::string dir = run_dir + "/plots";
+    // a plots/ folder the user made, or files the user put into demlab's: refused before any
+    // is overwritten or recorded as demlab's (which a later --force would delete)
+    check_regenerated_output_dir(dir);
     fs::create_directories(dir);
     mark_output_dir(dir);
     std::ostringstream gp;
