@@ -154,6 +154,41 @@ TEST(Checkpoint, ResumedRunIsByteIdentical) {
     fs::remove_all(cut);
 }
 
+// A forced run interrupted keeps the old folder aside (nothing lost while the new one is
+// unfinished); resumed to its end, the new run removes that folder, and no other: a folder the
+// user named like it stays. The resume removes the temporary files demlab's writers leave, not
+// a user's.
+TEST(Checkpoint, AForcedRunResumedRemovesTheFolderItMovedAside) {
+    const Scenario s = scenario();
+    const fs::path dir = temp_dir("ck-force-aside");
+    run_scenario(s, {dir.string(), false, {}});
+    const std::string old_summary = demlab::test::read_file(dir / "summary.json");
+    RunOptions ro{dir.string(), true, [](const std::string&, const std::string&, int index) {
+                      if (index == 1) request_interrupt(SIGTERM);
+                  }};
+    ro.handle_signals = true;
+    EXPECT_THROW(run_scenario(s, ro), Interrupted);
+    const fs::path aside = replaced_output_dir(dir.string());
+    EXPECT_EQ(demlab::test::read_file(aside / "summary.json"), old_summary);
+    const fs::path users = dir.string() + ".replaced-2";
+    fs::copy(aside, users, fs::copy_options::recursive);
+    // a write the interrupt cut (its temporary file) goes on resume; a user's own .tmp stays
+    std::ofstream(dir / "summary.json.tmp") << "{";
+    fs::create_directories(dir / "analysis");
+    std::ofstream(dir / "analysis/model.tmp") << "mine";
+    std::ofstream(dir / "snapshots/notes.tmp") << "mine";
+    demlab::test::resume_run(dir, 1);
+    EXPECT_FALSE(fs::exists(dir / "summary.json.tmp"));
+    EXPECT_TRUE(fs::exists(dir / "analysis/model.tmp"));
+    EXPECT_TRUE(fs::exists(dir / "snapshots/notes.tmp"));
+    fs::remove_all(dir / "analysis");
+    fs::remove(dir / "snapshots/notes.tmp");
+    EXPECT_FALSE(fs::exists(aside)) << "the folder the forced run moved aside stayed";
+    EXPECT_EQ(demlab::test::read_file(users / "summary.json"), old_summary) << "a folder it did not move went";
+    fs::remove_all(dir);
+    fs::remove_all(users);
+}
+
 // The same with the discs renumbered in space order every 2,000 steps (world.space_order = on;
 // geometry A at scale 20 is below auto's threshold): the checkpoint falls between two
 // renumberings, holds the discs' order, and the resume renumbers at the same steps.

@@ -92,9 +92,22 @@ std::unique_ptr<BinaryReader> open_run_folder(const RunOptions& o, const std::st
     // a terrain profile (or any file the scenario reads) edited since: refused, naming it
     if (header.has_inputs) check_same_inputs(header.inputs, inputs, dir);
     restore->expect_tag("RUN ");
-    // a write the kill interrupted left its temporary file (the target is intact)
-    for (const auto& e : std::filesystem::recursive_directory_iterator(dir))
-        if (e.is_regular_file() && e.path().extension() == ".tmp") std::filesystem::remove(e.path());
+    // a write the kill interrupted left its temporary file (the target is intact): only the
+    // names demlab's writers give them (NAME.EXT.tmp, core/fileio.cpp, output/image.cpp) in the
+    // folders a run writes, never a user's own .tmp file in a folder of theirs
+    namespace fs = std::filesystem;
+    for (const char* sub : {"", "snapshots", "frames", "plots"}) {
+        const fs::path folder = fs::path(dir) / sub;
+        std::error_code ec;
+        if (!fs::is_directory(folder, ec) || fs::is_symlink(fs::symlink_status(folder, ec))) continue;
+        for (const auto& e : fs::directory_iterator(folder, ec)) {
+            const fs::path name = e.path().filename();
+            if (!e.is_regular_file() || name.extension() != ".tmp") continue;
+            const std::string inner = name.stem().extension().string();
+            for (const char* ext : {".csv", ".part", ".json", ".toml", ".vtp", ".pvd", ".png", ".bin"})
+                if (inner == ext) fs::remove(e.path(), ec);
+        }
+    }
     return restore;
 }
 
