@@ -527,3 +527,39 @@ TEST(Validation, MaxStepsEndsTheRunWithItsOutputs) {
     std::filesystem::remove_all(dir);
     expect_refused([] { parse_scenario("[stop]\nmax_steps = -1\n", "bad.toml"); }, {"stop.max_steps", "-1"});
 }
+
+// release.from_file is the scenario file's neighbour, as terrain.profile and the other files a
+// scenario names: resolved absolute, the run folder's copy and a resume from any working
+// directory read the same mass.
+TEST(Validation, ReleaseFromFileIsTheScenarioFilesNeighbour) {
+    namespace fs = std::filesystem;
+    const fs::path work = temp_dir("from-file");
+    std::string text = read_file(fs::path(DEMLAB_SOURCE_DIR) / "scenarios/geometry-A.toml");
+    const size_t at = text.find("[release]\n");
+    ASSERT_NE(at, std::string::npos);
+    text.insert(at + 10, "from_file = \"../masses/release.csv\"\n");
+    fs::create_directories(work / "project");
+    write_file_atomic((work / "project/a.toml").string(), text);
+    Scenario s = load_scenario((work / "project/a.toml").string());
+    finish_scenario(s);
+    EXPECT_EQ(fs::path(s.release.from_file), (fs::absolute(work) / "masses/release.csv").lexically_normal());
+    fs::remove_all(work);
+}
+
+// A release mass settled without gravity (world.gravity = [0, 0], a valid value) puts no load on
+// its lid: release.csv holds 0 there, not 0 / 0 written as inf, and reads back as a start.
+TEST(Validation, AReleaseWithoutGravityWritesAFiniteLidLoadAndReadsBack) {
+    namespace fs = std::filesystem;
+    const fs::path work = temp_dir("no-gravity");
+    Scenario s = load_scenario(std::string(DEMLAB_SOURCE_DIR) + "/scenarios/geometry-A.toml");
+    for (const char* o : {"release.scale=20", "world.gravity=[0, 0]", "stop.t_max=0.002", "stop.rest_duration=0.001"})
+        apply_override(s, o);
+    finish_scenario(s);
+    run_scenario(s, {(work / "a").string(), false, {}});
+    const std::string release = read_file(work / "a/release.csv");
+    EXPECT_NE(release.find("# lid_load_fraction 0\n"), std::string::npos);
+    Scenario again = s;
+    again.release.from_file = (work / "a/release.csv").string();
+    EXPECT_NO_THROW(run_scenario(again, {(work / "b").string(), false, {}}));
+    fs::remove_all(work);
+}

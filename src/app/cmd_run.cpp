@@ -178,7 +178,10 @@ int run_command(const RunCliOptions& o) {
     if (o.model) apply_override(s, "rotation.model=" + std::to_string(o.model));
     if (!o.variant.empty()) apply_override(s, "release.variant=\"" + o.variant + "\"");
     if (o.scale) apply_override(s, "release.scale=" + std::to_string(o.scale));
-    if (!o.release_from.empty()) s.release.from_file = o.release_from;
+    // a path typed on the command line is the working directory's; kept absolute, so the run
+    // folder's scenario.toml (and a resume from another directory) reads the same file
+    if (!o.release_from.empty())
+        s.release.from_file = std::filesystem::absolute(o.release_from).lexically_normal().string();
     for (const std::string& a : o.set) apply_override(s, a);
     if (!o.solver.empty()) apply_override(s, "scenario.solver=\"" + o.solver + "\"");
     finish_scenario(s);

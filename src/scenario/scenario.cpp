@@ -628,6 +628,9 @@ void finish_scenario(Scenario& s) {
         throw InputError(where + "release.from_file (--release-from) = \"" + r.from_file + "\": does not apply: " +
                          (s.lattice_release.enabled ? "the discs are a [lattice_release]"
                                                     : "the discs are given ([[discs]]), not a release mass"));
+    // the scenario file's neighbour, as every file a scenario names (a run folder's copy and a
+    // resume then read the same mass from any working directory)
+    if (!r.from_file.empty()) resolve_beside_scenario(s, s.release.from_file);
     if (!c_enabled_or_no_bonds(s))
         throw InputError(where + "cohesion.bonds: given without cohesion.enabled = true; the bonds would not be made");
     if (s.cohesion.enabled && s.world.space_order == SpaceOrder::On)
