@@ -406,7 +406,9 @@ void settle_release(const Scenario& s, const ReleaseBox& box, std::vector<Vec2>&
         if (stage == Stage::Compaction) {  // the lid's load at the compaction's end
             double weight = 0;
             for (double mi : w.masses()) weight += mi * s.world.gravity.norm();
-            m.lid_load_fraction = lid_index >= 0 ? w.wall_force(lid_index).norm() / weight : 0.0;
+            // (a mass without weight, world.gravity = [0, 0], puts no load on the lid: 0, not
+            // 0 / 0, which release.csv's reader would refuse)
+            m.lid_load_fraction = lid_index >= 0 && weight > 0.0 ? w.wall_force(lid_index).norm() / weight : 0.0;
         }
         if (frictionless) t_frictionless += w.time();
         positions = w.positions();
