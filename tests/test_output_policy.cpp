@@ -248,6 +248,50 @@ TEST(OutputPolicy, AFailedWriteEndsTheRunWithItsOwnExitCode) {
     fs::remove_all(work);
 }
 
+// Row 5b: the same under a plain `ulimit -f` (SIGXFSZ as the shell leaves it, which would kill
+// the process), and for the plots gnuplot draws: a PNG it could not finish is removed and named
+// (exit 5), and no cut PNG stays under its final name.
+TEST(OutputPolicy, AFileSizeLimitEndsRunAndPlotWithExitFiveAndNoCutPlot) {
+    const fs::path work = temp_dir("fsize");
+    write_text(work / "s.toml", drop_scenario("fsize", 1e-5, 0.0));
+    const fs::path run = finished_run(work, "r");
+    auto limited = [&](std::vector<const char*> args, rlim_t bytes) {
+        const pid_t pid = ::fork();
+        if (pid == 0) {
+            ::signal(SIGXFSZ, SIG_DFL);  // as a shell's ulimit -f leaves it
+            const rlimit lim{bytes, bytes};
+            ::setrlimit(RLIMIT_FSIZE, &lim);
+            if (::chdir(work.c_str()) != 0) ::_exit(99);
+            const int fd = ::open("stderr.txt", O_WRONLY | O_CREAT | O_TRUNC, 0644);
+            ::dup2(fd, 2);
+            args.insert(args.begin(), DEMLAB_EXE);
+            args.push_back(nullptr);
+            ::execv(DEMLAB_EXE, const_cast<char* const*>(args.data()));
+            ::_exit(98);
+        }
+        int status = 0;
+        ::waitpid(pid, &status, 0);
+        return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+    };
+    EXPECT_EQ(limited({"run", "s.toml", "--out", "out", "--no-plots"}, 64 * 1024), kExitWrite) << read_file(work / "stderr.txt");
+    EXPECT_FALSE(fs::exists(work / "out/scenario.toml.tmp"));
+    // the plots: small enough that some PNGs pass and some are cut
+    fs::remove_all(run / "plots");
+    EXPECT_EQ(limited({"plot", "r"}, 24 * 1024), kExitWrite) << read_file(work / "stderr.txt");
+    EXPECT_NE(read_file(work / "stderr.txt").find(".png: gnuplot could not write"), std::string::npos) << read_file(work / "stderr.txt");
+    int whole = 0;
+    for (const auto& e : fs::directory_iterator(run / "plots")) {
+        if (e.path().extension() != ".png") continue;
+        const std::string png = read_file(e.path());
+        ASSERT_GE(png.size(), 12u) << e.path();
+        EXPECT_EQ(png.substr(png.size() - 8, 4), "IEND") << e.path() << " is cut";
+        ++whole;
+    }
+    EXPECT_GT(whole, 0);  // (the smaller ones passed)
+    EXPECT_EQ(limited({"plot", "r"}, RLIM_INFINITY), 0) << read_file(work / "stderr.txt");
+    fs::remove_all(work);
+}
+
 // The writers themselves: a refused write throws WriteError, removes its temporary file and
 // gives no final name.
 TEST(OutputPolicy, WritersCheckEveryByte) {

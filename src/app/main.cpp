@@ -1,4 +1,5 @@
 // demlab: a discrete-element laboratory for rapid granular flows.
+#include <csignal>
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cstdio>
@@ -66,6 +67,10 @@ int main(int argc, char** argv) {
     add(add_demo_command);
     add(add_keys_command);
     add(add_bench_command);
+    // a file size limit (ulimit -f) makes a write fail with EFBIG, which the checked writers
+    // report (exit 5, the file named, no cut file under a final name), instead of SIGXFSZ
+    // killing the process with a lock and temporary files left behind
+    ::signal(SIGXFSZ, SIG_IGN);
     try {
         app.parse(argc, argv);
     } catch (const CLI::ParseError& e) {

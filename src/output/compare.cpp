@@ -309,11 +309,7 @@ std::vector<std::string> compare_into(const CompareOptions& o, const std::vector
     }
     const std::string script = o.out + "/compare.gp";
     write_file_atomic(script, gp.str());
-    ProcessDef gnuplot;  // no shell; the script names only the files of this folder
-    gnuplot.argv = {"gnuplot", "compare.gp"};
-    gnuplot.cwd = o.out;
-    gnuplot.stderr_file = o.out + "/gnuplot.log";
-    if (run_process(gnuplot) != 0) throw RunError("gnuplot failed on " + script + " (see " + o.out + "/gnuplot.log)");
+    run_gnuplot(o.out, "compare.gp", made);  // no shell; the script names only the files of this folder
 
     compare_table(o, runs, made);
     return made;

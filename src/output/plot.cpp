@@ -335,6 +335,38 @@ void plot_spheres(const std::string& run_dir, const std::string& dir, std::ostri
 
 bool gnuplot_available() { return program_available("gnuplot"); }
 
+namespace {
+// Whether the file is a whole PNG: the signature first and the IEND chunk last (a write cut
+// by a full disk or a size limit loses the end).
+bool png_is_whole(const std::string& path) {
+    static const unsigned char kSignature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+    static const unsigned char kEnd[12] = {0, 0, 0, 0, 'I', 'E', 'N', 'D', 0xae, 0x42, 0x60, 0x82};
+    std::ifstream in(path, std::ios::binary);
+    unsigned char head[8], tail[12];
+    if (!in.read(reinterpret_cast<char*>(head), 8) || !std::equal(head, head + 8, kSignature)) return false;
+    in.seekg(-12, std::ios::end);
+    return bool(in.read(reinterpret_cast<char*>(tail), 12)) && std::equal(tail, tail + 12, kEnd);
+}
+}  // namespace
+
+void run_gnuplot(const std::string& dir, const std::string& script, const std::vector<std::string>& pngs) {
+    ProcessDef gnuplot;
+    gnuplot.argv = {"gnuplot", script};
+    gnuplot.cwd = dir;
+    gnuplot.stderr_file = dir + "/gnuplot.log";
+    if (run_process(gnuplot) != 0) throw RunError("gnuplot failed on " + dir + "/" + script + " (see " + dir + "/gnuplot.log)");
+    std::string cut;
+    for (const std::string& png : pngs)
+        if (!png_is_whole(png)) {
+            std::error_code ec;
+            std::filesystem::remove(png, ec);
+            if (cut.empty()) cut = png;
+        }
+    if (!cut.empty())
+        throw WriteError(cut + ": gnuplot could not write the whole plot (a full disk or a file size limit?); "
+                               "no cut plot was left");
+}
+
 std::vector<std::string> make_plots(const std::string& run_dir, int width, int height) {
     namespace fs = std::filesystem;
     if (!gnuplot_available())
@@ -363,11 +395,7 @@ std::vector<std::string> make_plots(const std::string& run_dir, int width, int h
     write_file_atomic(script, gp.str());
     // no shell, and the script names its files relative to the plots folder, where gnuplot
     // runs: no path or name a user chose ever reaches a command line or the script
-    ProcessDef gnuplot;
-    gnuplot.argv = {"gnuplot", "plots.gp"};
-    gnuplot.cwd = dir;
-    gnuplot.stderr_file = dir + "/gnuplot.log";
-    if (run_process(gnuplot) != 0) throw RunError("gnuplot failed on " + script + " (see " + dir + "/gnuplot.log)");
+    run_gnuplot(dir, "plots.gp", made);
     record_output_files(dir);  // (so a --force on the run keeps off what the user adds here)
     return made;
 }
