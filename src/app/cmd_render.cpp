@@ -39,7 +39,8 @@ Command add_render_command(CLI::App& app) {
     sub->add_flag("--last", o->last_only, "Render only the final snapshot (the deposit)");
     sub->add_option("--strip", o->strip,
                     "Tile the frames into one PNG, three to a row; without --out (and --video) only this file is "
-                    "written, so it can be made beside a run's existing frames");
+                    "written, so it can be made beside a run's existing frames")
+        ->check([](const std::string& v) { return v.empty() ? std::string("an empty file name") : std::string(); });
     sub->add_flag("--video", o->video, "Also assemble the frames into video.mp4 with ffmpeg (when installed)");
     sub->add_option("--threads", o->threads, "Frames rendered at once (0: one per core, at most 8); the same files for any count")
         ->check(CLI::Range(0, 64))

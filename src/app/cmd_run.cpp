@@ -193,9 +193,12 @@ int run_command(const RunCliOptions& o) {
         throw InputError("--scale does not apply to " + o.scenario + no_box);
     if (!o.variant.empty() && !s.flume.enabled)
         throw InputError("--variant does not apply to " + o.scenario + ": the variants are a [flume]'s gate (removed, or lifted)");
-    if (s.solver == "dan" && (o.model || !o.release_from.empty()))
+    if (s.solver == "dan" && (o.model || !o.release_from.empty() || o.scale || !o.variant.empty()))
         throw InputError(std::string("--solver dan: ") +
-                         (o.model ? "--model (the rotation models are the discs')" : "--release-from (DAN fills the release box itself)") +
+                         (o.model                   ? "--model (the rotation models are the discs')"
+                          : !o.release_from.empty() ? "--release-from (DAN fills the release box itself)"
+                          : o.scale                 ? "--scale (the discs' size; DAN's resolution is dan.blocks)"
+                                                    : "--variant (the gate's removal; DAN releases at once)") +
                          " does not apply to the continuum model");
     s.world.threads = o.threads;
     s.world.simd = !o.scalar;
@@ -254,6 +257,8 @@ struct ResumeCliOptions {
 int resume_command(const ResumeCliOptions& o) {
     namespace fs = std::filesystem;
     const std::string dir = o.dir;
+    // (CLI11's range check lets nan through, as for run's option)
+    if (std::isnan(o.checkpoint_every)) throw InputError("--checkpoint-every nan: must be seconds in [0, 1e7]");
     if (!fs::is_directory(dir)) throw InputError(dir + ": no such run folder");
     const std::string scenario_file = dir + "/scenario.toml";
     if (!fs::exists(scenario_file)) throw InputError(dir + ": not a run folder (no scenario.toml)");

@@ -43,6 +43,10 @@ RunInfo read_run(const std::string& dir) {
     for (const char* f : {"scenario.toml", "summary.json", "front.csv", "forces.csv"})
         if (!fs::is_regular_file(dir + "/" + f))
             throw InputError(dir + ": not a finished run folder (no " + f + "); compare takes folders written by demlab run");
+    // every series compare reads, whole: one cut short (a full disk, a killed writer) is refused
+    // naming the file and the row, before anything is drawn or copied from it
+    for (const char* f : {"front.csv", "forces.csv", "deposit.csv", "front_synced.csv", "bed.csv"})
+        if (fs::is_regular_file(dir + "/" + f)) read_csv_table(dir + "/" + f);
     r.scenario = parse_scenario(read_input_file(dir + "/scenario.toml", kMaxScenarioBytes, "scenario file"), dir + "/scenario.toml");
     r.summary = read_summary_file(dir + "/summary.json");
     r.dan = r.summary.text("model") == "dan";

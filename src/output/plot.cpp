@@ -53,8 +53,11 @@ static std::string moving_average_csv(const std::string& path, const std::vector
     return out.str();
 }
 
-// The header of a run's CSV series (its first line).
+// The header of a run's CSV series (its first line), once the whole file has been checked: a
+// series cut short (a full disk, a killed writer) or with a malformed row is refused, naming
+// the file and the row, rather than drawn short.
 static CsvHeader header_of(const std::string& path) {
+    read_csv_table(path);
     std::string line;
     std::getline(std::ifstream(path) >> std::ws, line);
     return CsvHeader(line, path);

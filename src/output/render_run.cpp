@@ -30,7 +30,8 @@ void parse_size(const std::string& s, RenderStyle& st) {
     int w = 0, h = 0;
     char x = 0;
     std::istringstream in(s);
-    if (!(in >> w >> x >> h) || x != 'x') throw InputError("--size '" + s + "': expected WxH, e.g. 1280x720");
+    if (!(in >> w >> x >> h) || x != 'x' || !(in >> std::ws).eof())
+        throw InputError("--size '" + s + "': expected WxH, e.g. 1280x720");
     st.width = w;
     st.height = h;
 }
@@ -67,6 +68,10 @@ void check_strip_path(const RenderRunOptions& o, const std::string& out) {
     if (o.strip.empty()) return;
     std::error_code ec;
     if (std::filesystem::is_directory(o.strip, ec)) throw InputError("--strip " + o.strip + ": is a folder; give a PNG file");
+    // the folder it goes into exists before a single frame is rendered
+    const std::filesystem::path parent = std::filesystem::absolute(o.strip, ec).parent_path();
+    if (!std::filesystem::is_directory(parent, ec))
+        throw InputError("--strip " + o.strip + ": its folder " + parent.string() + " does not exist");
     if (!out.empty() && path_within(o.strip, out))
         throw InputError("--strip " + o.strip + ": lies inside the frames' folder " + out + "; give a file outside it");
     if (!std::filesystem::exists(o.strip, ec)) return;

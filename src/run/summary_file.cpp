@@ -3,7 +3,9 @@
 #include <cmath>
 #include <fstream>
 #include <map>
+#include <sstream>
 
+#include "core/error.h"
 #include "core/fileio.h"
 
 namespace demlab {
@@ -65,8 +67,35 @@ std::string SummaryFile::text(const std::string& key) const {
     return it == strings.end() ? std::string() : it->second;
 }
 
+// Whether a summary's text is whole: one object whose braces close (outside strings). A file cut
+// short (a full disk, a killed writer) or emptied would otherwise read as a run that measured
+// nothing.
+static bool whole_object(const std::string& text) {
+    int depth = 0;
+    bool in_string = false, escaped = false, opened = false;
+    for (const char c : text) {
+        if (in_string) {
+            if (escaped) escaped = false;
+            else if (c == '\\') escaped = true;
+            else if (c == '"') in_string = false;
+        } else if (c == '"') {
+            in_string = true;
+        } else if (c == '{') {
+            ++depth;
+            opened = true;
+        } else if (c == '}') {
+            if (--depth < 0) return false;
+        }
+    }
+    return opened && depth == 0 && !in_string;
+}
+
 SummaryFile read_summary_file(const std::string& path) {
-    std::ifstream in(path);
+    const std::string text = read_input_file(path, kMaxScenarioBytes, "run summary");
+    if (!whole_object(text))
+        throw InputError(path + ": not a whole summary (empty, or cut short: its braces do not close); "
+                         "the run folder is damaged: run it again");
+    std::istringstream in(text);
     SummaryFile out;
     std::string line;
     // the nested objects: "units" (key: unit) and "not_measured" (key: reason), one entry a line
