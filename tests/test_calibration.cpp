@@ -163,6 +163,19 @@ TEST(Calibration, ApplyWritesACopyAndNeverOverwrites) {
     EXPECT_DOUBLE_EQ(s.disc_friction_deg, 15.7);
     EXPECT_DOUBLE_EQ(load_scenario((dir / "geometry-A.toml").string()).disc_friction_deg, 15.5);  // original intact
     EXPECT_THROW(apply_calibration((dir / "geometry-A.toml").string(), 16.0, false), InputError);
+    // what --apply would refuse is found before the calibration runs: the copy exists, the
+    // scenario is missing
+    EXPECT_THROW(check_apply_calibration((dir / "geometry-A.toml").string(), false), InputError);
+    EXPECT_NO_THROW(check_apply_calibration((dir / "geometry-A.toml").string(), true));
+    EXPECT_THROW(check_apply_calibration((dir / "missing.toml").string(), false), InputError);
+    // the key indented under [material] is replaced where it stands, not added twice
+    std::string text = test_read((dir / "geometry-A.toml").string());
+    const size_t at = text.find("\nfriction_disc_deg");
+    ASSERT_NE(at, std::string::npos);
+    text.insert(at + 1, "    ");
+    std::ofstream(dir / "indented.toml") << text;
+    EXPECT_NO_THROW(check_apply_calibration((dir / "indented.toml").string(), false));
+    EXPECT_DOUBLE_EQ(load_scenario(apply_calibration((dir / "indented.toml").string(), 15.9, false)).disc_friction_deg, 15.9);
     fs::remove_all(dir);
 }
 

@@ -40,6 +40,7 @@ int calibrate_command(const CalibrateCli& o) {
     opt.out = o.out.empty() ? "runs/calibration" : o.out;
     opt.jobs = o.jobs;
     opt.force = o.force;
+    if (!o.apply.empty()) check_apply_calibration(o.apply, o.force);  // before hours of runs
     const CalibrationResult r = calibrate(c, opt);
     if (!Ranks::world().root()) return kExitOk;  // rank 0 reports (and applies)
     std::printf("best friction angle %.2f deg (objective %.3f deg); %d new run(s), %d reused, %.0f s\n", r.best_angle,

@@ -524,41 +524,77 @@ CalibrationConfidence calibration_confidence(const CalibrationResult& res, int s
     return out;
 }
 
-std::string apply_calibration(const std::string& scenario, double angle, bool force, const std::vector<std::string>& provenance) {
+namespace {
+// The file apply_calibration writes: SCENARIO-calibrated.toml beside the scenario.
+std::string calibrated_path(const std::string& scenario) {
+    const fs::path p(scenario);
+    return (p.parent_path() / (p.stem().string() + "-calibrated" + p.extension().string())).string();
+}
+
+// The scenario's text with material.friction_disc_deg set to `angle` (an existing key replaced
+// where it stands, however indented; else added under [material], made if missing), the
+// provenance above; checked to parse as a scenario.
+std::string calibrated_text(const std::string& scenario, double angle, const std::vector<std::string>& provenance) {
     std::ifstream in(scenario);
     if (!in) throw InputError(scenario + ": cannot open the scenario to apply the calibration to");
     std::vector<std::string> lines;
     std::string line;
     while (std::getline(in, line)) lines.push_back(line);
-    const std::string value = "friction_disc_deg = " + format_number(angle);
+    const std::string value = "friction_disc_deg = " + format_number(angle) + "  # calibrated by demlab calibrate";
+    auto trimmed = [](const std::string& l) {
+        const size_t b = l.find_first_not_of(" \t");
+        return b == std::string::npos ? std::string() : l.substr(b);
+    };
+    auto is_key = [&](const std::string& l) {
+        const std::string t = trimmed(l);
+        if (t.rfind("friction_disc_deg", 0) != 0) return false;
+        const size_t e = t.find_first_not_of(" \t", 17);
+        return e != std::string::npos && t[e] == '=';
+    };
     bool in_material = false, done = false;
+    long material_header = -1;
     for (size_t k = 0; k < lines.size() && !done; ++k) {
-        const std::string& l = lines[k];
-        if (!l.empty() && l[0] == '[') in_material = (l.rfind("[material]", 0) == 0);
-        if (in_material && l.rfind("friction_disc_deg", 0) == 0) {
-            lines[k] = value + "  # calibrated by demlab calibrate";
+        const std::string t = trimmed(lines[k]);
+        if (!t.empty() && t[0] == '[') {
+            in_material = t.rfind("[material]", 0) == 0;
+            if (in_material && material_header < 0) material_header = long(k);
+        }
+        if (in_material && is_key(lines[k])) {
+            lines[k] = value;
             done = true;
         }
     }
     if (!done) {
-        auto it = std::find(lines.begin(), lines.end(), std::string("[material]"));
-        if (it != lines.end()) lines.insert(it + 1, value + "  # calibrated by demlab calibrate");
+        if (material_header >= 0) lines.insert(lines.begin() + material_header + 1, value);
         else {
             lines.push_back("");
             lines.push_back("[material]");
-            lines.push_back(value + "  # calibrated by demlab calibrate");
+            lines.push_back(value);
         }
     }
-    fs::path p(scenario);
-    const std::string out = (p.parent_path() / (p.stem().string() + "-calibrated" + p.extension().string())).string();
-    if (fs::exists(out) && !force)
-        throw InputError(out + " exists already: pass --force to replace it (the original " + scenario + " is never changed)");
+    const std::string out = calibrated_path(scenario);
     std::ostringstream text;
     text << "# " << out << ": " << scenario << " with the disc-disc friction angle from demlab calibrate\n";
     for (const std::string& note : provenance) text << "# " << note << "\n";
     for (const auto& l : lines) text << l << "\n";
-    parse_scenario(text.str(), out);  // still a valid scenario
-    write_file_atomic(out, text.str());
+    parse_scenario(text.str(), scenario);  // still a valid scenario (errors name the file read)
+    return text.str();
+}
+}  // namespace
+
+void check_apply_calibration(const std::string& scenario, bool force) {
+    const std::string out = calibrated_path(scenario);
+    if (fs::exists(out) && !force)
+        throw InputError("--apply: " + out + " exists already: pass --force to replace it (the original " + scenario +
+                         " is never changed)");
+    calibrated_text(scenario, 20.0, {});  // (any angle: the edit and the parse are what is checked)
+}
+
+std::string apply_calibration(const std::string& scenario, double angle, bool force, const std::vector<std::string>& provenance) {
+    const std::string out = calibrated_path(scenario);
+    if (fs::exists(out) && !force)
+        throw InputError(out + " exists already: pass --force to replace it (the original " + scenario + " is never changed)");
+    write_file_atomic(out, calibrated_text(scenario, angle, provenance));
     return out;
 }
 

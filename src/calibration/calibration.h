@@ -70,6 +70,11 @@ CalibrationResult calibrate(const CalibrationConfig& c, const CalibrationOptions
 // decimals where two decimals would not tell the angle apart ("phi15.001-seed1").
 std::string calibration_run_name(double angle, int seed);
 
+// What apply_calibration would refuse, checked before the calibration runs (hours of runs
+// otherwise end in the refusal): the scenario cannot be read or edited into a valid one, or
+// its -calibrated copy exists (unless force). Throws InputError.
+void check_apply_calibration(const std::string& scenario, bool force);
+
 // Writes a copy of a scenario with material.friction_disc_deg set (never over an existing file
 // unless force). Returns the path written.
 // `provenance`: comment lines written above the value (where it came from: scale, seeds,
