@@ -18,9 +18,11 @@
 
 #include "core/error.h"
 #include "core/fileio.h"
+#include "core/interrupt.h"
 #include "core/output_dir.h"
 #include "core/process.h"
 #include "files.h"
+#include "output/plot.h"
 #include "scenario/key_registry.h"
 #include "scenario/scenario.h"
 
@@ -289,6 +291,21 @@ TEST(OutputPolicy, AFileSizeLimitEndsRunAndPlotWithExitFiveAndNoCutPlot) {
     }
     EXPECT_GT(whole, 0);  // (the smaller ones passed)
     EXPECT_EQ(limited({"plot", "r"}, RLIM_INFINITY), 0) << read_file(work / "stderr.txt");
+    fs::remove_all(work);
+}
+
+// gnuplot stopped by the Ctrl-C that stops demlab (one process group) is an interruption (exit
+// 4, what it draws from being complete), not a failed run (exit 3); failing on its own, a
+// failed run.
+TEST(OutputPolicy, GnuplotStoppedByAnInterruptIsAnInterruption) {
+    if (!gnuplot_available()) GTEST_SKIP() << "gnuplot is not installed";
+    const fs::path work = temp_dir("gp-int");
+    fs::create_directories(work);
+    write_text(work / "bad.gp", "this is not gnuplot\n");
+    EXPECT_THROW(run_gnuplot(work.string(), "bad.gp", {}), RunError);
+    request_interrupt(SIGINT);
+    EXPECT_THROW(run_gnuplot(work.string(), "bad.gp", {}), Interrupted);
+    clear_interrupt();
     fs::remove_all(work);
 }
 

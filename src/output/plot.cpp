@@ -13,6 +13,7 @@
 #include "core/output_dir.h"
 #include "core/process.h"
 #include "core/fileio.h"
+#include "core/interrupt.h"
 #include "run/summary_file.h"
 
 namespace demlab {
@@ -357,7 +358,13 @@ void run_gnuplot(const std::string& dir, const std::string& script, const std::v
     gnuplot.argv = {"gnuplot", script};
     gnuplot.cwd = dir;
     gnuplot.stderr_file = dir + "/gnuplot.log";
-    if (run_process(gnuplot) != 0) throw RunError("gnuplot failed on " + dir + "/" + script + " (see " + dir + "/gnuplot.log)");
+    if (run_process(gnuplot) != 0) {
+        // Ctrl-C reaches gnuplot too (one process group): the work drawn from is complete
+        if (pending_interrupt() != 0)
+            throw Interrupted("interrupted while gnuplot drew " + dir + "; what it draws from is complete: `demlab plot` "
+                              "(or `demlab compare` again) draws it");
+        throw RunError("gnuplot failed on " + dir + "/" + script + " (see " + dir + "/gnuplot.log)");
+    }
     std::string cut;
     for (const std::string& png : pngs)
         if (!png_is_whole(png)) {
