@@ -280,6 +280,9 @@ TEST(Guards, DemoRefusesAbsurdRunsAndNegativeSeeds) {
     EXPECT_FALSE(fs::exists(dir));
     EXPECT_EQ(run_exe("demo --seed -1 --out " + dir.string(), err), 2);
     EXPECT_NE(err.find("--seed -1"), std::string::npos) << err;
+    // one past 2^64: refused, not taken as 2^63 - 1
+    EXPECT_EQ(run_exe("demo --seed 99999999999999999999 --out " + dir.string(), err), 2);
+    EXPECT_NE(err.find("--seed 99999999999999999999"), std::string::npos) << err;
     EXPECT_FALSE(fs::exists(dir));
 }
 

@@ -48,7 +48,8 @@ struct DemoOptions {
     bool force = false;
     double t_end = 1.0;
     int model = 3;
-    long long seed = 1;  // signed: "-1" would wrap to 2^64 - 1 in an unsigned option
+    std::string seed = "1";  // as typed: scenario.seed's parser checks it (a number option
+                             // would wrap "-1", or saturate 99999999999999999999, unseen)
     int threads = 1;
     bool no_plots = false;
 };
@@ -63,13 +64,12 @@ void set_from_option(Scenario& s, const std::string& option, const std::string& 
 }
 
 int demo(const DemoOptions& o) {
-    if (o.seed < 0) throw InputError("demo --seed " + std::to_string(o.seed) + ": must be an integer >= 0");
     Scenario s = parse_scenario(kDemoScenario, "demo (built in)");
     set_from_option(s, "--t-end", "stop.t_max", format_number(o.t_end));
     // a short demo still stops by time: the rest test's window at most half of it
     if (s.stop.rest_duration >= 0.5 * o.t_end) s.stop.rest_duration = 0.5 * o.t_end;
     set_from_option(s, "--model", "rotation.model", std::to_string(o.model));
-    set_from_option(s, "--seed", "scenario.seed", std::to_string(o.seed));
+    set_from_option(s, "--seed", "scenario.seed", o.seed);
     finish_scenario(s);
     s.world.threads = o.threads;
     RunOptions ro;
