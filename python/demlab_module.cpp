@@ -2,6 +2,7 @@
 // scenario with its key registry and checks, runs into run folders, and a World to step from
 // Python. It calls the C++ library, never the executable, so a run from Python writes the same
 // files, with the same bytes, as `demlab run`.
+#include <filesystem>
 #include <pybind11/functional.h>
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
@@ -94,7 +95,9 @@ PyScenario load(const std::string& path, const py::dict& overrides, const std::s
             throw KeyedInputError(e.what(), k);
         }
     }
-    if (!release_from.empty()) p.s.release.from_file = release_from;
+    // the working directory's, as --release-from (kept absolute: the run folder's scenario.toml
+    // and a resume read the same file from anywhere)
+    if (!release_from.empty()) p.s.release.from_file = std::filesystem::absolute(release_from).lexically_normal().string();
     finish_scenario(p.s);
     return p;
 }

@@ -137,17 +137,44 @@ TEST(OutputPolicy, OnlyTheFolderAForcedOutputMovedAsideIsRemoved) {
     fs::remove_all(work);
 }
 
+// Row 1b': an unfinished forced output (a run stopped before its first checkpoint) forced again,
+// as resume does when it reruns such a run from the start: the unfinished folder is replaced and
+// the new output takes over its token, so the user's old folder, still aside, goes once the new
+// output is complete, and no second aside is left behind.
+TEST(OutputPolicy, AnUnfinishedForcedOutputForcedAgainKeepsTheOldFolderUntilTheEnd) {
+    const fs::path work = temp_dir("aside-again");
+    const fs::path x = work / "x";
+    prepare_output_dir(x.string(), false);
+    write_text(x / "result.csv", "old\n");
+    remove_replaced_output(x.string());  // complete
+    prepare_output_dir(x.string(), true);  // forced: the old one aside
+    write_text(x / "partial.csv", "new, unfinished\n");
+    const fs::path aside = replaced_output_dir(x.string());
+    EXPECT_EQ(read_file(aside / "result.csv"), "old\n");
+    prepare_output_dir(x.string(), true);  // forced again before it finished
+    EXPECT_EQ(read_file(aside / "result.csv"), "old\n");
+    EXPECT_FALSE(fs::exists(x / "partial.csv"));
+    EXPECT_FALSE(fs::exists(work / "x.replaced-2"));
+    remove_replaced_output(x.string());  // now complete
+    EXPECT_FALSE(fs::exists(aside));
+    fs::remove_all(work);
+}
+
 // Row 1c: demlab plot writes into a run's plots/ only when it is demlab's and holds nothing else:
 // a user's file there is neither overwritten nor listed as demlab's (which a --force on the run
-// would then delete).
+// would then delete). A plots/ an earlier build made without the marker is still drawn into.
 TEST(OutputPolicy, PlotNeverAdoptsTheUsersFiles) {
     const fs::path work = temp_dir("plot-adopt");
     const fs::path run = finished_run(work, "r");
     fs::remove_all(run / "plots");
-    write_text(run / "plots/front.png", "hand-drawn");
+    write_text(run / "plots/kinetic_energy.png", "hand-drawn");
     EXPECT_EQ(demlab({"plot", "r"}, work), kExitInput);
     EXPECT_NE(read_file(work / "stderr.txt").find("not made by demlab"), std::string::npos) << read_file(work / "stderr.txt");
-    EXPECT_EQ(read_file(run / "plots/front.png"), "hand-drawn");
+    EXPECT_EQ(read_file(run / "plots/kinetic_energy.png"), "hand-drawn");
+    // a plots/ of a build before the marker (its plots.gp and PNGs, nothing else) is demlab's
+    write_text(run / "plots/plots.gp", "# an earlier build's\n");
+    EXPECT_EQ(demlab({"plot", "r"}, work), 0) << read_file(work / "stderr.txt");
+    EXPECT_NE(read_file(run / "plots/kinetic_energy.png"), "hand-drawn");
     fs::remove_all(run / "plots");
     EXPECT_EQ(demlab({"plot", "r"}, work), 0) << read_file(work / "stderr.txt");
     write_text(run / "plots/my_fig.svg", "mine");

@@ -218,40 +218,63 @@ void mark_output_dir(const std::string& dir) {
 void prepare_output_dir(const std::string& dir, bool force, const std::vector<std::string>& inputs) {
     check_output_dir(dir, force, inputs);
     std::error_code ec;
-    std::string token;
+    std::string token, moved;
     if (fs::exists(dir, ec)) {
-        // the old content aside, under the first free name (X.replaced, X.replaced-2, ...):
-        // whatever already has such a name (a forced run's old folder left by a failure, a
-        // user's own folder) stays as it is. Both markers get the same token, so that only
-        // this folder is removed once the new output is complete, or moved back if it fails.
-        const std::string base = replaced_output_dir(dir);
-        std::string aside;
-        for (int k = 1; k <= 1000 && aside.empty(); ++k) {
-            const std::string name = k == 1 ? base : base + "-" + std::to_string(k);
-            if (!fs::exists(fs::symlink_status(name, ec))) aside = name;
+        std::vector<std::string> listed;
+        if (!own_aside(dir).empty() && !recorded_entries(dir, listed)) {
+            // an unfinished forced output (no file list) whose own old folder is still aside (a
+            // run interrupted before its first checkpoint, rerun by resume, or forced again):
+            // the unfinished output is replaced, and the new one takes over its token, so that
+            // the old folder goes once the new output is complete
+            token = aside_token(dir);
+            fs::remove_all(dir, ec);
+            if (ec) throw InputError("cannot remove the unfinished output folder '" + dir + "' for --force: " + ec.message());
+        } else {
+            // the old content aside, under the first free name (X.replaced, X.replaced-2, ...):
+            // whatever already has such a name (a user's own folder, say) stays as it is. Both
+            // markers get the same token, so that only this folder is removed once the new
+            // output is complete, or moved back if it fails.
+            const std::string base = replaced_output_dir(dir);
+            std::string aside;
+            for (int k = 1; k <= 1000 && aside.empty(); ++k) {
+                const std::string name = k == 1 ? base : base + "-" + std::to_string(k);
+                if (!fs::exists(fs::symlink_status(name, ec))) aside = name;
+            }
+            if (aside.empty())
+                throw InputError("cannot move the old output folder '" + dir + "' aside: '" + base + "' and '" + base +
+                                 "-2' to '" + base + "-1000' all exist; move or delete them yourself");
+            token = new_aside_token();
+            // the token into the old marker before anything moves (a folder that cannot take it,
+            // read-only say, is refused here, still in place)
+            std::string head;
+            std::vector<std::string> files;
+            const bool has_list = read_marker(dir, head, &files);
+            std::string marker = head + kAsidePrefix + token + "\n";
+            if (has_list) {
+                marker += kFilesLine;
+                for (const std::string& f : files) marker += f + "\n";
+            }
+            write_file_atomic(marker_path(dir), marker);
+            fs::rename(dir, aside, ec);
+            if (ec)
+                throw InputError("cannot move the old output folder '" + dir + "' aside to '" + aside + "' for --force: " +
+                                 ec.message());
+            moved = aside;
         }
-        if (aside.empty())
-            throw InputError("cannot move the old output folder '" + dir + "' aside: '" + base + "' and '" + base +
-                             "-2' to '" + base + "-1000' all exist; move or delete them yourself");
-        token = new_aside_token();
-        fs::rename(dir, aside, ec);
-        if (ec)
-            throw InputError("cannot move the old output folder '" + dir + "' aside to '" + aside + "' for --force: " +
-                             ec.message());
-        std::string head;
-        std::vector<std::string> files;
-        const bool listed = read_marker(aside, head, &files);
-        std::string marker = head + kAsidePrefix + token + "\n";
-        if (listed) {
-            marker += kFilesLine;
-            for (const std::string& f : files) marker += f + "\n";
-        }
-        write_file_atomic(marker_path(aside), marker);
     }
-    fs::create_directories(dir, ec);
-    if (ec) throw InputError("cannot create output folder '" + dir + "': " + ec.message());
-    if (!token.empty()) write_file_atomic(marker_path(dir), std::string(kMarkerHead) + kAsidePrefix + token + "\n");
-    else mark_output_dir(dir);
+    try {
+        fs::create_directories(dir, ec);
+        if (ec) throw InputError("cannot create output folder '" + dir + "': " + ec.message());
+        if (!token.empty()) write_file_atomic(marker_path(dir), std::string(kMarkerHead) + kAsidePrefix + token + "\n");
+        else mark_output_dir(dir);
+    } catch (...) {
+        if (!moved.empty()) {  // the old folder back where it was
+            std::error_code ignore;
+            fs::remove_all(dir, ignore);
+            fs::rename(moved, dir, ignore);
+        }
+        throw;
+    }
 }
 
 void record_output_files(const std::string& dir) {

@@ -11,6 +11,7 @@
 #include "core/csv.h"
 #include "core/error.h"
 #include "core/fileio.h"
+#include "core/interrupt.h"
 #include "core/output_dir.h"
 #include "core/process.h"
 #include "output/plot.h"
@@ -45,7 +46,7 @@ RunInfo read_run(const std::string& dir) {
             throw InputError(dir + ": not a finished run folder (no " + f + "); compare takes folders written by demlab run");
     // every series compare reads, whole: one cut short (a full disk, a killed writer) is refused
     // naming the file and the row, before anything is drawn or copied from it
-    for (const char* f : {"front.csv", "forces.csv", "deposit.csv", "front_synced.csv", "bed.csv"})
+    for (const char* f : {"front.csv", "forces.csv", "deposit.csv", "front_synced.csv"})
         if (fs::is_regular_file(dir + "/" + f)) read_csv_table(dir + "/" + f);
     r.scenario = parse_scenario(read_input_file(dir + "/scenario.toml", kMaxScenarioBytes, "scenario file"), dir + "/scenario.toml");
     r.summary = read_summary_file(dir + "/summary.json");
@@ -334,6 +335,7 @@ std::vector<std::string> compare_runs(const CompareOptions& o) {
         throw RunError("gnuplot is not installed, so no comparison was drawn (apt-get install gnuplot-nox, or "
                        "scripts/install-deps.sh)");
     prepare_output_dir(o.out, o.force, o.runs);
+    InterruptScope interrupts;  // a Ctrl-C while gnuplot draws: an interruption, the old folder put back
     try {
         std::vector<std::string> made = compare_into(o, runs);
         remove_replaced_output(o.out);

@@ -287,6 +287,7 @@ void plot_peaks(const std::string& run_dir, const std::string& dir, std::ostring
     namespace fs = std::filesystem;
     const std::string peaks = run_dir + "/peaks.csv";
     if (fs::exists(peaks)) {
+        read_csv_table(peaks);  // whole (as header_of checks the others)
         gp << "set output 'peaks.png'\nset title 'Largest flow height and mean speed along the path over the run'\n"
            << "set xlabel 's along the path (m)'\nset ylabel 'flow height normal to the bed (m)'\nset y2label 'mean speed (m/s)'\n"
            << "set y2tics\nplot '../peaks.csv' using 1:2 with lines lw 2 title 'height' axes x1y1, '' using 1:3 with lines lw 2 "
@@ -318,6 +319,7 @@ void plot_spheres(const std::string& run_dir, const std::string& dir, std::ostri
     std::ifstream in(path);
     std::string header_line, first;
     if (!std::getline(in, header_line) || header_line.find("moving_spheres") == std::string::npos) return;
+    read_csv_table(path);  // whole (as header_of checks the others)
     const CsvHeader header(header_line, path);
     auto col = [&](const char* name) { return std::to_string(header.column(name) + 1); };  // gnuplot counts from 1
     gp << "set output 'motion.png'\nset title 'The fastest sphere and the largest travel in map view'\n"
@@ -358,13 +360,13 @@ void run_gnuplot(const std::string& dir, const std::string& script, const std::v
     gnuplot.argv = {"gnuplot", script};
     gnuplot.cwd = dir;
     gnuplot.stderr_file = dir + "/gnuplot.log";
-    if (run_process(gnuplot) != 0) {
-        // Ctrl-C reaches gnuplot too (one process group): the work drawn from is complete
-        if (pending_interrupt() != 0)
-            throw Interrupted("interrupted while gnuplot drew " + dir + "; what it draws from is complete: `demlab plot` "
-                              "(or `demlab compare` again) draws it");
-        throw RunError("gnuplot failed on " + dir + "/" + script + " (see " + dir + "/gnuplot.log)");
-    }
+    const int status = run_process(gnuplot);
+    // Ctrl-C reaches gnuplot too (one process group), which may end with any status: the work
+    // drawn from is complete (the caller holds an InterruptScope, so demlab records the signal)
+    if (pending_interrupt() != 0)
+        throw Interrupted("interrupted while gnuplot drew " + dir + "; what it draws from is complete: `demlab plot` "
+                          "(or `demlab compare` again) draws it");
+    if (status != 0) throw RunError("gnuplot failed on " + dir + "/" + script + " (see " + dir + "/gnuplot.log)");
     std::string cut;
     for (const std::string& png : pngs)
         if (!png_is_whole(png)) {
@@ -384,10 +386,25 @@ std::vector<std::string> make_plots(const std::string& run_dir, int width, int h
                        "scripts/install-deps.sh)");
     const std::string dir = run_dir + "/plots";
     // a plots/ folder the user made, or files the user put into demlab's: refused before any
-    // is overwritten or recorded as demlab's (which a later --force would delete)
+    // is overwritten or recorded as demlab's (which a later --force would delete). A folder
+    // without the marker that holds only the files this function writes is one made by a
+    // build before the marker (its plots.gp among them): it is demlab's.
+    if (fs::is_directory(dir) && !fs::is_symlink(dir) && !is_demlab_output(dir) && fs::is_regular_file(dir + "/plots.gp")) {
+        bool only_plots = true;
+        for (const auto& e : fs::directory_iterator(dir)) {
+            const std::string name = e.path().filename().string(), ext = e.path().extension().string();
+            only_plots = only_plots && e.is_regular_file() &&
+                         (ext == ".png" || name == "plots.gp" || name == "gnuplot.log" || name == "forces_smoothed.csv" ||
+                          name == "barrier_pressure_peak.csv" || name == "barrier_pressure_map.dat");
+        }
+        if (only_plots) mark_output_dir(dir);
+    }
     check_regenerated_output_dir(dir);
     fs::create_directories(dir);
     mark_output_dir(dir);
+    // Ctrl-C reaches gnuplot as well as demlab: recorded here (run_gnuplot reports it as an
+    // interruption), not the end of demlab by the signal
+    InterruptScope interrupts;
     std::ostringstream gp;
     gp << "set terminal pngcairo size " << width << "," << height << " font 'DejaVu Sans,11'\n"
        << "set datafile separator ','\nset key autotitle columnhead\nset grid\nset key outside right top\n"

@@ -104,8 +104,10 @@ std::unique_ptr<BinaryReader> open_run_folder(const RunOptions& o, const std::st
             const fs::path name = e.path().filename();
             if (!e.is_regular_file() || name.extension() != ".tmp") continue;
             const std::string inner = name.stem().extension().string();
-            for (const char* ext : {".csv", ".part", ".json", ".toml", ".vtp", ".pvd", ".png", ".bin"})
-                if (inner == ext) fs::remove(e.path(), ec);
+            bool writers = name.stem() == kOutputMarker;  // the marker's own
+            for (const char* ext : {".csv", ".part", ".json", ".toml", ".vtp", ".pvd", ".png", ".bin", ".asc", ".dat", ".gp"})
+                writers = writers || inner == ext;
+            if (writers) fs::remove(e.path(), ec);
         }
     }
     return restore;

@@ -282,3 +282,9 @@ def test_help_documents_every_public_name():
         assert getattr(demlab.World, name).__doc__, name
     for name in ("summary", "forces", "snapshot", "snapshot_times"):
         assert getattr(demlab.RunFolder, name).__doc__, name
+
+
+def test_release_from_is_the_working_directorys_as_the_cli(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    sc = demlab.load_scenario(SCENARIO, SMALL, release_from="masses/release.csv")
+    assert sc["release.from_file"] == str(tmp_path / "masses/release.csv")
