@@ -3,6 +3,7 @@
 // place, so a column added later breaks no reader.
 #pragma once
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace demlab {
@@ -14,6 +15,8 @@ std::vector<std::string> csv_cells(const std::string& line);
 class CsvHeader {
 public:
     CsvHeader(const std::string& header_line, std::string file);
+    // From the names read_csv_table gave.
+    CsvHeader(std::vector<std::string> names, std::string file) : names_(std::move(names)), file_(std::move(file)) {}
     // The index of the column `name`, or of `legacy` (the unitless name of run folders written
     // before the units were named) if given and `name` is absent; an InputError naming the
     // file and the columns it has otherwise.

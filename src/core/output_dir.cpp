@@ -70,14 +70,31 @@ std::string new_aside_token() {
     return t.str();
 }
 
+// The names a forced output may move its old folder to: X.replaced, X.replaced-2, ... (k = 1 to
+// kAsideNames).
+constexpr int kAsideNames = 1000;
+std::string aside_name(const std::string& dir, int k) {
+    const std::string base = replaced_output_dir(dir);
+    return k == 1 ? base : base + "-" + std::to_string(k);
+}
+
+// A marker's text: the head, the aside line when there is a token, the file list when given.
+std::string marker_text(const std::string& head, const std::string& token, const std::vector<std::string>* files) {
+    std::string text = head + (token.empty() ? "" : kAsidePrefix + token + "\n");
+    if (files) {
+        text += kFilesLine;
+        for (const std::string& f : *files) text += f + "\n";
+    }
+    return text;
+}
+
 // The old folder the output in dir moved aside, if it is still there and carries dir's token.
 std::string own_aside(const std::string& dir) {
     std::error_code ec;
     const std::string token = aside_token(dir);
     if (token.empty()) return "";
-    const std::string base = replaced_output_dir(dir);
-    for (int k = 1; k <= 1000; ++k) {
-        const std::string aside = k == 1 ? base : base + "-" + std::to_string(k);
+    for (int k = 1; k <= kAsideNames; ++k) {
+        const std::string aside = aside_name(dir, k);
         if (!fs::exists(fs::symlink_status(aside, ec))) continue;
         if (!fs::is_symlink(fs::symlink_status(aside, ec)) && is_demlab_output(aside) && aside_token(aside) == token)
             return aside;
@@ -105,16 +122,9 @@ std::vector<std::string> listed_entries(const std::string& dir) {
 // The files a completed output recorded in its marker; false for a marker without the list (a
 // folder still being written, or made by an earlier build).
 bool recorded_entries(const std::string& dir, std::vector<std::string>& files) {
-    std::ifstream in(marker_path(dir));
-    std::string line;
-    bool listed = false;
-    while (std::getline(in, line)) {
-        if (listed) files.push_back(line);
-        else if (line + "\n" == kFilesLine) listed = true;
-    }
-    return listed;
+    std::string head;
+    return read_marker(dir, head, &files);
 }
-
 
 // The entries below dir that its marker does not list (prefixed with `prefix`), and those of
 // the folders with their own marker inside it (frames/, plots/), which keep their own lists.
@@ -234,27 +244,19 @@ void prepare_output_dir(const std::string& dir, bool force, const std::vector<st
             // whatever already has such a name (a user's own folder, say) stays as it is. Both
             // markers get the same token, so that only this folder is removed once the new
             // output is complete, or moved back if it fails.
-            const std::string base = replaced_output_dir(dir);
             std::string aside;
-            for (int k = 1; k <= 1000 && aside.empty(); ++k) {
-                const std::string name = k == 1 ? base : base + "-" + std::to_string(k);
-                if (!fs::exists(fs::symlink_status(name, ec))) aside = name;
-            }
+            for (int k = 1; k <= kAsideNames && aside.empty(); ++k)
+                if (!fs::exists(fs::symlink_status(aside_name(dir, k), ec))) aside = aside_name(dir, k);
             if (aside.empty())
-                throw InputError("cannot move the old output folder '" + dir + "' aside: '" + base + "' and '" + base +
-                                 "-2' to '" + base + "-1000' all exist; move or delete them yourself");
+                throw InputError("cannot move the old output folder '" + dir + "' aside: '" + aside_name(dir, 1) + "' to '" +
+                                 aside_name(dir, kAsideNames) + "' all exist; move or delete them yourself");
             token = new_aside_token();
             // the token into the old marker before anything moves (a folder that cannot take it,
             // read-only say, is refused here, still in place)
             std::string head;
             std::vector<std::string> files;
             const bool has_list = read_marker(dir, head, &files);
-            std::string marker = head + kAsidePrefix + token + "\n";
-            if (has_list) {
-                marker += kFilesLine;
-                for (const std::string& f : files) marker += f + "\n";
-            }
-            write_file_atomic(marker_path(dir), marker);
+            write_file_atomic(marker_path(dir), marker_text(head, token, has_list ? &files : nullptr));
             fs::rename(dir, aside, ec);
             if (ec)
                 throw InputError("cannot move the old output folder '" + dir + "' aside to '" + aside + "' for --force: " +
@@ -265,8 +267,7 @@ void prepare_output_dir(const std::string& dir, bool force, const std::vector<st
     try {
         fs::create_directories(dir, ec);
         if (ec) throw InputError("cannot create output folder '" + dir + "': " + ec.message());
-        if (!token.empty()) write_file_atomic(marker_path(dir), std::string(kMarkerHead) + kAsidePrefix + token + "\n");
-        else mark_output_dir(dir);
+        write_file_atomic(marker_path(dir), marker_text(kMarkerHead, token, nullptr));
     } catch (...) {
         if (!moved.empty()) {  // the old folder back where it was
             std::error_code ignore;
@@ -279,13 +280,10 @@ void prepare_output_dir(const std::string& dir, bool force, const std::vector<st
 
 void record_output_files(const std::string& dir) {
     if (!is_demlab_output(dir)) return;
-    const std::string token = aside_token(dir);
-    std::string marker = std::string(kMarkerHead) + (token.empty() ? "" : kAsidePrefix + token + "\n") + kFilesLine;
-    for (const std::string& e : listed_entries(dir)) {
-        marker += e + "\n";
+    const std::vector<std::string> entries = listed_entries(dir);
+    for (const std::string& e : entries)
         if (is_demlab_output(dir + "/" + e)) record_output_files(dir + "/" + e);
-    }
-    write_file_atomic(marker_path(dir), marker);
+    write_file_atomic(marker_path(dir), marker_text(kMarkerHead, aside_token(dir), &entries));
 }
 
 void remove_replaced_output(const std::string& dir) {

@@ -109,12 +109,8 @@ namespace {
 // line (a gap in gnuplot's line) where none does.
 std::string surface_over_x(const std::string& src) {
     const CsvTable t = read_csv_table(src);  // (a cut or malformed file: an InputError naming its line)
-    auto column = [&](const char* name) {
-        const auto at = std::find(t.names.begin(), t.names.end(), name);
-        if (at == t.names.end()) throw InputError(src + ": no column " + name + " (a run's surface.csv has x_m, surface_m, depth_m)");
-        return size_t(at - t.names.begin());
-    };
-    const size_t cx = column("x_m"), cs = column("surface_m"), cd = column("depth_m");
+    const CsvHeader h(t.names, src);
+    const size_t cx = h.column("x_m"), cs = h.column("surface_m"), cd = h.column("depth_m");
     std::ostringstream out;
     out.precision(10);
     out << "x_m,y_m\n";
