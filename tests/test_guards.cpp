@@ -16,6 +16,7 @@
 #include "core/csv.h"
 #include "core/error.h"
 #include "dem/world.h"
+#include "geometry/deposit.h"
 #include "files.h"
 #include "helpers.h"
 #include "run/run.h"
@@ -365,6 +366,64 @@ TEST(Guards, DepositBinsThatWouldExhaustTheMemoryAreRefusedBeforeTheRun) {
 // --strip, a strip whose folder does not exist (found only after every frame was rendered),
 // --scale and --variant with DAN (silently unused), resume's --checkpoint-every nan. Each is
 // refused before anything is written.
+// The files that render and calibrate read back from a run folder are checked as the series
+// are: a snapshot index whose time is not a number, or whose file points out of the folder; a
+// DAN blocks.csv or an envelope.csv with a cell that is not a number; calibrate's --angles
+// with trailing text. Each is an input error naming the file (and line), exit 2.
+TEST(Guards, DamagedIndexesAndNumbersInRunFilesAreInputErrors) {
+    const fs::path dir = temp_dir("indexes");
+    fs::create_directories(dir);
+    const fs::path sc = dir / "drop.toml";
+    write_text(sc, "[stop]\nt_max = 0.05\nrest_duration = 0.01\n[output]\nsnapshot_interval = 0.02\n"
+                   "[[discs]]\nposition = [0.0, 0.05]\nradius = 0.01\n[[walls]]\nstart = [-1, 0]\nend = [1, 0]\n");
+    const std::string run = (dir / "run").string();
+    std::string err;
+    ASSERT_EQ(run_exe("run " + sc.string() + " --no-plots --out " + run, err), 0) << err;
+    const fs::path pvd = dir / "run/snapshots/discs.pvd";
+    const std::string index = read_file(pvd);
+    ASSERT_NE(index.find("timestep=\"0\" file=\"discs_00000.vtp\""), std::string::npos) << index;
+    auto damaged = [&](const std::string& from, const std::string& to, const std::string& says) {
+        std::string bad = index;
+        bad.replace(bad.find(from), from.size(), to);
+        write_text(pvd, bad);
+        EXPECT_EQ(run_exe("render " + run + " --size 64x48 --out " + (dir / "f").string(), err), 2) << to;
+        EXPECT_NE(err.find("discs.pvd:"), std::string::npos) << err;
+        EXPECT_NE(err.find(says), std::string::npos) << err;
+        EXPECT_FALSE(fs::exists(dir / "f")) << to;
+    };
+    damaged("timestep=\"0\"", "timestep=\"nan\"", "finite");
+    damaged("timestep=\"0\"", "timestep=\"0x\"", "'0x' is not a number");
+    damaged("file=\"discs_00000.vtp\"", "file=\"../../run/snapshots/discs_00000.vtp\"", "not a snapshot file of this folder");
+    write_text(pvd, index);
+    EXPECT_EQ(run_exe("render " + run + " --size 64x48 --out " + (dir / "f").string(), err), 0) << err;
+
+    // DAN's blocks, drawn by render
+    const std::string dan = (dir / "dan").string();
+    const std::string geometry_a = std::string(DEMLAB_SOURCE_DIR) + "/scenarios/geometry-A.toml";
+    ASSERT_EQ(run_exe("run " + geometry_a + " --solver dan --no-plots --set stop.t_max=0.3 --set stop.rest_duration=0.1 "
+                      "--set output.snapshot_interval=0.1 --out " + dan, err), 0) << err;
+    const fs::path blocks = dir / "dan/blocks.csv";
+    std::string rows = read_file(blocks);
+    const size_t second = rows.find('\n') + 1;
+    rows.replace(second, rows.find(',', second) - second, "0.0zz");
+    write_text(blocks, rows);
+    EXPECT_EQ(run_exe("render " + dan + " --size 64x48 --out " + (dir / "g").string(), err), 2);
+    EXPECT_NE(err.find("blocks.csv:2: '0.0zz' is not a number"), std::string::npos) << err;
+
+    // an envelope, read back by the calibration
+    const fs::path envelope = dir / "envelope.csv";
+    write_text(envelope, "x_m,surface_m\n0.1,0.02\n1e12,0.01\n");
+    EXPECT_THROW(read_envelope_csv(envelope.string()), InputError);
+    write_text(envelope, "x_m,surface_m\n0.1,0.02x\n");
+    EXPECT_THROW(read_envelope_csv(envelope.string()), InputError);
+    write_text(envelope, "x_m,surface_m\n0.1,0.02\n0.2,0.01\n");
+    EXPECT_EQ(read_envelope_csv(envelope.string()).y.size(), 201u);
+    EXPECT_EQ(run_exe("calibrate " + std::string(DEMLAB_SOURCE_DIR) + "/calibration/dam-break.toml --angles 15x --out " +
+                          (dir / "c").string(), err), 2);
+    EXPECT_NE(err.find("--angles '15x'"), std::string::npos) << err;
+    fs::remove_all(dir);
+}
+
 TEST(Guards, OptionsOnceAcceptedByMistakeAreRefused) {
     const fs::path dir = temp_dir("options");
     fs::create_directories(dir);

@@ -6,6 +6,7 @@
 #include "calibration/calibration.h"
 #include "app/commands.h"
 #include "calibration/ranks.h"
+#include "core/csv.h"
 #include "core/error.h"
 
 namespace demlab {
@@ -24,11 +25,10 @@ int calibrate_command(const CalibrateCli& o) {
         std::stringstream s(o.angles);
         std::string item;
         while (std::getline(s, item, ',')) {
-            try {
-                c.angles.push_back(std::stod(item));
-            } catch (...) {
+            double angle = 0.0;
+            if (!parse_number(item, angle))  // all of it: "15x" is not 15
                 throw InputError("--angles '" + o.angles + "': expected numbers in degrees separated by commas, e.g. 15,15.5,16");
-            }
+            c.angles.push_back(angle);
             if (!(c.angles.back() >= 0 && c.angles.back() <= 60)) throw InputError("--angles: each angle must be in [0, 60] deg");
         }
         std::sort(c.angles.begin(), c.angles.end());

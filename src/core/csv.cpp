@@ -10,14 +10,18 @@
 
 namespace demlab {
 
-namespace {
-bool parse_double(const std::string& c, double& x) {
+bool parse_number(const std::string& c, double& x) {
     if (c.empty()) return false;
     char* end = nullptr;
     x = std::strtod(c.c_str(), &end);
     return end == c.c_str() + c.size();
 }
-}  // namespace
+
+double parse_number_cell(const std::string& cell, const std::string& where) {
+    double x = 0.0;
+    if (!parse_number(cell, x)) throw InputError(where + ": '" + cell + "' is not a number");
+    return x;
+}
 
 std::vector<std::string> csv_cells(const std::string& line) {
     std::vector<std::string> out;
@@ -82,7 +86,7 @@ CsvTable read_csv_table(const std::string& path) {
         for (const std::string& c : cells) {
             double x = 0.0;
             if (c.empty()) x = NAN;  // a value not measured at this row (forces.csv's filtered loads before a whole window)
-            else if (!parse_double(c, x))
+            else if (!parse_number(c, x))
                 throw InputError(path + ":" + std::to_string(row) + ": '" + c + "' is not a number");
             v.push_back(x);
         }

@@ -11,6 +11,14 @@ namespace demlab {
 // The cells of one CSV line (no quoting: the run's files have none).
 std::vector<std::string> csv_cells(const std::string& line);
 
+// Text read as a number, all of it ("1.5abc" is not 1.5; "nan" and "inf" are numbers): false
+// when it is empty or is not.
+bool parse_number(const std::string& text, double& x);
+
+// A cell read as a number, all of it ("1.5abc" is not 1.5; "nan" and "inf" are numbers); an
+// InputError "WHERE: 'CELL' is not a number" otherwise (WHERE names the file and line).
+double parse_number_cell(const std::string& cell, const std::string& where);
+
 // A CSV file's header line: its columns and where each one is.
 class CsvHeader {
 public:

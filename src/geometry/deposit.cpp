@@ -4,6 +4,7 @@
 #include <fstream>
 #include <sstream>
 
+#include "core/csv.h"
 #include "core/error.h"
 #include "core/fileio.h"
 #include <unordered_map>
@@ -145,17 +146,18 @@ SlopeAngles slope_angles(const Envelope& e, double w, double wall_gap, double st
 }
 
 Envelope read_envelope_csv(const std::string& path) {
-    std::istringstream in(read_input_file(path, kMaxTableBytes, "envelope"));
-    std::string line;
-    std::getline(in, line);
+    // read whole (a cut or malformed file: an InputError naming its line), by column name
+    const CsvTable t = read_csv_table(path);
+    const CsvHeader header(t.names, path);
+    const size_t cx = header.column("x_m"), cy = header.column("surface_m");
     std::vector<Vec2> pts;
-    while (std::getline(in, line)) {
-        const size_t comma = line.find(',');
-        try {
-            pts.emplace_back(std::stod(line.substr(0, comma)), std::stod(line.substr(comma + 1)));
-        } catch (...) {
-            throw InputError(path + ": malformed row '" + line + "' (expected x_m,surface_m)");
-        }
+    for (size_t k = 0; k < t.rows.size(); ++k) {
+        const double x = t.rows[k][cx], y = t.rows[k][cy];
+        // the run samples a flume of metres from the back wall every 1 mm: an x beyond a
+        // kilometre would ask for a grid of millions of samples
+        if (!(x >= 0.0 && x <= 1000.0) || !std::isfinite(y))
+            throw InputError(path + ":" + std::to_string(k + 2) + ": expected x_m in [0, 1000] and a finite surface_m");
+        pts.emplace_back(x, y);
     }
     Envelope e;
     e.dx = 0.001;

@@ -195,7 +195,7 @@ void compare_deposits(const CompareOptions& o, const std::vector<RunInfo>& runs,
         while (std::getline(in, line)) {
             const std::vector<std::string> c = csv_cells(line);
             if (std::max(cs, ch) >= c.size()) throw InputError(src + ": a short row '" + line + "'");
-            const double s = std::stod(c[cs]), height = std::stod(c[ch]);
+            const double s = parse_number_cell(c[cs], src), height = parse_number_cell(c[ch], src);
             if (path) {
                 const DanPathPoint q = path->at(s);
                 if (height <= 0.0) {

@@ -252,9 +252,11 @@ std::vector<Frame> read_dan_frames(const std::string& run_dir) {
     while (std::getline(in, line)) {
         ++row;
         std::vector<double> v;
-        for (const std::string& cell : csv_cells(line)) v.push_back(std::stod(cell));
-        if (v.size() != columns)
-            throw InputError(blocks_file + ":" + std::to_string(row) + ": expected " + std::to_string(columns) + " columns");
+        const std::string at = blocks_file + ":" + std::to_string(row);
+        for (const std::string& cell : csv_cells(line)) v.push_back(parse_number_cell(cell, at));
+        if (v.size() != columns) throw InputError(at + ": expected " + std::to_string(columns) + " columns");
+        if (!std::isfinite(v[ct]) || !std::isfinite(v[cs]) || !(v[ch] >= 0.0 && std::isfinite(v[ch])))
+            throw InputError(at + ": t_s and s_m must be finite numbers and H_m a finite thickness from 0");
         if (v[ct] != t_now) {
             close_frame();
             t_now = v[ct];
@@ -276,14 +278,29 @@ std::vector<SnapshotEntry> list_snapshots(const std::string& run_dir) {
     const std::string dir = run_dir + "/snapshots";
     if (!fs::is_directory(dir)) throw InputError(run_dir + ": no snapshots/ folder (was output.snapshot_interval 0?)");
     std::vector<SnapshotEntry> out;
-    std::ifstream pvd(dir + "/discs.pvd");
+    const std::string index = dir + "/discs.pvd";
+    std::ifstream pvd(index);
     if (pvd) {
         std::string line;
+        long row = 0;
+        // the attribute's value between its quotes ("" when it has no closing quote)
+        auto attribute = [&](size_t at, size_t name_length) {
+            const size_t from = at + name_length, to = line.find('"', from);
+            return to == std::string::npos ? std::string() : line.substr(from, to - from);
+        };
         while (std::getline(pvd, line)) {
+            ++row;
             const size_t ts = line.find("timestep=\""), file = line.find("file=\"");
             if (ts == std::string::npos || file == std::string::npos) continue;
-            const double t = std::stod(line.substr(ts + 10));
-            const std::string name = line.substr(file + 6, line.find('"', file + 6) - file - 6);
+            // the index is the run's own: a time that is not a finite number, or a file that is
+            // not one of the folder's discs_*.vtp (a path elsewhere), is a damaged index
+            const std::string where = index + ":" + std::to_string(row);
+            const double t = parse_number_cell(attribute(ts, 10), where);
+            if (!std::isfinite(t)) throw InputError(where + ": the snapshot's time must be a finite number");
+            const std::string name = attribute(file, 6);
+            if (name.rfind("discs_", 0) != 0 || name.find('/') != std::string::npos || name.find('\\') != std::string::npos ||
+                name.size() < 11 || name.compare(name.size() - 4, 4, ".vtp") != 0)
+                throw InputError(where + ": '" + name + "' is not a snapshot file of this folder (discs_NNNNN.vtp)");
             std::string walls = name;
             walls.replace(0, 5, "walls");
             out.push_back({t, dir + "/" + name, dir + "/" + walls});
