@@ -3,6 +3,7 @@
 #pragma once
 #include <filesystem>
 
+#include "run/checkpoint_file.h"
 #include "run/run.h"
 #include "scenario/scenario.h"
 
@@ -11,8 +12,7 @@ namespace demlab::test {
 // The folder's own resolved scenario, on `threads` threads (the thread count is not part of
 // the result: a resume on another count must give the same bytes).
 inline RunSummary resume_run(const std::filesystem::path& dir, int threads) {
-    Scenario s = load_scenario((dir / "scenario.toml").string());
-    finish_scenario(s);
+    Scenario s = load_run_folder_scenario(dir.string());
     s.world.threads = threads;
     RunOptions options{dir.string(), false, {}};
     options.resume = true;

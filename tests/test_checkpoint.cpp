@@ -154,6 +154,45 @@ TEST(Checkpoint, ResumedRunIsByteIdentical) {
     fs::remove_all(cut);
 }
 
+// A run folder whose scenario.toml holds a relative release.from_file, as builds before the key
+// was taken from the scenario's folder wrote it (they read it from the working directory): the
+// resume from that directory reads the same mass and continues to the bytes of a run started
+// from it today; from another directory it is refused, saying where to resume from.
+TEST(Checkpoint, AFolderWithARelativeReleaseFromAnEarlierBuildResumes) {
+    const fs::path work = temp_dir("ck-legacy"), ref = work / "ref", cut = work / "cut";
+    fs::create_directories(work / "rel");
+    const fs::path first = work / "first";
+    run_scenario(scenario({"stop.t_max=0.01", "stop.rest_duration=0.005"}), {first.string(), false, {}});
+    fs::copy_file(first / "release.csv", work / "rel/release.csv");
+    const fs::path cwd = fs::current_path();
+    fs::current_path(work);
+    // the run never stopped reads the mass by its absolute path, as today's build holds it (the
+    // scenario's fingerprint names the path: the resumed run's is then this one's)
+    Scenario s = scenario();
+    s.release.from_file = (work / "rel/release.csv").lexically_normal().string();
+    run_scenario(s, {ref.string(), false, {}});
+    s.release.from_file = "rel/release.csv";  // as the earlier build held it
+    RunOptions ro{cut.string(), false, [](const std::string&, const std::string&, int index) {
+                      if (index == 2) request_interrupt(SIGTERM);
+                  }};
+    ro.handle_signals = true;
+    EXPECT_THROW(run_scenario(s, ro), Interrupted);
+    ASSERT_NE(read_file(cut / "scenario.toml").find("from_file = \"rel/release.csv\""), std::string::npos);
+    fs::current_path(cwd);
+    try {
+        demlab::test::resume_run(cut, 1);
+        ADD_FAILURE() << "resumed from a directory without rel/release.csv";
+    } catch (const InputError& e) {
+        EXPECT_NE(std::string(e.what()).find("resume from the directory the run was started in"), std::string::npos) << e.what();
+    }
+    fs::current_path(work);
+    const RunSummary r = demlab::test::resume_run(cut, 1);
+    fs::current_path(cwd);
+    EXPECT_NEAR(r.t_end, 1.2, 1e-4);
+    expect_same_outputs(ref, cut);
+    fs::remove_all(work);
+}
+
 // A forced run interrupted keeps the old folder aside (nothing lost while the new one is
 // unfinished); resumed to its end, the new run removes that folder, and no other: a folder the
 // user named like it stays. The resume removes the temporary files demlab's writers leave, not

@@ -9,6 +9,7 @@
 #include "app/commands.h"
 #include "core/error.h"
 #include "core/interrupt.h"
+#include "run/checkpoint_file.h"
 #include "run/measures.h"
 #include "run/run.h"
 #include "output/frame.h"
@@ -265,8 +266,7 @@ int resume_command(const ResumeCliOptions& o) {
     const bool has_checkpoint = fs::exists(dir + "/" + kCheckpointFile);
     if (!has_checkpoint && fs::exists(dir + "/summary.json"))
         throw InputError(dir + ": the run has finished already (summary.json); there is nothing to resume");
-    Scenario s = load_scenario(scenario_file);
-    finish_scenario(s);
+    Scenario s = load_run_folder_scenario(dir);
     s.world.threads = o.threads;
     s.world.simd = !o.scalar;
     s.world.avx512 = !o.no_avx512;

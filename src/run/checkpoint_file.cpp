@@ -1,6 +1,7 @@
 #include "run/checkpoint_file.h"
 
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 
@@ -48,7 +49,7 @@ void check_same_inputs(const std::vector<ScenarioInput>& stored, const std::vect
         const ScenarioInput* cur = nullptr;
         for (const ScenarioInput& n : now)
             if (n.key == then.key) cur = &n;
-        if (!cur || cur->path != then.path)
+        if (!cur || cur->path != as_read_then(then.path))
             throw InputError(dir + ": the checkpoint's run read " + then.key + " = \"" + then.path +
                              "\", which the scenario no longer names; a resumed run must read the same files");
         if (cur->hash != then.hash)
@@ -124,11 +125,33 @@ bool same_scenario(const std::string& stored, const std::string& resolved_now) {
     if (scenario_settings(stored) == scenario_settings(resolved_now)) return true;
     try {
         Scenario then = parse_scenario(stored, "the checkpoint's scenario");
+        if (!then.release.from_file.empty()) then.release.from_file = as_read_then(then.release.from_file);
         finish_scenario(then);
         return scenario_settings(resolved_toml(then)) == scenario_settings(resolved_now);
     } catch (const InputError&) {
         return false;  // a key this build no longer reads: not the same scenario
     }
+}
+
+std::string as_read_then(const std::string& path) {
+    const std::filesystem::path p(path);
+    return p.is_relative() ? std::filesystem::absolute(p).lexically_normal().string() : path;
+}
+
+Scenario load_run_folder_scenario(const std::string& dir) {
+    const std::string file = dir + "/scenario.toml";
+    Scenario s = load_scenario(file);
+    std::string& from = s.release.from_file;
+    if (!from.empty() && std::filesystem::path(from).is_relative()) {
+        const std::string then = as_read_then(from);
+        if (!std::filesystem::exists(then))
+            throw InputError(file + ": release.from_file = \"" + from + "\" is relative: the build that wrote this folder read it "
+                             "from the working directory, where " + then + " does not exist; resume from the directory the run "
+                             "was started in");
+        from = then;
+    }
+    finish_scenario(s);
+    return s;
 }
 
 CheckpointInfo read_checkpoint_info(const std::string& run_dir) {

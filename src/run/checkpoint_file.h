@@ -7,6 +7,7 @@
 #include "core/binary_io.h"
 #include "run/run.h"
 #include "scenario/fingerprint.h"
+#include "scenario/scenario.h"
 
 namespace demlab {
 
@@ -30,6 +31,16 @@ CheckpointHeader get_checkpoint_header(BinaryReader& in, const std::string& path
 // A checkpoint of an earlier build, without a sum, is read as it is.
 std::string seal_checkpoint(const std::string& bytes);
 std::string read_checkpoint_file(const std::string& path);
+
+// A run folder's scenario (DIR/scenario.toml), parsed and finished as a resume reads it. A
+// relative release.from_file there was written by a build that read it from the working
+// directory (before the key was taken from the scenario's folder; or a scenario given as text):
+// it is read from the working directory still, and its absence says to resume from the folder
+// the run was started in.
+Scenario load_run_folder_scenario(const std::string& dir);
+// A path the checkpoint's scenario or inputs hold: a relative one (see above) made absolute
+// against the working directory, as those builds read it; others as they are.
+std::string as_read_then(const std::string& path);
 
 // A whole file's bytes (InputError naming it when it cannot be read).
 std::string read_whole(const std::string& path);
