@@ -130,6 +130,11 @@ TEST(Guards, MagnitudesAreBoundedAtInput) {
     expect_refused([&] { disc("omega = 1e300"); }, {"discs[0].omega", "1e+06"});
     expect_refused([&] { disc("omega = -2e6"); }, {"discs[0].omega"});
     expect_refused([&] { disc("force = [0.0, 1e300]"); }, {"discs[0].force", "N/m"});
+    // the rolling penetration against the given discs' smallest radius, with the file's name
+    // (the world's own check, after the scenario's, has none)
+    expect_refused([&] { one_disc("position = [0.0, 0.5]", "[rotation]\nmodel = 3\nu_rr = 0.006\n"); },
+                   {"one-disc.toml: rotation.u_rr = 0.006 m", "smallest disc radius"});
+    EXPECT_NO_THROW(one_disc("position = [0.0, 0.5]", "[rotation]\nmodel = 3\nu_rr = 0.0059\n"));
     expect_refused([&] { parse_scenario("[[discs]]\nposition = [0.0, 0.5]\nradius = 1e300\n", "d.toml"); }, {"discs[0].radius"});
     expect_refused([&] { one_disc("position = [0.0, 0.5]", "[world]\ngravity = [0.0, -1e300]\n"); }, {"world.gravity", "1000"});
     expect_refused([&] { one_disc("position = [0.0, 0.5]", "[world]\ngravity = [800.0, -800.0]\n"); }, {"world.gravity"});

@@ -619,6 +619,17 @@ void finish_scenario(Scenario& s) {
         throw InputError(where + "scenario.name = \"" + s.name + "\": must be a plain name (no '/', '\\' or '..', not starting "
                          "with '.'); it names the run folder runs/<name>");
     finish_explicit_discs(s);
+    // the given discs' and the lattice's smallest radius bounds the rolling penetration as the
+    // generated masses' does (below); the world checks it again, without the file's name
+    if (s.world.rotation.model >= 2) {
+        double r_small = INFINITY;
+        for (const DiscDef& d : s.discs) r_small = std::min(r_small, d.radius);
+        if (s.lattice_release.enabled && s.lattice_release.r_min > 0.0) r_small = std::min(r_small, s.lattice_release.r_min);
+        if (std::isfinite(r_small) && !(s.world.rotation.u_rr < 0.6 * r_small))
+            throw InputError(where + "rotation.u_rr = " + format_number(s.world.rotation.u_rr) + " m must be < 0.6 times the " +
+                             "smallest disc radius, " + format_number(r_small) + " m, = " + format_number(0.6 * r_small) +
+                             " m (eq. 2.71 needs r_rr = r - u_rr > 2/5 r)");
+    }
     if (s.terrain.enabled) finish_terrain(s);
     finish_dan(s);
     finish_dem3(s);
