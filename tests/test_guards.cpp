@@ -271,7 +271,7 @@ TEST(Guards, AbsurdDiscCountsAreRefusedBeforeAllocation) {
     finish_scenario(s);
     expect_refused([&] { generate_release(s); }, {"release.r_min", "release.r_max", "more than 2e+07"});
     Scenario l = parse_scenario("[lattice_release]\nregion = [[0.0, 0.0], [100.0, 0.0], [100.0, 100.0], [0.0, 100.0]]\n"
-                                "origin = [0.0, 0.0]\nr_min = 1e-5\n", "lattice.toml");
+                                "origin = [0.0, 0.0]\nr_min = 1e-5\n[rotation]\nu_rr = 1e-6\n", "lattice.toml");
     finish_scenario(l);
     expect_refused([&] { lattice_mass(l, {}); }, {"lattice_release", "spacing", "more than 2e+07"});
 }
