@@ -15,7 +15,11 @@
 
 #include "core/csv.h"
 #include "core/error.h"
+#include "calibration/calibration.h"
 #include "dem/world.h"
+#include "dem3/tin.h"
+#include "geometry/esri_grid.h"
+#include "geometry/profile.h"
 #include "geometry/deposit.h"
 #include "files.h"
 #include "helpers.h"
@@ -426,6 +430,73 @@ TEST(Guards, DamagedIndexesAndNumbersInRunFilesAreInputErrors) {
     EXPECT_EQ(run_exe("calibrate " + std::string(DEMLAB_SOURCE_DIR) + "/calibration/dam-break.toml --angles 15x --out " +
                           (dir / "c").string(), err), 2);
     EXPECT_NE(err.find("--angles '15x'"), std::string::npos) << err;
+    fs::remove_all(dir);
+}
+
+// The input files a scenario names, damaged as a review found them accepted: a number with
+// text after it, a header keyword given twice, a header asking for more cells than the file
+// holds, coordinates beyond 1e7 m, a profile's first row taken for a header, a column named
+// twice, counts that are not whole, rasters of billions of cells. Each is an input error naming
+// the file (and line) before any output.
+TEST(Guards, DamagedInputFilesAreRefusedNamingFileAndLine) {
+    const fs::path dir = temp_dir("inputs");
+    fs::create_directories(dir);
+    const std::string f = (dir / "f").string();
+    auto refused = [&](const std::string& text, const std::function<void()>& read, const std::vector<std::string>& says) {
+        write_text(f, text);
+        std::vector<std::string> all = {f};
+        all.insert(all.end(), says.begin(), says.end());
+        expect_refused(read, all);
+    };
+    // a release mass: the cell whole
+    refused("id,x_m,y_m,r_m,layer,grid\n0,0.1x,0.2,0.01,0,0\n", [&] { load_release(f); }, {":2:", "'0.1x' is not a number"});
+    // a column named twice
+    EXPECT_THROW(CsvHeader("t_s,s_front_m,t_s", "front.csv").column("t_s"), InputError);
+    EXPECT_EQ(CsvHeader("t_s,s_front_m", "front.csv").column("s_front_m"), 1u);
+    // an ESRI grid
+    const std::string grid = "ncols 2\nnrows 2\nxllcorner 0\nyllcorner 0\ncellsize 1\n1 2\n3 4\n";
+    write_text(f, grid);
+    EXPECT_EQ(read_esri_grid(f).z.size(), 4u);
+    refused("ncols 2\nnrows 2\nxllcorner 0\nxllcenter 5\nyllcorner 0\ncellsize 1\n1 2\n3 4\n", [&] { read_esri_grid(f); },
+            {":4:", "given again (line 3"});
+    refused("ncols 1000000\nnrows 50\nxllcorner 0\nyllcorner 0\ncellsize 1\n1 2\n", [&] { read_esri_grid(f); },
+            {"1000000 x 50 cells", "bytes at least"});
+    refused("ncols 2\nnrows 2\nxllcorner 0\nyllcorner 0\ncellsize 1e200\n1 2\n3 4\n", [&] { read_esri_grid(f); }, {":5:", "cellsize"});
+    refused("ncols 2\nnrows 2\nxllcorner 0\nyllcorner 0\ncellsize 1\n1 2\n3 1e308\n", [&] { read_esri_grid(f); }, {":7:", "1e7"});
+    // a profile: a first row that is not a header, an empty cell, a coordinate beyond 1e7 m
+    write_text(f, "x_m,y_m\n0,1\n1,0.5\n");
+    EXPECT_EQ(read_profile_csv(f).size(), 2u);
+    write_text(f, "0 1\n1 0.5\n");
+    EXPECT_EQ(read_profile_csv(f).size(), 2u);
+    refused("-0.5;1.4887\n0,1\n1,0.5\n", [&] { read_profile_csv(f); }, {":1:"});
+    refused("O.00,1.4\n1,0.5\n2,0.4\n", [&] { read_profile_csv(f); }, {":1:"});
+    refused("x,y\n0,1\n1.55,,0.3250\n2,0.4\n", [&] { read_profile_csv(f); }, {":3:"});
+    refused("x,y\n0,1\n1.5x,0.5\n", [&] { read_profile_csv(f); }, {":3:"});
+    refused("x,y\n0,1\n1,1e308\n", [&] { read_profile_csv(f); }, {":3:", "1e7"});
+    // a point terrain
+    refused("0 0 0\n1 0 1e308\n0 1 0\n", [&] { read_xyz_points(f); }, {":2:", "1e7"});
+    // a calibration: whole counts
+    const std::string scenario = std::string(DEMLAB_SOURCE_DIR) + "/scenarios/dam-break.toml";
+    refused("[calibration]\nscenario = \"" + scenario + "\"\nseeds = 1.5\n", [&] { load_calibration(f); }, {"calibration.seeds", "whole"});
+    refused("[calibration]\nscenario = \"" + scenario + "\"\nsections = [3.9, 4]\n", [&] { load_calibration(f); }, {"whole"});
+    // a calibration whose scenario does not exist: refused before its folder is made
+    write_text(f, "[calibration]\nscenario = \"no-such.toml\"\nangles = [15]\n");
+    std::string err;
+    EXPECT_EQ(run_exe("calibrate " + f + " --no-refine --jobs 1 --out " + (dir / "c").string(), err), 2);
+    EXPECT_NE(err.find("no-such.toml"), std::string::npos) << err;
+    EXPECT_FALSE(fs::exists(dir / "c"));
+    // a 3-D run whose peak rasters would have billions of cells
+    const std::string snow3 = std::string(DEMLAB_SOURCE_DIR) + "/scenarios/snow-slide-3d.toml";
+    EXPECT_EQ(run_exe("run " + snow3 + " --no-plots --set dem3.raster_cell=0.0001 --out " + (dir / "r").string(), err), 2);
+    EXPECT_NE(err.find("dem3.raster_cell"), std::string::npos) << err;
+    EXPECT_FALSE(fs::exists(dir / "r"));
+    // DAN's reference front: the cell whole
+    write_text(f, "t_s,s_front_m\n0,0.5\n0.2,0.8\n0.4,1.2x\n");
+    const std::string geometry_a = std::string(DEMLAB_SOURCE_DIR) + "/scenarios/geometry-A.toml";
+    EXPECT_EQ(run_exe("run " + geometry_a + " --solver dan --no-plots --set 'dan.sync_front=\"" + f + "\"' --out " +
+                          (dir / "d").string(), err), 2);
+    EXPECT_NE(err.find(f + ":4: '1.2x' is not a number"), std::string::npos) << err;
+    EXPECT_FALSE(fs::exists(dir / "d"));
     fs::remove_all(dir);
 }
 

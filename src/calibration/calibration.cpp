@@ -67,6 +67,13 @@ CalibrationConfig load_calibration(const std::string& path) {
                     throw InputError(w + ": must be a number in [" + format_number(lo) + ", " + format_number(hi) + "] " + unit);
                 return *x;
             };
+            // a count or a section: a whole number (1.5 seeds is not 1)
+            auto whole = [&](const toml::node& n, double lo, double hi, const char* unit) {
+                const double x = number(n, lo, hi, unit);
+                if (x != std::floor(x))
+                    throw InputError(w + ": must be a whole number in [" + format_number(lo) + ", " + format_number(hi) + "] " + unit);
+                return int(x);
+            };
             if (key == "calibration.scenario") {
                 auto s = v.value_exact<std::string>();
                 if (!s) throw InputError(w + ": must be the path of a scenario file");
@@ -78,12 +85,12 @@ CalibrationConfig load_calibration(const std::string& path) {
                 c.angles.clear();
                 for (const auto& e : *a) c.angles.push_back(number(e, 0.0, 60.0, "deg"));
             } else if (key == "calibration.seeds") {
-                c.seeds = int(number(v, 1, 100, "(count)"));
+                c.seeds = whole(v, 1, 100, "(count)");
             } else if (key == "calibration.sections") {
                 const toml::array* a = v.as_array();
                 if (!a || a->empty()) throw InputError(w + ": must be an array of section numbers 1 to 5");
                 c.sections.clear();
-                for (const auto& e : *a) c.sections.push_back(int(number(e, 1, 5, "(section)")));
+                for (const auto& e : *a) c.sections.push_back(whole(e, 1, 5, "(section)"));
             } else if (key == "calibration.refine") {
                 auto b = v.value_exact<bool>();
                 if (!b) throw InputError(w + ": must be true or false");
@@ -93,7 +100,7 @@ CalibrationConfig load_calibration(const std::string& path) {
             } else if (key == "calibration.wall_gap") {
                 c.wall_gap = number(v, 0.0, 0.05, "m");
             } else if (key == "calibration.scale") {
-                c.scale = int(number(v, 0, 100, "(scale factor)"));
+                c.scale = whole(v, 0, 100, "(scale factor)");
             } else if (section == "lab") {
                 auto it = std::find(lab_keys.begin(), lab_keys.end(), std::string(k.str()));
                 if (it == lab_keys.end())
@@ -453,6 +460,14 @@ void plot_envelopes(const CalibrationConfig& c, const CalibrationOptions& o, con
 
 CalibrationResult calibrate(const CalibrationConfig& c, const CalibrationOptions& o) {
     const auto t0 = std::chrono::steady_clock::now();
+    {
+        // the scenario read and finished as the runs will read it (the grid's first angle, the
+        // scale), before the folder is made: a missing or invalid scenario leaves nothing behind
+        Scenario s = load_scenario(c.scenario);
+        if (!c.angles.empty()) apply_override(s, "material.friction_disc_deg=" + format_number(c.angles.front()));
+        if (c.scale) apply_override(s, "release.scale=" + std::to_string(c.scale));
+        finish_scenario(s);
+    }
     open_calibration_folder(c, o);
     const int jobs = o.jobs > 0 ? o.jobs : std::max(1, int(std::thread::hardware_concurrency()));
     CalibrationResult res;

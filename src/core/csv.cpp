@@ -53,11 +53,17 @@ bool CsvHeader::has(const std::string& name) const {
 }
 
 size_t CsvHeader::column(const std::string& name, const std::string& legacy) const {
+    // a name given twice: which column is meant cannot be told
+    auto only = [&](const std::string& n, size_t k) {
+        for (size_t j = k + 1; j < names_.size(); ++j)
+            if (names_[j] == n) throw InputError(file_ + ": the column '" + n + "' is named twice in its header");
+        return k;
+    };
     for (size_t k = 0; k < names_.size(); ++k)
-        if (names_[k] == name) return k;
+        if (names_[k] == name) return only(name, k);
     if (!legacy.empty())
         for (size_t k = 0; k < names_.size(); ++k)
-            if (names_[k] == legacy) return k;
+            if (names_[k] == legacy) return only(legacy, k);
     std::string have;
     for (const std::string& n : names_) have += (have.empty() ? "" : ", ") + n;
     throw InputError(file_ + ": no column '" + name + "' (its columns: " + have + ")");

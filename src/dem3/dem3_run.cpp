@@ -112,8 +112,16 @@ public:
             grid.cellsize = cell;
             grid.x0 = lo.x() + 0.5 * cell;
             grid.y0 = lo.y() + 0.5 * cell;
-            grid.ncols = std::max(1, int(std::ceil((hi.x() - lo.x()) / cell)));
-            grid.nrows = std::max(1, int(std::ceil((hi.y() - lo.y()) / cell)));
+            // counted in doubles: a wide terrain over a small cell would overflow an int
+            const double cols = std::max(1.0, std::ceil((hi.x() - lo.x()) / cell));
+            const double rows = std::max(1.0, std::ceil((hi.y() - lo.y()) / cell));
+            if (!(cols * rows <= 5e7))
+                throw InputError(s.source + ": the peak rasters over the terrain's " + format_number(hi.x() - lo.x()) + " m x " +
+                                 format_number(hi.y() - lo.y()) + " m at cells of " + format_number(cell) + " m (dem3.raster_cell" +
+                                 (d.raster_cell > 0.0 ? "" : " 0: two radii") + ") would have " + format_number(cols * rows) +
+                                 " cells, more than 50 million: give a larger dem3.raster_cell");
+            grid.ncols = int(cols);
+            grid.nrows = int(rows);
             grid.z.assign(size_t(grid.ncols) * size_t(grid.nrows), 0.0);
             for (int r = 0; r < grid.nrows; ++r)
                 for (int c = 0; c < grid.ncols; ++c) {

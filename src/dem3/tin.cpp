@@ -360,8 +360,9 @@ std::vector<Vec3> read_xyz_points(const std::string& path) {
         for (int k = 0; k < 3; ++k) {
             char* end = nullptr;
             v[k] = std::strtod(cells[size_t(k)].c_str(), &end);
-            if (end != cells[size_t(k)].c_str() + cells[size_t(k)].size() || !std::isfinite(v[k]))
-                throw InputError(path + ":" + std::to_string(no) + ": '" + cells[size_t(k)] + "' is not a finite number (" +
+            // beyond 10,000 km is no terrain (and the triangles' areas would overflow)
+            if (end != cells[size_t(k)].c_str() + cells[size_t(k)].size() || !(std::abs(v[k]) <= 1e7))
+                throw InputError(path + ":" + std::to_string(no) + ": '" + cells[size_t(k)] + "' is not a finite number in [-1e7, 1e7] (" +
                                  std::string(k == 0 ? "x" : k == 1 ? "y" : "z") + ", m)");
         }
         points.emplace_back(v[0], v[1], v[2]);

@@ -45,13 +45,15 @@ bool EsriGrid::sample(const Vec2& p, double& out) const {
 }
 
 EsriGrid read_esri_grid(const std::string& path) {
-    std::istringstream in(read_input_file(path, kMaxTableBytes, "elevation grid (terrain.grid)"));
+    const std::string text = read_input_file(path, kMaxTableBytes, "elevation grid (terrain.grid)");
+    std::istringstream in(text);
     EsriGrid g;
     std::string line;
     int no = 0;
     // the header: keyword value lines until the first line that starts with a number
     bool corner_x = true, corner_y = true, have[5] = {false, false, false, false, false};
     const char* names[5] = {"ncols", "nrows", "xllcorner or xllcenter", "yllcorner or yllcenter", "cellsize"};
+    int line_of[6] = {0, 0, 0, 0, 0, 0};  // where each of names[] (and NODATA_value) was given
     std::string first_data;
     while (std::getline(in, line)) {
         ++no;
@@ -70,6 +72,16 @@ EsriGrid read_esri_grid(const std::string& path) {
         double v = 0.0;
         if (!to_number(value, v)) throw InputError(where + ": " + key + " = '" + value + "' is not a number");
         const std::string k = lower(key);
+        // a keyword given twice (xllcorner and xllcenter count as one): which one holds cannot be told
+        const int slot = k == "ncols" ? 0 : k == "nrows" ? 1 : (k == "xllcorner" || k == "xllcenter") ? 2
+                         : (k == "yllcorner" || k == "yllcenter") ? 3 : k == "cellsize" ? 4 : k == "nodata_value" ? 5 : -1;
+        if (slot >= 0 && line_of[slot] > 0)
+            throw InputError(where + ": " + key + " given again (line " + std::to_string(line_of[slot]) + " gave " +
+                             (slot < 5 ? names[slot] : "NODATA_value") + ")");
+        if (slot >= 0) line_of[slot] = no;
+        // coordinates and elevations beyond 10,000 km are no terrain
+        if (!(std::abs(v) <= 1e7))
+            throw InputError(where + ": " + key + " = " + value + " must be within [-1e7, 1e7]");
         if (k == "ncols" || k == "nrows") {
             if (v != std::floor(v) || v < 2 || v > 1e6)
                 throw InputError(where + ": " + k + " = " + value + " must be a whole number in [2, 1000000]");
@@ -84,7 +96,7 @@ EsriGrid read_esri_grid(const std::string& path) {
             corner_y = k == "yllcorner";
             have[3] = true;
         } else if (k == "cellsize") {
-            if (!(v > 0.0)) throw InputError(where + ": cellsize = " + value + " m must be > 0");
+            if (!(v > 0.0 && v <= 1e5)) throw InputError(where + ": cellsize = " + value + " m must be in (0, 1e5]");
             g.cellsize = v;
             have[4] = true;
         } else if (k == "nodata_value") {
@@ -99,6 +111,12 @@ EsriGrid read_esri_grid(const std::string& path) {
         if (!have[k]) throw InputError(path + ": the header lacks " + std::string(names[k]));
     if (double(g.ncols) * double(g.nrows) > 5e7)
         throw InputError(path + ": " + std::to_string(g.ncols) + " x " + std::to_string(g.nrows) + " cells: more than 50 million");
+    // each elevation takes two bytes at least (a digit and a separator): a header asking for more
+    // than the file holds is refused before the grid is allocated
+    if (2.0 * double(g.ncols) * double(g.nrows) > double(text.size()))
+        throw InputError(path + ": " + std::to_string(g.ncols) + " x " + std::to_string(g.nrows) + " cells need " +
+                         format_number(2.0 * double(g.ncols) * double(g.nrows)) + " bytes at least; the file has " +
+                         std::to_string(text.size()) + ": ncols or nrows is wrong, or the file is cut short");
     if (corner_x) g.x0 += 0.5 * g.cellsize;
     if (corner_y) g.y0 += 0.5 * g.cellsize;
     // the rows, northernmost first; stored from the south
@@ -119,6 +137,8 @@ EsriGrid read_esri_grid(const std::string& path) {
         while (cells >> cell) {
             double v = 0.0;
             if (!to_number(cell, v)) throw InputError(path + ":" + std::to_string(no) + ": '" + cell + "' is not a number");
+            if (!(std::abs(v) <= 1e7))
+                throw InputError(path + ":" + std::to_string(no) + ": elevation " + cell + " must be within [-1e7, 1e7] m");
             values.push_back(v);
         }
         if (values.empty()) continue;

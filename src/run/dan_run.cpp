@@ -66,13 +66,12 @@ FrontSeries read_front(const std::string& path) {
         ++row;
         if (line.empty()) continue;
         const std::vector<std::string> cells = csv_cells(line);
-        try {
-            if (std::max(ct, cs) >= cells.size()) throw InputError("short row");
-            f.t.push_back(std::stod(cells[ct]));
-            f.s.push_back(std::stod(cells[cs]));
-        } catch (const std::exception&) {
-            throw InputError(path + ":" + std::to_string(row) + ": no numbers in its t_s and s_front_m columns");
-        }
+        const std::string at = path + ":" + std::to_string(row);
+        if (cells.size() != header.names().size())
+            throw InputError(at + ": " + std::to_string(cells.size()) + " cells, the header has " +
+                             std::to_string(header.names().size()));
+        f.t.push_back(parse_number_cell(cells[ct], at));
+        f.s.push_back(parse_number_cell(cells[cs], at));
         if (!std::isfinite(f.t.back()) || !std::isfinite(f.s.back()))
             throw InputError(path + ":" + std::to_string(row) + ": its t_s and s_front_m must be finite numbers");
         if (f.t.size() > 1 && !(f.t.back() > f.t[f.t.size() - 2]))

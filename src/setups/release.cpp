@@ -8,6 +8,7 @@
 #include <sstream>
 #include <unordered_map>
 
+#include "core/csv.h"
 #include "core/error.h"
 #include "core/fileio.h"
 #include "setups/setup.h"
@@ -632,13 +633,8 @@ ReleaseMass load_release(const std::string& path) {
         std::istringstream row(line);
         std::string cell;
         std::vector<double> v;
-        while (std::getline(row, cell, ',')) {
-            try {
-                v.push_back(std::stod(cell));
-            } catch (...) {
-                throw InputError(path + ":" + std::to_string(lineno) + ": '" + cell + "' is not a number");
-            }
-        }
+        // every cell a number, all of it ("0.0976x" is not 0.0976)
+        while (std::getline(row, cell, ',')) v.push_back(parse_number_cell(cell, path + ":" + std::to_string(lineno)));
         if (v.size() != 6 || !(v[3] > 0) || !std::isfinite(v[1]) || !std::isfinite(v[2]))
             throw InputError(path + ":" + std::to_string(lineno) + ": expected id,x,y,r,layer,grid with r > 0");
         // the layer and grid tags colour the discs: whole numbers from 0 (a NaN or 1e30 would
