@@ -14,8 +14,10 @@
 #include "geometry/deposit.h"
 #include "core/error.h"
 #include "scenario/scenario.h"
+#include "files.h"
 
 using namespace demlab;
+using demlab::test::read_file;
 namespace fs = std::filesystem;
 
 namespace {
@@ -373,6 +375,51 @@ TEST(Sweep, RerunReusesOnlyRunsOfTheSameScenarioAndFiles) {
     EXPECT_EQ(third.runs_done, 3);
     EXPECT_EQ(third.runs_reused, 0);
     for (const auto& r : w.table()) EXPECT_EQ(r[1], "0");
+}
+
+// A sweep's folder names its scenario by its absolute path: another sweep file naming another
+// scenario of the same name (d2/s.toml's two.toml) is refused without --force, where it
+// overwrote the first's sweep.csv; the same sweep file loaded through another relative path is
+// the same sweep; an id written by an earlier build (the scenario joined relative to the
+// working directory) is still this sweep's. An --out whose `..` follows a folder that does not
+// exist (which the system resolves only when the folders are made, into an existing folder of
+// the user's) and an empty --out are refused before anything is written.
+TEST(Sweep, TheFolderNamesItsScenarioAbsoluteAndTheOutPathIsChecked) {
+    DensitySweep w("demlab-sweep-id");
+    SweepOptions o;
+    o.out = (w.dir / "out").string();
+    o.jobs = 1;
+    const SweepConfig c = w.config("[2000]");
+    EXPECT_TRUE(fs::path(c.scenario).is_absolute()) << c.scenario;
+    EXPECT_EQ(run_sweep(c, o).runs_done, 1);
+    EXPECT_NE(read_file(w.dir / "out/sweep.id").find("scenario = " + c.scenario + "\n"), std::string::npos);
+    // the same sweep file through a relative path from another working directory: reused
+    const fs::path cwd = fs::current_path();
+    fs::current_path(w.dir / "out");
+    EXPECT_EQ(run_sweep(load_sweep("../s.toml"), o).runs_reused, 1);
+    // an earlier build's id, with the scenario joined as given ("../two.toml" here)
+    std::string earlier = read_file(w.dir / "out/sweep.id");
+    earlier.replace(earlier.find(c.scenario), c.scenario.size(), "../two.toml");
+    std::ofstream(w.dir / "out/sweep.id") << earlier;
+    EXPECT_EQ(run_sweep(load_sweep("../s.toml"), o).runs_reused, 1);
+    fs::current_path(cwd);
+    // another folder's sweep file naming its own two.toml
+    fs::create_directories(w.dir / "d2");
+    fs::copy_file(w.dir / "two.toml", w.dir / "d2/two.toml");
+    fs::copy_file(w.dir / "ground.csv", w.dir / "d2/ground.csv");
+    fs::copy_file(w.dir / "s.toml", w.dir / "d2/s.toml");
+    const std::string before = read_file(w.dir / "out/sweep.csv");
+    EXPECT_THROW(run_sweep(load_sweep((w.dir / "d2/s.toml").string()), o), InputError);
+    EXPECT_EQ(read_file(w.dir / "out/sweep.csv"), before);
+    // --out through a `..` after a folder that does not exist, into a folder of the user's
+    fs::create_directories(w.dir / "mine");
+    std::ofstream(w.dir / "mine/notes.txt") << "x";
+    o.out = (w.dir / "nonexistent/../mine").string();
+    EXPECT_THROW(run_sweep(c, o), InputError);
+    EXPECT_FALSE(fs::exists(w.dir / "mine/runs"));
+    EXPECT_FALSE(fs::exists(w.dir / "nonexistent"));
+    o.out = "";
+    EXPECT_THROW(run_sweep(c, o), InputError);
 }
 
 // A grid value listed twice (or two that resolve alike), and a column no summary holds, are

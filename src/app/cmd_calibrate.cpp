@@ -13,7 +13,8 @@ namespace demlab {
 
 namespace {
 struct CalibrateCli {
-    std::string config, out, angles, apply;
+    std::string config, angles, apply;
+    std::string out = "runs/calibration";  // (an --out '' given is refused, not taken for the default)
     int jobs = 0, seeds = 0, scale = 0;
     bool force = false, no_refine = false;
 };
@@ -37,7 +38,7 @@ int calibrate_command(const CalibrateCli& o) {
     if (o.scale) c.scale = o.scale;
     if (o.no_refine) c.refine = false;
     CalibrationOptions opt;
-    opt.out = o.out.empty() ? "runs/calibration" : o.out;
+    opt.out = o.out;
     opt.jobs = o.jobs;
     opt.force = o.force;
     if (!o.apply.empty()) check_apply_calibration(o.apply, o.force);  // before hours of runs

@@ -12,7 +12,8 @@ namespace demlab {
 
 namespace {
 struct SweepCli {
-    std::string file, out;
+    std::string file;
+    std::string out = "runs/sweep";  // (an --out '' given is refused, not taken for the default)
     int jobs = 0;
     bool force = false;
 };
@@ -20,7 +21,7 @@ struct SweepCli {
 int sweep_command(const SweepCli& o) {
     const SweepConfig c = load_sweep(o.file);
     SweepOptions opt;
-    opt.out = o.out.empty() ? "runs/sweep" : o.out;
+    opt.out = o.out;
     opt.jobs = o.jobs;
     opt.force = o.force;
     const Ranks& ranks = Ranks::world();

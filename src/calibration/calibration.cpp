@@ -112,7 +112,11 @@ CalibrationConfig load_calibration(const std::string& path) {
         }
     }
     if (!have_scenario) throw InputError(path + ": missing key 'calibration.scenario' (the dam-break scenario file)");
-    if (fs::path(c.scenario).is_relative()) c.scenario = (fs::path(path).parent_path() / c.scenario).lexically_normal().string();
+    // absolute: the folder's calibration.id names it (see SweepConfig::scenario)
+    if (fs::path(c.scenario).is_relative()) {
+        c.scenario_as_given = (fs::path(path).parent_path() / c.scenario).lexically_normal().string();
+        c.scenario = fs::absolute(fs::path(path).parent_path() / c.scenario).lexically_normal().string();
+    }
     std::sort(c.angles.begin(), c.angles.end());
     c.angles.erase(std::unique(c.angles.begin(), c.angles.end()), c.angles.end());
     return c;
@@ -204,14 +208,22 @@ namespace {
 
 // The folder: new, or one made for this same configuration (resume).
 void open_calibration_folder_here(const CalibrationConfig& c, const CalibrationOptions& o) {
-    std::ostringstream cfg;
-    cfg << "scenario = " << c.scenario << "\nseeds = " << c.seeds << "\nscale = " << c.scale << "\n";
+    auto id_naming = [&](const std::string& scenario) {
+        std::ostringstream cfg;
+        cfg << "scenario = " << scenario << "\nseeds = " << c.seeds << "\nscale = " << c.scale << "\n";
+        return cfg.str();
+    };
+    const std::string cfg = id_naming(c.scenario);
+    check_output_path(o.out);
     const std::string marker = o.out + "/calibration.id";
     if (fs::exists(o.out)) {
         std::ifstream in(marker);
         std::stringstream have;
         have << in.rdbuf();
-        if (have.str() != cfg.str()) {
+        // a folder of this calibration made by an earlier build, whose id named the scenario as
+        // given relative to the working directory: the same calibration from the same directory
+        const bool earlier = !c.scenario_as_given.empty() && have.str() == id_naming(c.scenario_as_given);
+        if (have.str() != cfg && !earlier) {
             if (!o.force)
                 throw InputError("output folder '" + o.out + "' exists and was not made by this calibration "
                                  "(scenario, seeds, scale); choose another --out or pass --force");
@@ -221,7 +233,7 @@ void open_calibration_folder_here(const CalibrationConfig& c, const CalibrationO
     }
     fs::create_directories(o.out + "/runs");
     mark_output_dir(o.out);
-    write_file_atomic(marker, cfg.str());
+    write_file_atomic(marker, cfg);
 }
 
 // Rank 0 opens the folder; the others wait for it (and stop with it if it refused).

@@ -12,7 +12,8 @@ namespace demlab {
 
 struct CalibrationConfig {
     std::string source;                    // the config file
-    std::string scenario;                  // scenario file (relative paths: to the config file)
+    std::string scenario;                  // scenario file (relative paths: to the config file), absolute
+    std::string scenario_as_given;         // the config's folder joined as given (the id of earlier builds' folders)
     std::vector<double> angles{14, 14.5, 15, 15.5, 16, 17, 18, 19};  // deg
     int seeds = 1;                         // runs per angle (seed, seed + 1, ...)
     std::vector<int> sections{3, 4, 5};    // sections in the objective (thesis: 3 to 5)

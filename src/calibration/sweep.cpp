@@ -169,7 +169,12 @@ SweepConfig load_sweep(const std::string& path) {
     }
     if (t.contains("grid") && t.contains("rows")) throw InputError(path + ": give either [grid] or [[rows]], not both");
     if (c.scenario.empty()) throw InputError(path + ": [sweep] scenario is required (the scenario file to sweep)");
-    if (fs::path(c.scenario).is_relative()) c.scenario = (fs::path(path).parent_path() / c.scenario).lexically_normal().string();
+    // absolute: the folder's sweep.id names it, and the same sweep run from another directory
+    // (or another sweep file naming another scenario of the same name) must be told apart
+    if (fs::path(c.scenario).is_relative()) {
+        c.scenario_as_given = (fs::path(path).parent_path() / c.scenario).lexically_normal().string();
+        c.scenario = fs::absolute(fs::path(path).parent_path() / c.scenario).lexically_normal().string();
+    }
     if (c.rows.empty()) c.rows = {{}};  // the scenario alone, over its seeds
     // a column that no run's summary.json holds is refused now, not after every run
     const std::vector<std::string> numbers = summary_number_keys();
@@ -220,19 +225,28 @@ SweepResult run_sweep(const SweepConfig& c, const SweepOptions& o) {
             todo.push_back({r, k, std::move(s), fp});
         }
     // the folder: new, or made by this same sweep (resume); rank 0 opens it
-    std::ostringstream id;
-    id << "scenario = " << c.scenario << "\nseeds = " << c.seeds << "\n";
-    for (const std::string& a : c.common) id << "set " << a << "\n";
-    for (size_t r = 0; r < c.rows.size(); ++r) {
-        id << "row " << r + 1 << ":";
-        for (size_t k = 0; k < c.keys.size(); ++k) id << " " << c.keys[k] << "=" << c.rows[r][k];
-        id << "\n";
-    }
+    auto id_naming = [&](const std::string& scenario) {
+        std::ostringstream id;
+        id << "scenario = " << scenario << "\nseeds = " << c.seeds << "\n";
+        for (const std::string& a : c.common) id << "set " << a << "\n";
+        for (size_t r = 0; r < c.rows.size(); ++r) {
+            id << "row " << r + 1 << ":";
+            for (size_t k = 0; k < c.keys.size(); ++k) id << " " << c.keys[k] << "=" << c.rows[r][k];
+            id << "\n";
+        }
+        return id.str();
+    };
+    const std::string id = id_naming(c.scenario);
     std::string error;
     if (ranks.root()) {
         try {
+            check_output_path(o.out);
             const std::string marker = o.out + "/sweep.id";
-            if (fs::exists(o.out) && read_text_or_empty(marker) != id.str()) {
+            const std::string have = read_text_or_empty(marker);
+            // a folder of this sweep made by an earlier build, whose id named the scenario as
+            // given relative to the working directory: the same sweep from the same directory
+            const bool earlier = !c.scenario_as_given.empty() && have == id_naming(c.scenario_as_given);
+            if (fs::exists(o.out) && have != id && !earlier) {
                 if (!o.force)
                     throw InputError("output folder '" + o.out + "' exists and was not made by this sweep; choose another --out or pass --force");
                 // forced over another folder: only one demlab made, holding no input (output_dir.h)
@@ -240,7 +254,7 @@ SweepResult run_sweep(const SweepConfig& c, const SweepOptions& o) {
             }
             fs::create_directories(o.out + "/runs");
             mark_output_dir(o.out);
-            write_file_atomic(marker, id.str());
+            write_file_atomic(marker, id);
         } catch (const std::exception& e) {
             error = e.what();
         }

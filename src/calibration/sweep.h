@@ -24,7 +24,8 @@ namespace demlab {
 
 struct SweepConfig {
     std::string source;                        // the sweep file
-    std::string scenario;                      // resolved against the sweep file's folder
+    std::string scenario;                      // resolved against the sweep file's folder, absolute
+    std::string scenario_as_given;             // the sweep file's folder joined as given (the id of earlier builds' folders)
     int seeds = 1;
     std::vector<std::string> common;           // key=value of every row
     std::vector<std::string> keys;             // the varied keys, in order

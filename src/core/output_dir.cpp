@@ -177,7 +177,7 @@ std::string replaced_output_dir(const std::string& dir) {
     return d + ".replaced";
 }
 
-void check_output_dir(const std::string& dir, bool force, const std::vector<std::string>& inputs) {
+void check_output_path(const std::string& dir) {
     if (dir.empty()) throw InputError("--out '': an output folder needs a name");
     std::error_code ec;
     // a `..` after a folder that does not exist: the system cannot resolve it (so the folder
@@ -190,6 +190,11 @@ void check_output_dir(const std::string& dir, bool force, const std::vector<std:
                              fs::path(dir).lexically_normal().string() + "')");
         prefix /= part;
     }
+}
+
+void check_output_dir(const std::string& dir, bool force, const std::vector<std::string>& inputs) {
+    check_output_path(dir);
+    std::error_code ec;
     if (!fs::exists(fs::symlink_status(dir, ec))) return;
     if (!force)
         throw InputError("output folder '" + dir +

@@ -23,6 +23,9 @@ inline constexpr const char* kOutputMarker = ".demlab-output";
 // The file a run folder's lock is held on (run/run_folder.h), kept after the run.
 inline constexpr const char* kRunLockName = ".demlab.lock";
 
+// The name alone: not empty, and no `..` after a folder that does not exist (the system would
+// find no folder there, and making the folders would then write into an existing one).
+void check_output_path(const std::string& dir);
 // Throws InputError unless `dir` may become a new output folder: a non-empty name that does
 // not exist, or (force) an output folder demlab made that neither is, nor holds, any of
 // `inputs` (files or folders the command reads) nor the working directory.
