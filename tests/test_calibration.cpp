@@ -422,6 +422,31 @@ TEST(Sweep, TheFolderNamesItsScenarioAbsoluteAndTheOutPathIsChecked) {
     EXPECT_THROW(run_sweep(c, o), InputError);
 }
 
+// Input a run finds wrong only once its mass is made (a tracer beyond the release's discs) ends
+// the sweep as bad input (exit 2), naming the row, as `demlab run` does for the same input.
+TEST(Sweep, ARowWithInputFoundWrongAtItsRunIsAnInputErrorNamingTheRow) {
+    const fs::path dir = fs::temp_directory_path() / ("demlab-sweep-track-" + std::to_string(::getpid()));
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    const fs::path file = dir / "s.toml";
+    std::ofstream(file) << "[sweep]\nscenario = \"" << DEMLAB_SOURCE_DIR << "/scenarios/geometry-A.toml\"\n"
+                        << "set = [\"release.scale=20\", \"stop.t_max=0.002\", \"stop.rest_duration=0.001\", "
+                           "\"output.snapshot_interval=0\"]\n"
+                        << "[[rows]]\n\"output.track\" = [1]\n[[rows]]\n\"output.track\" = [100000]\n";
+    SweepOptions o;
+    o.out = (dir / "out").string();
+    o.jobs = 1;
+    try {
+        run_sweep(load_sweep(file.string()), o);
+        ADD_FAILURE() << "a tracer beyond the discs was accepted";
+    } catch (const InputError& e) {
+        const std::string m = e.what();
+        EXPECT_NE(m.find("row002"), std::string::npos) << m;
+        EXPECT_NE(m.find("output.track"), std::string::npos) << m;
+    }
+    fs::remove_all(dir);
+}
+
 // A grid value listed twice (or two that resolve alike), and a column no summary holds, are
 // refused when the sweep file is read, before any run.
 TEST(Sweep, DuplicateRowsAndUnknownColumnsAreRefusedBeforeAnyRun) {

@@ -42,6 +42,7 @@ RankJobsCount run_rank_jobs(const RankJobsDef& def) {
     std::mutex mu;
     size_t next = 0;
     std::string error;
+    bool input_error = false;  // the error is bad input (exit 2), not a failed run
     const auto t0 = std::chrono::steady_clock::now();
     const auto worker = [&] {
         while (true) {
@@ -74,6 +75,12 @@ RankJobsCount run_rank_jobs(const RankJobsDef& def) {
                 std::printf("  %s%s; %ld / %zu runs done%s\n", line.c_str(), reused ? " (reused)" : "", finished, def.count,
                             count.ran > 0 && size_t(finished) < def.count ? (", ETA " + format_number(std::round(eta)) + " s").c_str() : "");
                 std::fflush(stdout);
+            } catch (const InputError& e) {
+                // input a run found wrong only once its mass was made (a tracer id beyond its
+                // discs): the row named, and exit 2, as `demlab run` gives for the same input
+                std::lock_guard<std::mutex> lock(mu);
+                error = def.describe(k) + ": " + e.what();
+                input_error = true;
             } catch (const std::exception& e) {
                 std::lock_guard<std::mutex> lock(mu);
                 error = dir + ": " + e.what();
@@ -83,8 +90,10 @@ RankJobsCount run_rank_jobs(const RankJobsDef& def) {
     std::vector<std::thread> pool;
     for (int t = 0; t < std::min<int>(def.threads, int(mine.size())); ++t) pool.emplace_back(worker);
     for (auto& th : pool) th.join();
-    if (ranks.any_failed(!error.empty()))
+    if (ranks.any_failed(!error.empty())) {
+        if (input_error) throw InputError(def.what + " stopped: " + error);
         throw RunError(def.what + " run failed: " + (error.empty() ? std::string("on another rank (its output says which)") : error));
+    }
     return count;
 }
 
