@@ -8,6 +8,7 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <memory>
 #include <regex>
@@ -15,6 +16,7 @@
 
 #include "core/error.h"
 #include "core/interrupt.h"
+#include "core/validate.h"
 #include "output/plot.h"
 #include "output/render_run.h"
 #include "run/measures.h"
@@ -52,16 +54,28 @@ std::string key_in_message(const std::string& message) {
 std::string python_terms(std::string m) {
     static const std::regex set_override("--set '([^'=]+)=[^']*'");
     m = std::regex_replace(m, set_override, "overrides['$1']");
+    // the options as words only: "--out" inside a path ("/tmp/x--out") is the path's
     for (const auto& [cli, py] : {std::pair<std::string, std::string>{"--release-from", "release_from="},
-                                  {"--out", "out="}, {"--force", "force=True"}, {"--threads", "threads="}})
-        for (size_t at = m.find(cli); at != std::string::npos; at = m.find(cli, at + py.size())) m.replace(at, cli.size(), py);
+                                  {"--out", "out="}, {"--force", "force=True"}, {"--threads", "threads="}}) {
+        const std::regex word("(^|[\\s(;,])" + cli + "(?![\\w/.-])");
+        m = std::regex_replace(m, word, "$1" + py);
+    }
     return m;
 }
 
 // A Python value as a TOML literal for apply_override: bools, numbers, strings, lists of them.
 std::string toml_literal(const py::handle& v) {
     if (py::isinstance<py::bool_>(v)) return v.cast<bool>() ? "true" : "false";
-    if (py::isinstance<py::int_>(v)) return std::to_string(v.cast<long long>());
+    if (py::isinstance<py::int_>(v)) {
+        // TOML's integers are 64-bit: a larger one is refused here, with its key (load)
+        long long x = 0;
+        try {
+            x = v.cast<long long>();
+        } catch (const py::cast_error&) {
+            throw InputError("the integer " + std::string(py::str(v)) + " is beyond a 64-bit integer's range [-2^63, 2^63 - 1]");
+        }
+        return std::to_string(x);
+    }
     if (py::isinstance<py::float_>(v)) return keys::toml_number(v.cast<double>());
     if (py::isinstance<py::str>(v)) return keys::toml_string(v.cast<std::string>());
     if (py::isinstance<py::list>(v) || py::isinstance<py::tuple>(v)) {
@@ -106,6 +120,11 @@ PyScenario load(const std::string& path, const py::dict& overrides, const std::s
 void run(PyScenario sc, const std::string& out, int threads, bool force, bool frames, bool plots,
                double checkpoint_every, const py::object& progress) {
     if (threads < 1 || threads > 64) throw InputError("threads = " + std::to_string(threads) + ": must be 1 to 64");
+    // as the executable's --checkpoint-every, and a progress that can be called, before any output
+    if (!(checkpoint_every >= 0.0 && checkpoint_every <= 1e7))
+        throw InputError("checkpoint_every = " + format_number(checkpoint_every) + ": must be seconds in [0, 1e7]");
+    if (!progress.is_none() && !PyCallable_Check(progress.ptr()))
+        throw InputError("progress: must be None or a function progress(t, t_max, rate)");
     Scenario& s = sc.s;
     s.world.threads = threads;
     RunOptions ro;
@@ -261,6 +280,7 @@ PYBIND11_MODULE(_demlab, m) {
         .def_static("from_scenario", [](const PyScenario& p, int threads) {
                 if (p.s.solver != "dem") throw InputError("World.from_scenario: scenario.solver = \"" + p.s.solver +
                                                           "\": a World is the discs' (dem) model");
+                if (threads < 1 || threads > 64) throw InputError("threads = " + std::to_string(threads) + ": must be 1 to 64");
                 Scenario s = p.s;
                 s.world.threads = threads;
                 PyWorld w;
@@ -275,8 +295,18 @@ PYBIND11_MODULE(_demlab, m) {
             }, py::arg("scenario"), py::arg("threads") = 1)
         .def("step", [](PyWorld& w, long n) {
                 if (n < 0) throw InputError("World.step(" + std::to_string(n) + "): the number of steps must be >= 0");
-                py::gil_scoped_release nogil;
-                w.step(n);
+                // in pieces, with Python's signals looked at between them: Ctrl-C raises
+                // KeyboardInterrupt within a piece's time (the steps are the same whatever the pieces)
+                constexpr long kPiece = 2000;
+                for (long done = 0; done < n;) {
+                    const long piece = std::min(kPiece, n - done);
+                    {
+                        py::gil_scoped_release nogil;
+                        w.step(piece);
+                    }
+                    done += piece;
+                    if (PyErr_CheckSignals() != 0) throw py::error_already_set();
+                }
             }, py::arg("n") = 1)
         .def_property_readonly("time", [](const PyWorld& w) { return w.w->time(); })
         .def_property_readonly("dt", [](const PyWorld& w) { return w.w->dt(); })

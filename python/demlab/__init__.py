@@ -138,6 +138,8 @@ def run(scenario, out=None, threads=1, progress=None, force=False, frames=False,
     out = _os.fsdecode(_os.fspath(out))
     if not out:
         raise InputError("run(out=''): an output folder needs a name")
+    if "\0" in out:  # (the system would take the name up to it)
+        raise InputError("run(out=%r): a path cannot hold a NUL character" % (out,))
     _demlab.run(scenario._compiled, out, int(threads), bool(force), bool(frames), bool(plots),
                 float(checkpoint_every), progress)
     return RunFolder(out)
@@ -228,11 +230,13 @@ def _read_csv(path):
         body.append(r)
     out = {}
     for j, name in enumerate(head):
-        col = [r[j] for r in body]
+        # an empty cell is a value not measured at that row (forces.csv's filtered loads before
+        # the first whole window): NaN, as the executable reads it, so the column stays numbers
+        col = [r[j] if r[j] != "" else "nan" for r in body]
         try:
             out[name] = _np.array(col, dtype=float)
         except ValueError:
-            out[name] = _np.array(col)
+            out[name] = _np.array([r[j] for r in body])
     return out
 
 

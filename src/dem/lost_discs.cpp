@@ -57,8 +57,11 @@ void World::remap_discs(const std::vector<int32_t>& from) {
     const size_t n = pos_.size();
     std::vector<int32_t> to(n, -1);
     for (size_t k = 0; k < from.size(); ++k) to[size_t(from[k])] = int32_t(k);
+    // each array rewritten in its own buffer (a copy read, the array written): Python's views of
+    // the arrays (python/demlab_module.cpp) keep pointing at live memory, its first rows the
+    // new ones, where a moved-from array freed it under them
     auto remap = [&](auto& v) {
-        auto old = std::move(v);
+        const auto old = v;
         v.resize(from.size());
         for (size_t k = 0; k < from.size(); ++k) v[k] = old[size_t(from[k])];
     };

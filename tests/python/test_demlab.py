@@ -93,8 +93,11 @@ def test_run_folder_series_are_numpy_arrays_keyed_by_column(cli_run):
     forces = f.forces
     n = len(forces["t_s"])
     assert n == round(s["t_end"] / 0.005) + 1
-    for col in ("fx_barrier_N_per_m", "fy_arc_N_per_m", "ix_total_Ns_per_m", "fx_gate_N_per_m"):
-        assert forces[col].shape == (n,) and forces[col].dtype == np.float64
+    for col in ("fx_barrier_N_per_m", "fy_arc_N_per_m", "ix_total_Ns_per_m", "fx_gate_N_per_m",
+                "fx_barrier_filtered_N_per_m", "fy_arc_filtered_N_per_m"):
+        assert forces[col].shape == (n,) and forces[col].dtype == np.float64, col
+    # the filtered loads are not measured before the first whole window: NaN, not text
+    assert np.isnan(forces["fx_barrier_filtered_N_per_m"][0])
     # the gate holds the mass at t = 0: the slope carries the weight's share along it
     assert forces["fy_slope_N_per_m"][0] < 0
     assert f.energy["t_s"].shape == (n,)
@@ -215,6 +218,54 @@ def test_ascii_snapshots_read_as_the_binary_ones(tmp_path):
     np.testing.assert_allclose(a.velocities, b.velocities, rtol=1e-8, atol=1e-12)
     np.testing.assert_array_equal(a.ids, b.ids)
     np.testing.assert_array_equal(a.layers, b.layers)
+
+
+def test_views_kept_across_a_lost_disc_read_live_memory(tmp_path):
+    # a disc leaves the domain and is taken out: the arrays close up in their own buffers, so a
+    # view read before holds the new rows first (it read freed memory when they were moved)
+    sc = tmp_path / "fall.toml"
+    sc.write_text("[world]\ndomain = [[-1.0, -0.2], [1.0, 1.0]]\n[stop]\nt_max = 1.0\nrest_duration = 0.1\n"
+                  "[[discs]]\nposition = [0.0, 0.5]\nradius = 0.01\n"
+                  "[[discs]]\nposition = [0.5, 0.5]\nradius = 0.01\n"
+                  "[[discs]]\nposition = [-0.5, 0.5]\nradius = 0.01\n"
+                  "[[walls]]\nstart = [-0.7, 0.0]\nend = [0.2, 0.0]\n")
+    w = demlab.World.from_scenario(demlab.load_scenario(str(sc)))
+    p, ids = w.positions, w.ids
+    assert w.disc_count == 3
+    while w.disc_count == 3 and w.time < 1.0:
+        w.step(100)
+    assert w.disc_count == 2, "the disc beside the wall's end falls out of the domain"
+    assert np.shares_memory(w.positions, p)
+    np.testing.assert_array_equal(p[:2], w.positions)
+    np.testing.assert_array_equal(ids[:2], w.ids)
+    assert list(w.ids) == [0, 2]
+
+
+def test_arguments_are_checked_before_any_output(tmp_path):
+    sc = demlab.load_scenario(SCENARIO, SMALL)
+    out = tmp_path / "o"
+    for kw in ({"checkpoint_every": -5}, {"checkpoint_every": float("nan")}, {"checkpoint_every": float("inf")},
+               {"progress": 5}):
+        with pytest.raises(demlab.InputError):
+            demlab.run(sc, str(out), **kw)
+        assert not out.exists(), kw
+    with pytest.raises(demlab.InputError):
+        demlab.run(sc, str(tmp_path / "nul\0tail"))
+    assert not (tmp_path / "nul").exists()
+    for threads in (0, -1, 65):
+        with pytest.raises(demlab.InputError):
+            demlab.World.from_scenario(sc, threads=threads)
+    # an integer beyond TOML's 64 bits: an InputError with its key, not a bare RuntimeError
+    for key, value in (("scenario.seed", 2 ** 63), ("stop.t_max", 10 ** 30), ("scenario.seed", np.uint64(2 ** 64 - 1))):
+        with pytest.raises(demlab.InputError) as e:
+            demlab.load_scenario(SCENARIO, {key: value})
+        assert e.value.key == key and "64-bit" in str(e.value)
+    # the executable's option names become Python's, but not inside a path
+    mine = tmp_path / "x--out"
+    mine.mkdir()
+    with pytest.raises(demlab.InputError) as e:
+        demlab.run(sc, str(mine))
+    assert str(mine) in str(e.value) and "force=True" in str(e.value)
 
 
 def test_world_arrays_are_read_only_views_with_units():
