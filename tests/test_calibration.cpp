@@ -2,6 +2,8 @@
 // at scale 20; resuming; applying the result.
 #include <gtest/gtest.h>
 
+#include <sys/wait.h>
+
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -444,6 +446,33 @@ TEST(Sweep, ARowWithInputFoundWrongAtItsRunIsAnInputErrorNamingTheRow) {
         EXPECT_NE(m.find("row002"), std::string::npos) << m;
         EXPECT_NE(m.find("output.track"), std::string::npos) << m;
     }
+    fs::remove_all(dir);
+}
+
+// Ctrl-C on a sweep (SIGINT from `timeout`): the runs in progress write their checkpoints and
+// stop, the command ends as interrupted (exit 4, it said nothing and died by the signal), and
+// the same command then finishes the sweep.
+TEST(Sweep, AnInterruptedSweepEndsWithExitFourAndTheSameCommandFinishesIt) {
+    const fs::path dir = fs::temp_directory_path() / ("demlab-sweep-int-" + std::to_string(::getpid()));
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    std::ofstream(dir / "s.toml") << "[sweep]\nscenario = \"" << DEMLAB_SOURCE_DIR << "/scenarios/geometry-A.toml\"\n"
+                                  << "set = [\"release.scale=20\", \"stop.t_max=3\", \"stop.rest_ke_fraction=1e-12\", "
+                                     "\"output.snapshot_interval=0\"]\n[grid]\n\"material.friction_disc_deg\" = [14, 15, 16]\n";
+    const std::string sweep = std::string(DEMLAB_EXE) + " sweep " + (dir / "s.toml").string() + " --jobs 2 --out " +
+                              (dir / "out").string() + " >" + (dir / "log").string() + " 2>&1";
+    const int stopped = std::system(("timeout --preserve-status -s INT 2 " + sweep).c_str());
+    ASSERT_TRUE(WIFEXITED(stopped)) << "killed by the signal";
+    EXPECT_EQ(WEXITSTATUS(stopped), 4);
+    std::ifstream log(dir / "log");
+    std::stringstream text;
+    text << log.rdbuf();
+    EXPECT_NE(text.str().find("sweep stopped by a signal"), std::string::npos) << text.str();
+    EXPECT_FALSE(fs::exists(dir / "out/sweep.csv"));
+    const int again = std::system(sweep.c_str());
+    ASSERT_TRUE(WIFEXITED(again));
+    EXPECT_EQ(WEXITSTATUS(again), 0);
+    EXPECT_TRUE(fs::exists(dir / "out/sweep.csv"));
     fs::remove_all(dir);
 }
 

@@ -299,6 +299,8 @@ std::vector<AngleResult> evaluate_angles(const CalibrationConfig& c, const Calib
         if (make_setup(s)->kind() != "dam_break") throw InputError(c.scenario + ": not a [dam_break] scenario");
         RunOptions ro;
         ro.out_dir = dir_of(todo[k]);
+        ro.handle_signals = true;  // Ctrl-C: run_rank_jobs holds the handlers for all its runs
+        ro.install_handlers = false;
         run_scenario(s, ro);
     };
     def.describe = [&](size_t k) {

@@ -13,6 +13,7 @@
 
 #include "calibration/ranks.h"
 #include "core/error.h"
+#include "core/interrupt.h"
 #include "core/validate.h"
 #include "run/summary_file.h"
 
@@ -39,6 +40,11 @@ RankJobsCount run_rank_jobs(const RankJobsDef& def) {
     count.reused_jobs.assign(def.count, false);
     for (size_t k = 0; k < def.count; ++k) count.reused_jobs[k] = def.finished(k);
     (void)ranks.any_failed(false);
+    // Ctrl-C, SIGTERM or SIGHUP: every run in progress writes its checkpoint and stops, no new
+    // one starts, and the command ends as interrupted (exit 4); run again, it reuses the finished
+    // runs and starts the others afresh
+    InterruptScope interrupts;
+    bool interrupted = false;
     std::mutex mu;
     size_t next = 0;
     std::string error;
@@ -49,7 +55,11 @@ RankJobsCount run_rank_jobs(const RankJobsDef& def) {
             size_t k;
             {
                 std::lock_guard<std::mutex> lock(mu);
-                if (next >= mine.size() || !error.empty()) return;
+                if (next >= mine.size() || !error.empty() || interrupted) return;
+                if (pending_interrupt() != 0) {
+                    interrupted = true;
+                    return;
+                }
                 k = mine[next++];
             }
             const std::string dir = def.folder(k);
@@ -75,11 +85,19 @@ RankJobsCount run_rank_jobs(const RankJobsDef& def) {
                 std::printf("  %s%s; %ld / %zu runs done%s\n", line.c_str(), reused ? " (reused)" : "", finished, def.count,
                             count.ran > 0 && size_t(finished) < def.count ? (", ETA " + format_number(std::round(eta)) + " s").c_str() : "");
                 std::fflush(stdout);
+            } catch (const Interrupted&) {
+                std::lock_guard<std::mutex> lock(mu);
+                interrupted = true;
             } catch (const InputError& e) {
                 // input a run found wrong only once its mass was made (a tracer id beyond its
                 // discs): the row named, and exit 2, as `demlab run` gives for the same input
+                std::string tag = dir;
+                try {
+                    tag = def.describe(k);  // (a calibration's reads the run's figures: it may fail here)
+                } catch (const std::exception&) {
+                }
                 std::lock_guard<std::mutex> lock(mu);
-                error = def.describe(k) + ": " + e.what();
+                error = tag + ": " + e.what();
                 input_error = true;
             } catch (const std::exception& e) {
                 std::lock_guard<std::mutex> lock(mu);
@@ -90,9 +108,14 @@ RankJobsCount run_rank_jobs(const RankJobsDef& def) {
     std::vector<std::thread> pool;
     for (int t = 0; t < std::min<int>(def.threads, int(mine.size())); ++t) pool.emplace_back(worker);
     for (auto& th : pool) th.join();
-    if (ranks.any_failed(!error.empty())) {
+    if (ranks.any_failed(!error.empty() || interrupted)) {
         if (input_error) throw InputError(def.what + " stopped: " + error);
-        throw RunError(def.what + " run failed: " + (error.empty() ? std::string("on another rank (its output says which)") : error));
+        if (!error.empty()) throw RunError(def.what + " run failed: " + error);
+        if (!interrupted) throw RunError(def.what + " run failed: on another rank (its output says which)");
+        long finished = 0;
+        for (size_t j = 0; j < def.count; ++j) finished += def.finished(j) ? 1 : 0;
+        throw Interrupted(def.what + " stopped by a signal: " + std::to_string(finished) + " of " + std::to_string(def.count) +
+                          " runs finished; the same command continues it (the unfinished runs start again)");
     }
     return count;
 }

@@ -272,6 +272,8 @@ SweepResult run_sweep(const SweepConfig& c, const SweepOptions& o) {
     def.run = [&](size_t k) {
         RunOptions ro;
         ro.out_dir = dir_of(todo[k]);
+        ro.handle_signals = true;  // Ctrl-C: run_rank_jobs holds the handlers for all its runs
+        ro.install_handlers = false;
         run_scenario(todo[k].scenario, ro);
     };
     def.describe = [&](size_t k) { return row_tag(todo[k].row, todo[k].seed) + " (runs/" + run_name(todo[k].fingerprint) + ")"; };

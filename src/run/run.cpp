@@ -386,7 +386,7 @@ RunSummary run_through_loop(const Scenario& s, const RunOptions& o, SolverRun& r
     std::unique_ptr<RunFolderLock> lock;
     std::unique_ptr<BinaryReader> restore = open_run_folder(o, scenario_text, inputs, lock, run_inputs(s, o, inputs));
     std::unique_ptr<InterruptScope> interrupts;
-    if (o.handle_signals) interrupts = std::make_unique<InterruptScope>();
+    if (o.handle_signals && o.install_handlers) interrupts = std::make_unique<InterruptScope>();
     double wall_seconds_before = 0.0;
     if (restore) run.load(*restore, wall_seconds_before);
     else run.open();
@@ -443,7 +443,7 @@ RunSummary run_scenario(const Scenario& s, const RunOptions& o) {
     else check_output_dir(dir, o.force, held);
     const bool terminal = isatty(STDERR_FILENO) != 0;
     std::unique_ptr<InterruptScope> interrupts;
-    if (o.handle_signals) interrupts = std::make_unique<InterruptScope>();
+    if (o.handle_signals && o.install_handlers) interrupts = std::make_unique<InterruptScope>();
 
     const std::unique_ptr<Setup> setup = make_setup(s);
     const ReleaseMass mass = start_mass(s, *setup, restore.get(), dir, terminal);

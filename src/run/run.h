@@ -27,6 +27,9 @@ struct RunOptions {
     // Checkpoints (RUN_DIR/checkpoint.bin, replaced atomically; removed when the run ends):
     double checkpoint_every = 0.0;  // s of wall-clock time between checkpoints; 0: none on a timer
     bool handle_signals = false;    // SIGINT/SIGTERM: a final checkpoint, then Interrupted (interrupt.h)
+    // with handle_signals: the run installs the handlers for its time (interrupt.h); false when
+    // the caller holds them for several runs at once (a sweep's worker threads)
+    bool install_handlers = true;
     bool resume = false;            // continue out_dir from its checkpoint (the scenario must be its scenario.toml)
     // run out_dir again from the start with its own scenario.toml (resume of a run stopped
     // before its first checkpoint): that file is an input the forced folder may hold
