@@ -424,6 +424,21 @@ TEST(Sweep, TheFolderNamesItsScenarioAbsoluteAndTheOutPathIsChecked) {
     EXPECT_THROW(run_sweep(c, o), InputError);
 }
 
+// A row's value holding a comma is one CSV cell in sweep.csv: quoted, its own quotes doubled
+// (it was written as ""a,b"", which a CSV reader splits into two cells).
+TEST(Sweep, AValueWithACommaIsOneCellOfTheTable) {
+    DensitySweep w("demlab-sweep-comma");
+    std::ofstream(w.dir / "s.toml") << "[sweep]\nscenario = \"two.toml\"\ncolumns = [\"total_mass\"]\n"
+                                    << "[[rows]]\n\"scenario.name\" = \"a,b\"\n[[rows]]\n\"scenario.name\" = \"c\"\n";
+    SweepOptions o;
+    o.out = (w.dir / "out").string();
+    o.jobs = 1;
+    run_sweep(load_sweep((w.dir / "s.toml").string()), o);
+    const std::string table = read_file(w.dir / "out/sweep.csv");
+    EXPECT_NE(table.find(",0,\"\"\"a,b\"\"\","), std::string::npos) << table;
+    EXPECT_NE(table.find(",0,\"c\","), std::string::npos) << table;
+}
+
 // Input a run finds wrong only once its mass is made (a tracer beyond the release's discs) ends
 // the sweep as bad input (exit 2), naming the row, as `demlab run` does for the same input.
 TEST(Sweep, ARowWithInputFoundWrongAtItsRunIsAnInputErrorNamingTheRow) {

@@ -53,6 +53,16 @@ std::string column_name(const std::string& key, const std::string& unit) {
     return key + "_" + u;
 }
 
+// A CSV cell (RFC 4180): as it is, unless it holds a comma or a line end (or `always`): then
+// in quotes, each quote inside doubled. A row's TOML literal
+// "II" stays as it is (read back: II); "a,b" becomes """a,b""" (read back: "a,b").
+std::string csv_field(const std::string& v, bool always = false) {
+    if (!always && v.find_first_of(",\n\r") == std::string::npos) return v;
+    std::string out = "\"";
+    for (char ch : v) out += ch == '"' ? std::string("\"\"") : std::string(1, ch);
+    return out + "\"";
+}
+
 std::string row_tag(size_t row, int seed) {
     char b[48];
     std::snprintf(b, sizeof b, "row%03zu-seed%d", row + 1, seed + 1);
@@ -313,7 +323,7 @@ SweepResult run_sweep(const SweepConfig& c, const SweepOptions& o) {
         const Job& j = todo[n];
         const int reused = count.reused_jobs[n] ? 1 : 0;
         csv << j.row + 1 << ',' << j.seed + 1 << ',' << run_name(j.fingerprint) << ',' << reused;
-        for (const std::string& v : c.rows[j.row]) csv << ',' << (v.find(',') != std::string::npos ? "\"" + v + "\"" : v);
+        for (const std::string& v : c.rows[j.row]) csv << ',' << csv_field(v);
         for (const std::string& k : columns) {
             const auto it = sums[n].numbers.find(k);
             if (it == sums[n].numbers.end())
@@ -326,8 +336,8 @@ SweepResult run_sweep(const SweepConfig& c, const SweepOptions& o) {
             const auto it = sums[n].numbers.find(k);
             return it == sums[n].numbers.end() ? NAN : it->second;
         };
-        timings << run_name(j.fingerprint) << ',' << num("wall_seconds") << ',' << num("release_wall_seconds") << ",\""
-                << sums[n].text("machine") << "\"," << reused << "\n";
+        timings << run_name(j.fingerprint) << ',' << num("wall_seconds") << ',' << num("release_wall_seconds") << ","
+                << csv_field(sums[n].text("machine"), true) << "," << reused << "\n";
     }
     timings << "sweep," << res.wall_seconds << ",,,\n";
     write_file_atomic(o.out + "/sweep.csv", csv.str());
