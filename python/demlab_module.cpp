@@ -54,6 +54,8 @@ std::string key_in_message(const std::string& message) {
 std::string python_terms(std::string m) {
     static const std::regex set_override("--set '([^'=]+)=[^']*'");
     m = std::regex_replace(m, set_override, "overrides['$1']");
+    static const std::regex set_key("--set key '([^']+)'");  // (a value out of its range)
+    m = std::regex_replace(m, set_key, "overrides['$1']");
     // the options as words only: "--out" inside a path ("/tmp/x--out") is the path's
     for (const auto& [cli, py] : {std::pair<std::string, std::string>{"--release-from", "release_from="},
                                   {"--out", "out="}, {"--force", "force=True"}, {"--threads", "threads="}}) {

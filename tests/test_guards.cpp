@@ -490,6 +490,10 @@ TEST(Guards, DamagedInputFilesAreRefusedNamingFileAndLine) {
     EXPECT_EQ(run_exe("run " + snow3 + " --no-plots --set dem3.raster_cell=0.0001 --out " + (dir / "r").string(), err), 2);
     EXPECT_NE(err.find("dem3.raster_cell"), std::string::npos) << err;
     EXPECT_FALSE(fs::exists(dir / "r"));
+    // a grid named .Asc is a grid (it was read as x y z points: "2 values")
+    fs::copy_file(std::string(DEMLAB_SOURCE_DIR) + "/data/snow-slope-3d/bed.asc", dir / "bed.Asc");
+    EXPECT_EQ(run_exe("run " + snow3 + " --no-plots --set 'dem3.terrain=\"" + (dir / "bed.Asc").string() +
+                          "\"' --set stop.t_max=0.02 --set stop.rest_duration=0.01 --out " + (dir / "asc").string(), err), 0) << err;
     // DAN's reference front: the cell whole
     write_text(f, "t_s,s_front_m\n0,0.5\n0.2,0.8\n0.4,1.2x\n");
     const std::string geometry_a = std::string(DEMLAB_SOURCE_DIR) + "/scenarios/geometry-A.toml";

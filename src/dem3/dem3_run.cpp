@@ -1,6 +1,7 @@
 #include "dem3/dem3_run.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -20,8 +21,9 @@ namespace demlab {
 namespace {
 
 bool is_grid_file(const std::string& path) {
-    const std::string ext = std::filesystem::path(path).extension().string();
-    return ext == ".asc" || ext == ".ASC";
+    std::string ext = std::filesystem::path(path).extension().string();
+    for (char& c : ext) c = char(std::tolower(static_cast<unsigned char>(c)));  // .asc, .ASC, .Asc
+    return ext == ".asc";
 }
 
 // a terrain file as a TIN, and the grid it came from (an empty grid for points)

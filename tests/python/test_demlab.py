@@ -260,6 +260,10 @@ def test_arguments_are_checked_before_any_output(tmp_path):
         with pytest.raises(demlab.InputError) as e:
             demlab.load_scenario(SCENARIO, {key: value})
         assert e.value.key == key and "64-bit" in str(e.value)
+    # a value out of its range, in Python's terms
+    with pytest.raises(demlab.InputError) as e:
+        demlab.load_scenario(SCENARIO, {"stop.t_max": -1})
+    assert str(e.value).startswith("overrides['stop.t_max'] = -1 s: must be in"), str(e.value)
     # the executable's option names become Python's, but not inside a path
     mine = tmp_path / "x--out"
     mine.mkdir()
