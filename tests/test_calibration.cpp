@@ -12,6 +12,7 @@
 
 #include "calibration/calibration.h"
 #include "calibration/sweep.h"
+#include "run/run_folder.h"
 #include "run/summary_file.h"
 #include "geometry/deposit.h"
 #include "core/error.h"
@@ -422,6 +423,31 @@ TEST(Sweep, TheFolderNamesItsScenarioAbsoluteAndTheOutPathIsChecked) {
     EXPECT_FALSE(fs::exists(w.dir / "nonexistent"));
     o.out = "";
     EXPECT_THROW(run_sweep(c, o), InputError);
+}
+
+// A run folder another process is making (a second sweep into the same folder) holds its
+// lock: the sweep refuses it instead of deleting it under that run.
+TEST(Sweep, ARunFolderInUseIsRefusedNotDeleted) {
+    DensitySweep w("demlab-sweep-lock");
+    SweepOptions o;
+    o.out = (w.dir / "out").string();
+    o.jobs = 1;
+    const SweepConfig c = w.config("[2000]");
+    run_sweep(c, o);
+    const auto rows = w.table();
+    const fs::path run = w.dir / "out/runs" / rows.at(0).at(0);
+    fs::remove(run / "summary.json");  // unfinished, as a run in progress
+    {
+        RunFolderLock held(run.string());
+        try {
+            run_sweep(c, o);
+            ADD_FAILURE() << "a locked run folder was taken";
+        } catch (const InputError& e) {
+            EXPECT_NE(std::string(e.what()).find(rows[0][0]), std::string::npos) << e.what();
+        }
+        EXPECT_TRUE(fs::exists(run / "scenario.toml"));
+    }
+    EXPECT_EQ(run_sweep(c, o).runs_done, 1);  // free again: run afresh
 }
 
 // A row's value holding a comma is one CSV cell in sweep.csv: quoted, its own quotes doubled

@@ -15,6 +15,7 @@
 #include "core/error.h"
 #include "core/interrupt.h"
 #include "core/validate.h"
+#include "run/run_folder.h"
 #include "run/summary_file.h"
 
 namespace demlab {
@@ -71,6 +72,12 @@ RankJobsCount run_rank_jobs(const RankJobsDef& def) {
                     if (std::filesystem::exists(dir)) {
                         if (!is_demlab_output(dir) && !std::filesystem::exists(dir + "/scenario.toml"))
                             throw InputError(dir + ": a folder demlab did not make stands where this run goes; move it");
+                        {
+                            // a run another process is making there now (a second sweep into the
+                            // same folder) holds its lock: refused, not deleted under it
+                            RunFolderLock in_use(dir);
+                            in_use.release_and_remove();
+                        }
                         std::filesystem::remove_all(dir);
                     }
                     def.run(k);
