@@ -226,7 +226,12 @@ SweepResult run_sweep(const SweepConfig& c, const SweepOptions& o) {
     std::map<std::string, size_t> by_name;
     for (size_t r = 0; r < c.rows.size(); ++r)
         for (int k = 0; k < c.seeds; ++k) {
-            Scenario s = scenario_of(c, r, k);
+            Scenario s;
+            try {
+                s = scenario_of(c, r, k);  // (load_sweep checked each row's first seed)
+            } catch (const InputError& e) {
+                throw InputError(c.source + ": " + row_tag(r, k) + ": " + e.what());
+            }
             const std::string fp = scenario_fingerprint(s);
             const auto [it, fresh] = by_name.emplace(run_name(fp), todo.size());
             if (!fresh)  // (load_sweep refuses a duplicate row; a file edited since could make one)

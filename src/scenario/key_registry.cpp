@@ -211,7 +211,7 @@ void add_scenario_and_material_keys(std::vector<Key>& k) {
         Key seed{"scenario.seed", "-", "integer in [0, 2^63)", "seed of every random draw (release mass radii and positions)", nullptr, nullptr};
         seed.set = [](Scenario& s, const toml::node& n, const std::string& where) {
             auto v = n.value_exact<int64_t>();
-            if (!v || *v < 0) throw InputError(where + " = " + node_text(n) + ": must be an integer >= 0");
+            if (!v || *v < 0) throw InputError(where + " = " + node_text(n) + ": must be an integer in [0, 2^63 - 1]");
             s.seed = static_cast<unsigned long long>(*v);
         };
         seed.get = [](const Scenario& s) { return std::to_string(s.seed); };
