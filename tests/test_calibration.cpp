@@ -392,12 +392,15 @@ TEST(Sweep, TheFolderNamesItsScenarioAbsoluteAndTheOutPathIsChecked) {
     SweepOptions o;
     o.out = (w.dir / "out").string();
     o.jobs = 1;
-    const SweepConfig c = w.config("[2000]");
+    w.config("[2000]");  // (s.toml written)
+    const fs::path cwd = fs::current_path();
+    fs::current_path(w.dir);
+    const SweepConfig c = load_sweep("s.toml");  // relative, as typed in its folder
+    fs::current_path(cwd);
     EXPECT_TRUE(fs::path(c.scenario).is_absolute()) << c.scenario;
     EXPECT_EQ(run_sweep(c, o).runs_done, 1);
     EXPECT_NE(read_file(w.dir / "out/sweep.id").find("scenario = " + c.scenario + "\n"), std::string::npos);
     // the same sweep file through a relative path from another working directory: reused
-    const fs::path cwd = fs::current_path();
     fs::current_path(w.dir / "out");
     EXPECT_EQ(run_sweep(load_sweep("../s.toml"), o).runs_reused, 1);
     // an earlier build's id, with the scenario joined as given ("../two.toml" here)
@@ -411,8 +414,11 @@ TEST(Sweep, TheFolderNamesItsScenarioAbsoluteAndTheOutPathIsChecked) {
     fs::copy_file(w.dir / "two.toml", w.dir / "d2/two.toml");
     fs::copy_file(w.dir / "ground.csv", w.dir / "d2/ground.csv");
     fs::copy_file(w.dir / "s.toml", w.dir / "d2/s.toml");
+    // loaded as typed in its own folder, "s.toml" naming "two.toml" as the first did there
     const std::string before = read_file(w.dir / "out/sweep.csv");
-    EXPECT_THROW(run_sweep(load_sweep((w.dir / "d2/s.toml").string()), o), InputError);
+    fs::current_path(w.dir / "d2");
+    EXPECT_THROW(run_sweep(load_sweep("s.toml"), o), InputError);
+    fs::current_path(cwd);
     EXPECT_EQ(read_file(w.dir / "out/sweep.csv"), before);
     // --out through a `..` after a folder that does not exist, into a folder of the user's
     fs::create_directories(w.dir / "mine");
@@ -448,6 +454,22 @@ TEST(Sweep, ARunFolderInUseIsRefusedNotDeleted) {
         EXPECT_TRUE(fs::exists(run / "scenario.toml"));
     }
     EXPECT_EQ(run_sweep(c, o).runs_done, 1);  // free again: run afresh
+}
+
+// A run of a sweep that cannot write (a file size limit, as a full disk) ends the sweep with
+// the write's exit code, 5, as `demlab run` does (it was 3, a failed run).
+TEST(Sweep, AFailedWriteEndsTheSweepWithExitFive) {
+    const fs::path dir = fs::temp_directory_path() / ("demlab-sweep-fsize-" + std::to_string(::getpid()));
+    fs::remove_all(dir);
+    fs::create_directories(dir);
+    std::ofstream(dir / "s.toml") << "[sweep]\nscenario = \"" << DEMLAB_SOURCE_DIR << "/scenarios/geometry-A.toml\"\n"
+                                  << "set = [\"release.scale=20\", \"stop.t_max=0.002\", \"stop.rest_duration=0.001\", "
+                                     "\"output.snapshot_interval=0\"]\n";
+    const int status = std::system(("ulimit -f 10; " + std::string(DEMLAB_EXE) + " sweep " + (dir / "s.toml").string() +
+                                    " --jobs 1 --out " + (dir / "out").string() + " >/dev/null 2>&1").c_str());
+    ASSERT_TRUE(WIFEXITED(status));
+    EXPECT_EQ(WEXITSTATUS(status), 5);
+    fs::remove_all(dir);
 }
 
 // A row's value holding a comma is one CSV cell in sweep.csv: quoted, its own quotes doubled

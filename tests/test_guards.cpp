@@ -435,7 +435,7 @@ TEST(Guards, DamagedIndexesAndNumbersInRunFilesAreInputErrors) {
 
 // The input files a scenario names, damaged as a review found them accepted: a number with
 // text after it, a header keyword given twice, a header asking for more cells than the file
-// holds, coordinates beyond 1e7 m, a profile's first row taken for a header, a column named
+// holds, coordinates beyond 1e9 m (elevations 1e7 m), a profile's first row taken for a header, a column named
 // twice, counts that are not whole, rasters of billions of cells. Each is an input error naming
 // the file (and line) before any output.
 TEST(Guards, DamagedInputFilesAreRefusedNamingFileAndLine) {
@@ -450,6 +450,10 @@ TEST(Guards, DamagedInputFilesAreRefusedNamingFileAndLine) {
     };
     // a release mass: the cell whole
     refused("id,x_m,y_m,r_m,layer,grid\n0,0.1x,0.2,0.01,0,0\n", [&] { load_release(f); }, {":2:", "'0.1x' is not a number"});
+    refused("# wall 0 1.115 1.4485 0.312zz\nid,x_m,y_m,r_m,layer,grid\n0,0.1,0.2,0.01,0,0\n", [&] { load_release(f); },
+            {":1:", "# wall"});
+    write_text(f, "id,x_m,y_m,r_m,layer,grid\r\n0,0.1,0.2,0.01,0,0\r\n");  // Windows line ends
+    EXPECT_EQ(load_release(f).pos.size(), 1u);
     // a column named twice
     EXPECT_THROW(CsvHeader("t_s,s_front_m,t_s", "front.csv").column("t_s"), InputError);
     EXPECT_EQ(CsvHeader("t_s,s_front_m", "front.csv").column("s_front_m"), 1u);
@@ -463,10 +467,16 @@ TEST(Guards, DamagedInputFilesAreRefusedNamingFileAndLine) {
             {"1000000 x 50 cells", "bytes at least"});
     refused("ncols 2\nnrows 2\nxllcorner 0\nyllcorner 0\ncellsize 1e200\n1 2\n3 4\n", [&] { read_esri_grid(f); }, {":5:", "cellsize"});
     refused("ncols 2\nnrows 2\nxllcorner 0\nyllcorner 0\ncellsize 1\n1 2\n3 1e308\n", [&] { read_esri_grid(f); }, {":7:", "1e7"});
-    // a profile: a first row that is not a header, an empty cell, a coordinate beyond 1e7 m
+    // GIS tools' float32 nodata value, a cell holding it, and a corner with a UTM zone prefix
+    write_text(f, "ncols 2\nnrows 2\nxllcorner 32500000\nyllcorner 5000000\ncellsize 1\n"
+                  "NODATA_value -3.4028234663852886e+38\n1 -3.4028234663852886e+38\n3 4\n");
+    EXPECT_EQ(read_esri_grid(f).z.size(), 4u);
+    // a profile: a first row that is not a header, an empty cell, an elevation beyond 1e7 m
     write_text(f, "x_m,y_m\n0,1\n1,0.5\n");
     EXPECT_EQ(read_profile_csv(f).size(), 2u);
     write_text(f, "0 1\n1 0.5\n");
+    EXPECT_EQ(read_profile_csv(f).size(), 2u);
+    write_text(f, "x_m,y_m,\n0,1,\n1,0.5,\n");  // a spreadsheet's trailing commas
     EXPECT_EQ(read_profile_csv(f).size(), 2u);
     refused("-0.5;1.4887\n0,1\n1,0.5\n", [&] { read_profile_csv(f); }, {":1:"});
     refused("O.00,1.4\n1,0.5\n2,0.4\n", [&] { read_profile_csv(f); }, {":1:"});
@@ -484,6 +494,11 @@ TEST(Guards, DamagedInputFilesAreRefusedNamingFileAndLine) {
     std::string err;
     EXPECT_EQ(run_exe("calibrate " + f + " --no-refine --jobs 1 --out " + (dir / "c").string(), err), 2);
     EXPECT_NE(err.find("no-such.toml"), std::string::npos) << err;
+    EXPECT_FALSE(fs::exists(dir / "c"));
+    // and one whose scenario is not a dam break
+    write_text(f, "[calibration]\nscenario = \"" + std::string(DEMLAB_SOURCE_DIR) + "/scenarios/geometry-A.toml\"\nangles = [15]\n");
+    EXPECT_EQ(run_exe("calibrate " + f + " --no-refine --jobs 1 --out " + (dir / "c").string(), err), 2);
+    EXPECT_NE(err.find("not a [dam_break] scenario"), std::string::npos) << err;
     EXPECT_FALSE(fs::exists(dir / "c"));
     // a 3-D run whose peak rasters would have billions of cells
     const std::string snow3 = std::string(DEMLAB_SOURCE_DIR) + "/scenarios/snow-slide-3d.toml";

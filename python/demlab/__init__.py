@@ -24,6 +24,7 @@ which `demlab resume RUN_DIR` continues the run to the same results.
 """
 import csv as _csv
 import json as _json
+import math as _math
 import os as _os
 import tomllib as _tomllib
 import xml.etree.ElementTree as _ET
@@ -108,6 +109,9 @@ def load_scenario(path, overrides=None, release_from=None):
     `key` attribute names the key.
     """
     overrides = dict(overrides or {})
+    for name, value in (("path", path), ("release_from", release_from)):
+        if value is not None and "\0" in str(value):  # (the system would take the name up to it)
+            raise InputError("load_scenario(%s=%r): a path cannot hold a NUL character" % (name, str(value)))
     compiled = _demlab.load_scenario(str(path), overrides, "" if release_from is None else str(release_from))
     return Scenario(compiled, str(path), overrides, release_from)
 
@@ -378,8 +382,21 @@ class RunFolder:
         if not _os.path.isfile(pvd):
             return []
         root = _ET.parse(pvd).getroot()
-        return [(float(d.get("timestep")), _os.path.join(self.path, "snapshots", d.get("file")))
-                for d in root.iter("DataSet")]
+        out = []
+        # the index is the run's own: a time that is not a finite number, or a file that is not
+        # one of the folder's discs_*.vtp (a path elsewhere), is a damaged index (as `demlab render`)
+        for d in root.iter("DataSet"):
+            name = d.get("file") or ""
+            try:
+                t = float(d.get("timestep"))
+            except (TypeError, ValueError):
+                t = float("nan")
+            if not _math.isfinite(t):
+                raise InputError("%s: the snapshot time %r is not a finite number" % (pvd, d.get("timestep")))
+            if not (name.startswith("discs_") and name.endswith(".vtp") and "/" not in name and "\\" not in name):
+                raise InputError("%s: %r is not a snapshot file of this folder (discs_NNNNN.vtp)" % (pvd, name))
+            out.append((t, _os.path.join(self.path, "snapshots", name)))
+        return out
 
     @property
     def snapshot_times(self):

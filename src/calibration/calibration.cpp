@@ -481,6 +481,7 @@ CalibrationResult calibrate(const CalibrationConfig& c, const CalibrationOptions
         if (!c.angles.empty()) apply_override(s, "material.friction_disc_deg=" + format_number(c.angles.front()));
         if (c.scale) apply_override(s, "release.scale=" + std::to_string(c.scale));
         finish_scenario(s);
+        if (make_setup(s)->kind() != "dam_break") throw InputError(c.scenario + ": not a [dam_break] scenario");
     }
     open_calibration_folder(c, o);
     const int jobs = o.jobs > 0 ? o.jobs : std::max(1, int(std::thread::hardware_concurrency()));

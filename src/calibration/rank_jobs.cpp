@@ -49,7 +49,9 @@ RankJobsCount run_rank_jobs(const RankJobsDef& def) {
     std::mutex mu;
     size_t next = 0;
     std::string error;
-    bool input_error = false;  // the error is bad input (exit 2), not a failed run
+    // the first error's class: bad input (exit 2), a failed write (5), a failed run (3). (Under
+    // MPI, another rank's error reaches this one as "failed on another rank", exit 3.)
+    enum class ErrorKind { Input, Write, Run } error_kind = ErrorKind::Run;
     const auto t0 = std::chrono::steady_clock::now();
     const auto worker = [&] {
         while (true) {
@@ -72,12 +74,10 @@ RankJobsCount run_rank_jobs(const RankJobsDef& def) {
                     if (std::filesystem::exists(dir)) {
                         if (!is_demlab_output(dir) && !std::filesystem::exists(dir + "/scenario.toml"))
                             throw InputError(dir + ": a folder demlab did not make stands where this run goes; move it");
-                        {
-                            // a run another process is making there now (a second sweep into the
-                            // same folder) holds its lock: refused, not deleted under it
-                            RunFolderLock in_use(dir);
-                            in_use.release_and_remove();
-                        }
+                        // a run another process is making there now (a second sweep into the
+                        // same folder) holds its lock: refused, not deleted under it; the lock is
+                        // held while the folder goes, so none can take it meanwhile
+                        RunFolderLock in_use(dir);
                         std::filesystem::remove_all(dir);
                     }
                     def.run(k);
@@ -104,11 +104,22 @@ RankJobsCount run_rank_jobs(const RankJobsDef& def) {
                 } catch (const std::exception&) {
                 }
                 std::lock_guard<std::mutex> lock(mu);
-                error = tag + ": " + e.what();
-                input_error = true;
+                if (error.empty()) {  // the first error decides the exit code
+                    error = tag + ": " + e.what();
+                    error_kind = ErrorKind::Input;
+                }
+            } catch (const WriteError& e) {  // a full disk, a file size limit: exit 5, as `demlab run`
+                std::lock_guard<std::mutex> lock(mu);
+                if (error.empty()) {
+                    error = dir + ": " + e.what();
+                    error_kind = ErrorKind::Write;
+                }
             } catch (const std::exception& e) {
                 std::lock_guard<std::mutex> lock(mu);
-                error = dir + ": " + e.what();
+                if (error.empty()) {
+                    error = dir + ": " + e.what();
+                    error_kind = ErrorKind::Run;
+                }
             }
         }
     };
@@ -116,7 +127,8 @@ RankJobsCount run_rank_jobs(const RankJobsDef& def) {
     for (int t = 0; t < std::min<int>(def.threads, int(mine.size())); ++t) pool.emplace_back(worker);
     for (auto& th : pool) th.join();
     if (ranks.any_failed(!error.empty() || interrupted)) {
-        if (input_error) throw InputError(def.what + " stopped: " + error);
+        if (error_kind == ErrorKind::Input) throw InputError(def.what + " stopped: " + error);
+        if (error_kind == ErrorKind::Write) throw WriteError(def.what + " stopped: " + error);
         if (!error.empty()) throw RunError(def.what + " run failed: " + error);
         if (!interrupted) throw RunError(def.what + " run failed: on another rank (its output says which)");
         long finished = 0;

@@ -360,10 +360,12 @@ std::vector<Vec3> read_xyz_points(const std::string& path) {
         for (int k = 0; k < 3; ++k) {
             char* end = nullptr;
             v[k] = std::strtod(cells[size_t(k)].c_str(), &end);
-            // beyond 10,000 km is no terrain (and the triangles' areas would overflow)
-            if (end != cells[size_t(k)].c_str() + cells[size_t(k)].size() || !(std::abs(v[k]) <= 1e7))
-                throw InputError(path + ":" + std::to_string(no) + ": '" + cells[size_t(k)] + "' is not a finite number in [-1e7, 1e7] (" +
-                                 std::string(k == 0 ? "x" : k == 1 ? "y" : "z") + ", m)");
+            // beyond these is no terrain (and the triangles' areas would overflow): x and y map
+            // coordinates within 1e9 m, z an elevation within 10,000 km
+            const double bound = k < 2 ? 1e9 : 1e7;
+            if (end != cells[size_t(k)].c_str() + cells[size_t(k)].size() || !(std::abs(v[k]) <= bound))
+                throw InputError(path + ":" + std::to_string(no) + ": '" + cells[size_t(k)] + "' is not a finite number in [" +
+                                 (k < 2 ? "-1e9, 1e9" : "-1e7, 1e7") + "] (" + std::string(k == 0 ? "x" : k == 1 ? "y" : "z") + ", m)");
         }
         points.emplace_back(v[0], v[1], v[2]);
     }

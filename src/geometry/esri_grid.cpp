@@ -79,9 +79,10 @@ EsriGrid read_esri_grid(const std::string& path) {
             throw InputError(where + ": " + key + " given again (line " + std::to_string(line_of[slot]) + " gave " +
                              (slot < 5 ? names[slot] : "NODATA_value") + ")");
         if (slot >= 0) line_of[slot] = no;
-        // coordinates and elevations beyond 10,000 km are no terrain
-        if (!(std::abs(v) <= 1e7))
-            throw InputError(where + ": " + key + " = " + value + " must be within [-1e7, 1e7]");
+        // a corner beyond 1e9 m is no map coordinate (UTM with a zone prefix reaches 6.1e7);
+        // NODATA_value is any number (GIS tools write -3.4028234663852886e+38)
+        if ((slot == 2 || slot == 3) && !(std::abs(v) <= 1e9))
+            throw InputError(where + ": " + key + " = " + value + " m must be within [-1e9, 1e9]");
         if (k == "ncols" || k == "nrows") {
             if (v != std::floor(v) || v < 2 || v > 1e6)
                 throw InputError(where + ": " + k + " = " + value + " must be a whole number in [2, 1000000]");
@@ -137,7 +138,8 @@ EsriGrid read_esri_grid(const std::string& path) {
         while (cells >> cell) {
             double v = 0.0;
             if (!to_number(cell, v)) throw InputError(path + ":" + std::to_string(no) + ": '" + cell + "' is not a number");
-            if (!(std::abs(v) <= 1e7))
+            // an elevation beyond 10,000 km is no terrain (the nodata value aside)
+            if (!(std::abs(v) <= 1e7) && !(g.has_nodata && v == g.nodata))
                 throw InputError(path + ":" + std::to_string(no) + ": elevation " + cell + " must be within [-1e7, 1e7] m");
             values.push_back(v);
         }

@@ -45,7 +45,8 @@ std::vector<Vec2> read_profile_csv(const std::string& path, const std::string& w
         if (!line.empty() && line.back() == '\r') line.pop_back();
         if (line.empty() || line[0] == '#') continue;
         const std::string where = path + ":" + std::to_string(no);
-        const std::vector<std::string> cells = profile_cells(line);
+        std::vector<std::string> cells = profile_cells(line);
+        while (!cells.empty() && cells.back().empty()) cells.pop_back();  // a spreadsheet's trailing commas
         if (cells.empty()) continue;
         double v[2] = {0.0, 0.0};
         int numbers = 0;
@@ -62,10 +63,13 @@ std::vector<Vec2> read_profile_csv(const std::string& path, const std::string& w
         if (header) continue;
         if (cells.size() != 2 || numbers != 2)
             throw InputError(where + ": expected a row 'x,y' of two numbers in m, found '" + line + "'");
-        // a coordinate beyond 10,000 km is no ground (and its squares would overflow)
+        // beyond these is no ground (and squares would overflow): x a map coordinate within
+        // 1e9 m, y an elevation within 10,000 km
+        const double bound[2] = {1e9, 1e7};
         for (int k = 0; k < 2; ++k)
-            if (!(std::abs(v[k]) <= 1e7))
-                throw InputError(where + ": " + (k == 0 ? "x" : "y") + " = " + cells[size_t(k)] + " must be a finite number in [-1e7, 1e7] m");
+            if (!(std::abs(v[k]) <= bound[k]))
+                throw InputError(where + ": " + (k == 0 ? "x" : "y") + " = " + cells[size_t(k)] + " must be a finite number in [-" +
+                                 (k == 0 ? "1e9, 1e9" : "1e7, 1e7") + "] m");
         const double x = v[0], y = v[1];
         if (!pts.empty() && !(x > pts.back().x()))
             throw InputError(where + ": x = " + format_number(x) + " m must exceed the previous row's x = " +

@@ -65,7 +65,8 @@ FrontSeries read_front(const std::string& path) {
     while (std::getline(in, line)) {
         ++row;
         if (line.empty()) continue;
-        const std::vector<std::string> cells = csv_cells(line);
+        std::vector<std::string> cells = csv_cells(line);
+        while (cells.size() > header.names().size() && cells.back().empty()) cells.pop_back();  // trailing commas
         const std::string at = path + ":" + std::to_string(row);
         if (cells.size() != header.names().size())
             throw InputError(at + ": " + std::to_string(cells.size()) + " cells, the header has " +

@@ -1,10 +1,12 @@
 #include "run/summary_file.h"
 
+#include <cctype>
 #include <cmath>
 #include <fstream>
 #include <map>
 #include <sstream>
 
+#include "core/csv.h"
 #include "core/error.h"
 #include "core/fileio.h"
 
@@ -129,12 +131,17 @@ SummaryFile read_summary_file(const std::string& path) {
             out.strings[key] = v2 > v1 ? value.substr(v1 + 1, v2 - v1 - 1) : std::string();
             continue;
         }
-        try {
-            out.numbers[key] = value.find("null") != std::string::npos ? NAN : std::stod(value);
-        } catch (...) {
-            if (value.find("true") != std::string::npos) out.numbers[key] = 1.0;
-            else if (value.find("false") != std::string::npos) out.numbers[key] = 0.0;
-        }
+        // the value without its blanks and the comma after it: null, true, false or a number,
+        // all of it ("1.5x" is no number)
+        std::string bare = value;
+        while (!bare.empty() && (bare.back() == ',' || std::isspace(static_cast<unsigned char>(bare.back())))) bare.pop_back();
+        const size_t first = bare.find_first_not_of(" \t");
+        bare = first == std::string::npos ? std::string() : bare.substr(first);
+        double x = 0.0;
+        if (bare == "null") out.numbers[key] = NAN;
+        else if (bare == "true") out.numbers[key] = 1.0;
+        else if (bare == "false") out.numbers[key] = 0.0;
+        else if (parse_number(bare, x)) out.numbers[key] = x;
     }
     return out;
 }

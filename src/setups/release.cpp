@@ -607,17 +607,24 @@ ReleaseMass load_release(const std::string& path) {
     auto at = [&](long l) { return path + ":" + std::to_string(l) + ": "; };
     while (std::getline(in, line)) {
         ++lineno;
+        if (!line.empty() && line.back() == '\r') line.pop_back();  // (a copy with Windows line ends)
         if (line.empty()) continue;
         if (line[0] == '#') {
             std::istringstream h(line.substr(1));
             std::string k;
             double v = 0;
             if (line.rfind("# wall ", 0) == 0) {
-                double x0, y0, x1, y1;
+                // four numbers, each whole
                 std::istringstream wl(line.substr(7));
-                if (!(wl >> x0 >> y0 >> x1 >> y1))
-                    throw InputError(path + ":" + std::to_string(lineno) + ": expected '# wall x0 y0 x1 y1'");
-                m.box_walls.push_back({Vec2(x0, y0), Vec2(x1, y1)});
+                std::vector<double> c;
+                for (std::string cell; wl >> cell;) {
+                    double x = 0.0;
+                    if (!parse_finite(cell, x)) c.push_back(NAN);
+                    else c.push_back(x);
+                }
+                if (c.size() != 4 || !std::all_of(c.begin(), c.end(), [](double x) { return std::isfinite(x); }))
+                    throw InputError(path + ":" + std::to_string(lineno) + ": expected '# wall x0 y0 x1 y1' (four numbers, m)");
+                m.box_walls.push_back({Vec2(c[0], c[1]), Vec2(c[2], c[3])});
                 continue;
             }
             if (h >> k) {

@@ -251,6 +251,10 @@ def test_arguments_are_checked_before_any_output(tmp_path):
         assert not out.exists(), kw
     with pytest.raises(demlab.InputError):
         demlab.run(sc, str(tmp_path / "nul\0tail"))
+    with pytest.raises(demlab.InputError):
+        demlab.load_scenario(SCENARIO + "\0junk")
+    with pytest.raises(demlab.InputError):
+        demlab.load_scenario(SCENARIO, release_from=str(tmp_path / "r\0x"))
     assert not (tmp_path / "nul").exists()
     for threads in (0, -1, 65):
         with pytest.raises(demlab.InputError):
@@ -270,6 +274,20 @@ def test_arguments_are_checked_before_any_output(tmp_path):
     with pytest.raises(demlab.InputError) as e:
         demlab.run(sc, str(mine))
     assert str(mine) in str(e.value) and "force=True" in str(e.value)
+
+
+def test_a_damaged_snapshot_index_is_an_input_error(cli_run, tmp_path):
+    # as `demlab render`: a time that is not a number, or a file outside the folder
+    import shutil
+    copy = tmp_path / "run"
+    shutil.copytree(cli_run, copy)
+    pvd = copy / "snapshots" / "discs.pvd"
+    text = pvd.read_text()
+    assert 'timestep="0" file="discs_00000.vtp"' in text
+    for bad in ('timestep="nan" file="discs_00000.vtp"', 'timestep="0" file="../../other/discs_00000.vtp"'):
+        pvd.write_text(text.replace('timestep="0" file="discs_00000.vtp"', bad))
+        with pytest.raises(demlab.InputError):
+            demlab.RunFolder(str(copy)).snapshot_times
 
 
 def test_world_arrays_are_read_only_views_with_units():
