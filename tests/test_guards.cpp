@@ -69,6 +69,16 @@ void write_text(const fs::path& p, const std::string& text) {
     std::ofstream(p) << text;
 }
 
+// One disc dropped onto a floor for 0.05 s with a snapshot every 0.02 s (dir/drop.toml), run
+// by the executable into `run`: a run folder with every kind of file, made in a fraction of a
+// second. Its exit code; its standard error in `err`.
+int run_drop(const fs::path& dir, const std::string& run, std::string& err) {
+    const fs::path sc = dir / "drop.toml";
+    write_text(sc, "[stop]\nt_max = 0.05\nrest_duration = 0.01\n[output]\nsnapshot_interval = 0.02\n"
+                   "[[discs]]\nposition = [0.0, 0.05]\nradius = 0.01\n[[walls]]\nstart = [-1, 0]\nend = [1, 0]\n");
+    return run_exe("run " + sc.string() + " --no-plots --out " + run, err);
+}
+
 }  // namespace
 
 // Row 8. A DEBRIS disc falls 2 m at the default ceiling debris.dt_max = 0.01 s (4 cm a step
@@ -382,12 +392,9 @@ TEST(Guards, DepositBinsThatWouldExhaustTheMemoryAreRefusedBeforeTheRun) {
 TEST(Guards, DamagedIndexesAndNumbersInRunFilesAreInputErrors) {
     const fs::path dir = temp_dir("indexes");
     fs::create_directories(dir);
-    const fs::path sc = dir / "drop.toml";
-    write_text(sc, "[stop]\nt_max = 0.05\nrest_duration = 0.01\n[output]\nsnapshot_interval = 0.02\n"
-                   "[[discs]]\nposition = [0.0, 0.05]\nradius = 0.01\n[[walls]]\nstart = [-1, 0]\nend = [1, 0]\n");
     const std::string run = (dir / "run").string();
     std::string err;
-    ASSERT_EQ(run_exe("run " + sc.string() + " --no-plots --out " + run, err), 0) << err;
+    ASSERT_EQ(run_drop(dir, run, err), 0) << err;
     const fs::path pvd = dir / "run/snapshots/discs.pvd";
     const std::string index = read_file(pvd);
     ASSERT_NE(index.find("timestep=\"0\" file=\"discs_00000.vtp\""), std::string::npos) << index;
@@ -522,12 +529,9 @@ TEST(Guards, DamagedInputFilesAreRefusedNamingFileAndLine) {
 TEST(Guards, OptionsOnceAcceptedByMistakeAreRefused) {
     const fs::path dir = temp_dir("options");
     fs::create_directories(dir);
-    const fs::path sc = dir / "drop.toml";
-    write_text(sc, "[stop]\nt_max = 0.05\nrest_duration = 0.01\n[output]\nsnapshot_interval = 0.02\n"
-                   "[[discs]]\nposition = [0.0, 0.05]\nradius = 0.01\n[[walls]]\nstart = [-1, 0]\nend = [1, 0]\n");
     const std::string run = (dir / "run").string();
     std::string err;
-    ASSERT_EQ(run_exe("run " + sc.string() + " --no-plots --out " + run, err), 0) << err;
+    ASSERT_EQ(run_drop(dir, run, err), 0) << err;
     EXPECT_EQ(run_exe("render " + run + " --size 640x480junk --out " + (dir / "f1").string(), err), 2);
     EXPECT_NE(err.find("--size '640x480junk'"), std::string::npos) << err;
     EXPECT_EQ(run_exe("render " + run + " --size 64x48x3 --out " + (dir / "f1").string(), err), 2);
