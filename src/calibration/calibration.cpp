@@ -206,6 +206,18 @@ double AngleResult::mean(const std::string& key) const {
 
 namespace {
 
+// The scenario of one run: the file at the angle, the configuration's scale, the seed's offset;
+// checked, and refused unless it is a dam break.
+Scenario calibration_scenario(const CalibrationConfig& c, double angle, int seed) {
+    Scenario s = load_scenario(c.scenario);
+    apply_override(s, "material.friction_disc_deg=" + format_number(angle));
+    if (c.scale) apply_override(s, "release.scale=" + std::to_string(c.scale));
+    apply_override(s, "scenario.seed=" + std::to_string(s.seed + unsigned(seed)));
+    finish_scenario(s);
+    if (make_setup(s)->kind() != "dam_break") throw InputError(c.scenario + ": not a [dam_break] scenario");
+    return s;
+}
+
 // The folder: new, or one made for this same configuration (resume).
 void open_calibration_folder_here(const CalibrationConfig& c, const CalibrationOptions& o) {
     auto id_naming = [&](const std::string& scenario) {
@@ -268,11 +280,7 @@ std::vector<AngleResult> evaluate_angles(const CalibrationConfig& c, const Calib
     std::vector<Scenario> scenarios;
     std::vector<std::string> fingerprints;
     for (const Job& job : todo) {
-        Scenario s = load_scenario(c.scenario);
-        apply_override(s, "material.friction_disc_deg=" + format_number(job.angle));
-        if (c.scale) apply_override(s, "release.scale=" + std::to_string(c.scale));
-        apply_override(s, "scenario.seed=" + std::to_string(s.seed + unsigned(job.seed)));
-        finish_scenario(s);
+        Scenario s = calibration_scenario(c, job.angle, job.seed);
         fingerprints.push_back(scenario_fingerprint(s));
         scenarios.push_back(std::move(s));
     }
@@ -296,7 +304,6 @@ std::vector<AngleResult> evaluate_angles(const CalibrationConfig& c, const Calib
     def.finished = [&](size_t k) { return finished_run_of(dir_of(todo[k]), fingerprints[k]); };
     def.run = [&](size_t k) {
         const Scenario& s = scenarios[k];
-        if (make_setup(s)->kind() != "dam_break") throw InputError(c.scenario + ": not a [dam_break] scenario");
         RunOptions ro;
         ro.out_dir = dir_of(todo[k]);
         ro.handle_signals = true;  // Ctrl-C: run_rank_jobs holds the handlers for all its runs
@@ -474,15 +481,9 @@ void plot_envelopes(const CalibrationConfig& c, const CalibrationOptions& o, con
 
 CalibrationResult calibrate(const CalibrationConfig& c, const CalibrationOptions& o) {
     const auto t0 = std::chrono::steady_clock::now();
-    {
-        // the scenario read and finished as the runs will read it (the grid's first angle, the
-        // scale), before the folder is made: a missing or invalid scenario leaves nothing behind
-        Scenario s = load_scenario(c.scenario);
-        if (!c.angles.empty()) apply_override(s, "material.friction_disc_deg=" + format_number(c.angles.front()));
-        if (c.scale) apply_override(s, "release.scale=" + std::to_string(c.scale));
-        finish_scenario(s);
-        if (make_setup(s)->kind() != "dam_break") throw InputError(c.scenario + ": not a [dam_break] scenario");
-    }
+    // the scenario as the first run reads it, before the folder is made: a missing, invalid or
+    // other than dam-break scenario leaves nothing behind
+    if (!c.angles.empty()) calibration_scenario(c, c.angles.front(), 0);
     open_calibration_folder(c, o);
     const int jobs = o.jobs > 0 ? o.jobs : std::max(1, int(std::thread::hardware_concurrency()));
     CalibrationResult res;

@@ -17,6 +17,8 @@ bool parse_number(const std::string& c, double& x) {
     return end == c.c_str() + c.size();
 }
 
+bool parse_finite(const std::string& text, double& x) { return parse_number(text, x) && std::isfinite(x); }
+
 double parse_number_cell(const std::string& cell, const std::string& where) {
     double x = 0.0;
     if (!parse_number(cell, x)) throw InputError(where + ": '" + cell + "' is not a number");
@@ -92,8 +94,7 @@ CsvTable read_csv_table(const std::string& path) {
         for (const std::string& c : cells) {
             double x = 0.0;
             if (c.empty()) x = NAN;  // a value not measured at this row (forces.csv's filtered loads before a whole window)
-            else if (!parse_number(c, x))
-                throw InputError(path + ":" + std::to_string(row) + ": '" + c + "' is not a number");
+            else x = parse_number_cell(c, path + ":" + std::to_string(row));
             v.push_back(x);
         }
         t.rows.push_back(std::move(v));

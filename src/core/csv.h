@@ -15,6 +15,9 @@ std::vector<std::string> csv_cells(const std::string& line);
 // when it is empty or is not.
 bool parse_number(const std::string& text, double& x);
 
+// The same, and finite.
+bool parse_finite(const std::string& text, double& x);
+
 // A cell read as a number, all of it ("1.5abc" is not 1.5; "nan" and "inf" are numbers); an
 // InputError "WHERE: 'CELL' is not a number" otherwise (WHERE names the file and line).
 double parse_number_cell(const std::string& cell, const std::string& where);

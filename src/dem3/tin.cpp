@@ -11,6 +11,7 @@
 #include <sstream>
 #include <utility>
 
+#include "core/csv.h"
 #include "core/error.h"
 #include "core/fileio.h"
 
@@ -358,12 +359,10 @@ std::vector<Vec3> read_xyz_points(const std::string& path) {
                              " values; each row is 'x y z' (m)");
         double v[3];
         for (int k = 0; k < 3; ++k) {
-            char* end = nullptr;
-            v[k] = std::strtod(cells[size_t(k)].c_str(), &end);
             // beyond these is no terrain (and the triangles' areas would overflow): x and y map
             // coordinates within 1e9 m, z an elevation within 10,000 km
             const double bound = k < 2 ? 1e9 : 1e7;
-            if (end != cells[size_t(k)].c_str() + cells[size_t(k)].size() || !(std::abs(v[k]) <= bound))
+            if (!parse_number(cells[size_t(k)], v[k]) || !(std::abs(v[k]) <= bound))
                 throw InputError(path + ":" + std::to_string(no) + ": '" + cells[size_t(k)] + "' is not a finite number in [" +
                                  (k < 2 ? "-1e9, 1e9" : "-1e7, 1e7") + "] (" + std::string(k == 0 ? "x" : k == 1 ? "y" : "z") + ", m)");
         }

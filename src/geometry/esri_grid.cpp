@@ -6,6 +6,7 @@
 #include <cstdlib>
 #include <sstream>
 
+#include "core/csv.h"
 #include "core/error.h"
 #include "core/fileio.h"
 #include "core/validate.h"
@@ -18,12 +19,6 @@ std::string lower(std::string s) {
     return s;
 }
 
-bool to_number(const std::string& text, double& v) {
-    if (text.empty()) return false;
-    char* end = nullptr;
-    v = std::strtod(text.c_str(), &end);
-    return end == text.c_str() + text.size() && std::isfinite(v);
-}
 }  // namespace
 
 bool EsriGrid::sample(const Vec2& p, double& out) const {
@@ -62,7 +57,7 @@ EsriGrid read_esri_grid(const std::string& path) {
         std::string key, value, rest;
         if (!(row >> key)) continue;
         double probe = 0.0;
-        if (to_number(key, probe)) {
+        if (parse_finite(key, probe)) {
             first_data = line;
             break;
         }
@@ -70,7 +65,7 @@ EsriGrid read_esri_grid(const std::string& path) {
         if (!(row >> value) || (row >> rest))
             throw InputError(where + ": expected a header line 'keyword value', found '" + line + "'");
         double v = 0.0;
-        if (!to_number(value, v)) throw InputError(where + ": " + key + " = '" + value + "' is not a number");
+        if (!parse_finite(value, v)) throw InputError(where + ": " + key + " = '" + value + "' is not a number");
         const std::string k = lower(key);
         // a keyword given twice (xllcorner and xllcenter count as one): which one holds cannot be told
         const int slot = k == "ncols" ? 0 : k == "nrows" ? 1 : (k == "xllcorner" || k == "xllcenter") ? 2
@@ -137,7 +132,7 @@ EsriGrid read_esri_grid(const std::string& path) {
         std::vector<double> values;
         while (cells >> cell) {
             double v = 0.0;
-            if (!to_number(cell, v)) throw InputError(path + ":" + std::to_string(no) + ": '" + cell + "' is not a number");
+            if (!parse_finite(cell, v)) throw InputError(path + ":" + std::to_string(no) + ": '" + cell + "' is not a number");
             // an elevation beyond 10,000 km is no terrain (the nodata value aside)
             if (!(std::abs(v) <= 1e7) && !(g.has_nodata && v == g.nodata))
                 throw InputError(path + ":" + std::to_string(no) + ": elevation " + cell + " must be within [-1e7, 1e7] m");

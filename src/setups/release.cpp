@@ -109,16 +109,6 @@ std::vector<Vec2> place_without_overlap(const Polygon& tri, const std::vector<do
 }  // namespace
 
 namespace {
-// text to a finite double, all of it
-bool parse_finite(const std::string& text, double& v) {
-    try {
-        size_t used = 0;
-        v = std::stod(text, &used);
-        return used == text.size() && std::isfinite(v);
-    } catch (...) {
-        return false;
-    }
-}
 
 // The generation is not checkpointed (minutes at scale 4): a signal ends it
 // here, and `demlab resume` starts the run again (the seed gives the same mass).
@@ -617,12 +607,13 @@ ReleaseMass load_release(const std::string& path) {
                 // four numbers, each whole
                 std::istringstream wl(line.substr(7));
                 std::vector<double> c;
+                bool numbers = true;
                 for (std::string cell; wl >> cell;) {
                     double x = 0.0;
-                    if (!parse_finite(cell, x)) c.push_back(NAN);
-                    else c.push_back(x);
+                    numbers = numbers && parse_finite(cell, x);
+                    c.push_back(x);
                 }
-                if (c.size() != 4 || !std::all_of(c.begin(), c.end(), [](double x) { return std::isfinite(x); }))
+                if (c.size() != 4 || !numbers)
                     throw InputError(path + ":" + std::to_string(lineno) + ": expected '# wall x0 y0 x1 y1' (four numbers, m)");
                 m.box_walls.push_back({Vec2(c[0], c[1]), Vec2(c[2], c[3])});
                 continue;
