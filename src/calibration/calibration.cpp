@@ -27,6 +27,7 @@
 #include "output/renderer.h"
 #include "run/run.h"
 #include "run/summary_file.h"
+#include "run/checkpoint_file.h"
 #include "scenario/fingerprint.h"
 #include "scenario/scenario.h"
 #include "setups/setup.h"
@@ -302,12 +303,14 @@ std::vector<AngleResult> evaluate_angles(const CalibrationConfig& c, const Calib
     def.what = "calibration";
     def.folder = [&](size_t k) { return dir_of(todo[k]); };
     def.finished = [&](size_t k) { return finished_run_of(dir_of(todo[k]), fingerprints[k]); };
-    def.run = [&](size_t k) {
+    def.resumable = [&](size_t k) { return checkpoint_continues(def.folder(k), scenarios[k]); };
+    def.run = [&](size_t k, bool resume) {
         const Scenario& s = scenarios[k];
         RunOptions ro;
         ro.out_dir = dir_of(todo[k]);
         ro.handle_signals = true;  // Ctrl-C: run_rank_jobs holds the handlers for all its runs
         ro.install_handlers = false;
+        ro.resume = resume;
         run_scenario(s, ro);
     };
     def.describe = [&](size_t k) {

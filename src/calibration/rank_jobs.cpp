@@ -43,7 +43,7 @@ RankJobsCount run_rank_jobs(const RankJobsDef& def) {
     (void)ranks.any_failed(false);
     // Ctrl-C, SIGTERM or SIGHUP: every run in progress writes its checkpoint and stops, no new
     // one starts, and the command ends as interrupted (exit 4); run again, it reuses the finished
-    // runs and starts the others afresh
+    // runs, resumes those with a checkpoint and starts the others afresh
     InterruptScope interrupts;
     bool interrupted = false;
     std::mutex mu;
@@ -68,19 +68,25 @@ RankJobsCount run_rank_jobs(const RankJobsDef& def) {
             const std::string dir = def.folder(k);
             try {
                 const bool reused = count.reused_jobs[k];
+                bool resumed = false;
                 if (!reused) {
-                    // an unfinished run, or one of another scenario or other input files: removed
-                    // when it is a run folder demlab made (never a folder of someone else's)
                     if (std::filesystem::exists(dir)) {
                         if (!is_demlab_output(dir) && !std::filesystem::exists(dir + "/scenario.toml"))
                             throw InputError(dir + ": a folder demlab did not make stands where this run goes; move it");
-                        // a run another process is making there now (a second sweep into the
-                        // same folder) holds its lock: refused, not deleted under it; the lock is
-                        // held while the folder goes, so none can take it meanwhile
-                        RunFolderLock in_use(dir);
-                        std::filesystem::remove_all(dir);
+                        // a run an interrupted invocation left with its checkpoint continues
+                        // from it (the same bytes as a run without the stop); any other
+                        // unfinished run, or one of another scenario or other input files, is
+                        // removed (a folder demlab made, never someone else's)
+                        resumed = def.resumable && def.resumable(k);
+                        if (!resumed) {
+                            // a run another process is making there now (a second sweep into the
+                            // same folder) holds its lock: refused, not deleted under it; the
+                            // lock is held while the folder goes, so none can take it meanwhile
+                            RunFolderLock in_use(dir);
+                            std::filesystem::remove_all(dir);
+                        }
                     }
-                    def.run(k);
+                    def.run(k, resumed);
                 }
                 const std::string line = def.describe(k);
                 std::lock_guard<std::mutex> lock(mu);
@@ -89,7 +95,8 @@ RankJobsCount run_rank_jobs(const RankJobsDef& def) {
                 for (size_t j = 0; j < def.count; ++j) finished += def.finished(j) ? 1 : 0;
                 const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
                 const double eta = count.ran > 0 ? secs / count.ran * double(def.count - size_t(finished)) / ranks.size() : 0.0;
-                std::printf("  %s%s; %ld / %zu runs done%s\n", line.c_str(), reused ? " (reused)" : "", finished, def.count,
+                std::printf("  %s%s; %ld / %zu runs done%s\n", line.c_str(),
+                            reused ? " (reused)" : resumed ? " (resumed from its checkpoint)" : "", finished, def.count,
                             count.ran > 0 && size_t(finished) < def.count ? (", ETA " + format_number(std::round(eta)) + " s").c_str() : "");
                 std::fflush(stdout);
             } catch (const Interrupted&) {
@@ -134,7 +141,8 @@ RankJobsCount run_rank_jobs(const RankJobsDef& def) {
         long finished = 0;
         for (size_t j = 0; j < def.count; ++j) finished += def.finished(j) ? 1 : 0;
         throw Interrupted(def.what + " stopped by a signal: " + std::to_string(finished) + " of " + std::to_string(def.count) +
-                          " runs finished; the same command continues it (the unfinished runs start again)");
+                          " runs finished; the same command continues it (the runs stopped now resume from their "
+                          "checkpoints)");
     }
     return count;
 }

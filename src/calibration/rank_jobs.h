@@ -1,8 +1,10 @@
 // The runs of a sweep (the calibration's, `demlab sweep`'s) spread over the MPI ranks and, on
 // each, over threads: rank r takes every size-th job from the r-th. A job whose folder holds
 // a finished run of the same scenario (`finished`: its summary.json with this job's
-// scenario_fingerprint) is reused; any other folder (unfinished, or of another scenario or
-// other input files) is emptied and run again, so a sweep resumes with any number of ranks.
+// scenario_fingerprint) is reused; one holding a checkpoint of the job's scenario and input
+// files (an interrupted invocation's: `resumable`) is resumed from it; any other folder
+// (unfinished, or of another scenario or other input files) is emptied and run again, so a
+// sweep continues with any number of ranks.
 // Every rank decides which jobs are reused before any rank runs one. Each finished job prints a
 // line with the count of finished jobs in the folder (all ranks') and an ETA from this rank's
 // pace. Once every rank is done, a failure on any rank is thrown on all of them.
@@ -20,7 +22,10 @@ struct RankJobsDef {
     std::string what;       // "calibration", "sweep": names the failure
     std::function<std::string(size_t)> folder;    // job k's run folder
     std::function<bool(size_t)> finished;         // whether job k's folder holds its finished run
-    std::function<void(size_t)> run;              // runs job k into its folder (emptied first)
+    std::function<bool(size_t)> resumable;        // whether job k's folder holds a checkpoint of its run
+    // runs job k into its folder (emptied first), or with resume true continues it from its
+    // checkpoint
+    std::function<void(size_t, bool resume)> run;
     // job k's line once finished ("phi15.00 seed 1: objective 4.50 deg"); may also write the
     // job's own figures into its folder
     std::function<std::string(size_t)> describe;

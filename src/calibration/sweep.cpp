@@ -22,6 +22,7 @@
 #include "run/measures.h"
 #include "run/run.h"
 #include "run/summary_file.h"
+#include "run/checkpoint_file.h"
 #include "scenario/fingerprint.h"
 #include "scenario/key_registry.h"
 #include "scenario/scenario.h"
@@ -284,11 +285,13 @@ SweepResult run_sweep(const SweepConfig& c, const SweepOptions& o) {
     def.what = "sweep";
     def.folder = [&](size_t k) { return dir_of(todo[k]); };
     def.finished = [&](size_t k) { return finished_run_of(dir_of(todo[k]), todo[k].fingerprint); };
-    def.run = [&](size_t k) {
+    def.resumable = [&](size_t k) { return checkpoint_continues(def.folder(k), todo[k].scenario); };
+    def.run = [&](size_t k, bool resume) {
         RunOptions ro;
         ro.out_dir = dir_of(todo[k]);
         ro.handle_signals = true;  // Ctrl-C: run_rank_jobs holds the handlers for all its runs
         ro.install_handlers = false;
+        ro.resume = resume;
         run_scenario(todo[k].scenario, ro);
     };
     def.describe = [&](size_t k) { return row_tag(todo[k].row, todo[k].seed) + " (runs/" + run_name(todo[k].fingerprint) + ")"; };

@@ -154,6 +154,20 @@ Scenario load_run_folder_scenario(const std::string& dir) {
     return s;
 }
 
+bool checkpoint_continues(const std::string& dir, const Scenario& s) {
+    const std::string path = dir + "/" + kCheckpointFile;
+    if (!std::filesystem::is_regular_file(path)) return false;
+    try {
+        BinaryReader in(read_checkpoint_file(path), path);
+        const CheckpointHeader header = get_checkpoint_header(in, path);
+        if (!header.has_inputs || !same_scenario(header.scenario_text, resolved_toml(s))) return false;
+        check_same_inputs(header.inputs, scenario_inputs(s), dir);
+        return true;
+    } catch (const std::exception&) {
+        return false;  // damaged, or an input file edited since: the job starts again
+    }
+}
+
 CheckpointInfo read_checkpoint_info(const std::string& run_dir) {
     const std::string path = run_dir + "/" + kCheckpointFile;
     BinaryReader in(read_checkpoint_file(path), path);

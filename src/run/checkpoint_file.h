@@ -42,6 +42,12 @@ Scenario load_run_folder_scenario(const std::string& dir);
 // against the working directory, as those builds read it; others as they are.
 std::string as_read_then(const std::string& path);
 
+// Whether DIR holds a checkpoint that resuming with scenario s continues: written with s's
+// resolved scenario and with the same content of every file s reads. False for none, a
+// damaged one, another scenario's or an earlier build's without the files' hashes (a sweep
+// then runs its job again from the start rather than resume what it cannot check).
+bool checkpoint_continues(const std::string& dir, const Scenario& s);
+
 // A whole file's bytes (InputError naming it when it cannot be read).
 std::string read_whole(const std::string& path);
 
