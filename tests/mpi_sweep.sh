@@ -40,4 +40,43 @@ TOML
 "${mpi[@]}" "$exe" sweep "$work/s.toml" --jobs 1 --out "$work/sweep-two" > "$work/sweep-two.log"
 cmp "$work/sweep-one/sweep.csv" "$work/sweep-two/sweep.csv"
 test "$(wc -l < "$work/sweep-two/sweep.csv")" -eq 5
-echo "mpi: the same calibration tables and sweep.csv on 1 and 2 ranks, resumed across rank counts without recomputing"
+# bad input found by rank 1's run alone: exit 2 on every rank (it was 2 or 3, whichever rank
+# stopped first), rank 1 naming the row, rank 0 pointing to it
+cat > "$work/bad.toml" <<TOML
+[sweep]
+scenario = "$PWD/scenarios/geometry-A.toml"
+set = ["release.scale=20", "stop.t_max=0.002", "stop.rest_duration=0.001", "output.snapshot_interval=0"]
+[[rows]]
+"output.track" = [1]
+[[rows]]
+"output.track" = [100000]
+TOML
+for attempt in 1 2 3; do
+  rc=0
+  "${mpi[@]}" "$exe" sweep "$work/bad.toml" --jobs 1 --out "$work/bad-$attempt" > "$work/bad.log" 2>&1 || rc=$?
+  test "$rc" -eq 2 || { cat "$work/bad.log"; echo "bad input on one rank: exit $rc, not 2"; exit 1; }
+done
+grep -q 'rank 1 of 2.*row002-seed1.*output.track' "$work/bad.log"
+# SIGTERM to the ranks (a batch system's stop): every rank writes its runs' checkpoints and
+# stops with exit 4, and the same command resumes them to the same sweep.csv
+cat > "$work/long.toml" <<TOML
+[sweep]
+scenario = "$PWD/scenarios/geometry-A.toml"
+set = ["release.scale=20", "stop.t_max=1.5", "stop.rest_ke_fraction=1e-12", "output.snapshot_interval=0"]
+[grid]
+"material.friction_disc_deg" = [14, 15, 16]
+TOML
+"${mpi[@]}" "$exe" sweep "$work/long.toml" --jobs 1 --out "$work/long" > "$work/long.log" 2>&1 &
+launcher=$!
+n=0
+while [ "$(ls "$work"/long/runs/*/release.csv 2>/dev/null | wc -l)" -lt 2 ] && [ $n -lt 2400 ]; do sleep 0.05; n=$((n + 1)); done
+pkill -TERM -P "$launcher"
+rc=0
+wait "$launcher" || rc=$?
+test "$rc" -eq 4 || { cat "$work/long.log"; echo "SIGTERM to the ranks: exit $rc, not 4"; exit 1; }
+"${mpi[@]}" "$exe" sweep "$work/long.toml" --jobs 1 --out "$work/long" > "$work/long.log" 2>&1
+test "$(grep -c 'resumed from its checkpoint' "$work/long.log")" -eq 2
+"$exe" sweep "$work/long.toml" --jobs 1 --out "$work/long-one" > "$work/long-one.log"
+cmp "$work/long/sweep.csv" "$work/long-one/sweep.csv"
+echo "mpi: the same calibration tables and sweep.csv on 1 and 2 ranks, resumed across rank counts without recomputing; \
+one exit code on every rank; stopped ranks resumed from their checkpoints"

@@ -49,8 +49,8 @@ RankJobsCount run_rank_jobs(const RankJobsDef& def) {
     std::mutex mu;
     size_t next = 0;
     std::string error;
-    // the first error's class: bad input (exit 2), a failed write (5), a failed run (3). (Under
-    // MPI, another rank's error reaches this one as "failed on another rank", exit 3.)
+    // the first error's class: bad input (exit 2), a failed write (5), a failed run (3); under
+    // MPI the ranks' classes are compared once all are done (below)
     enum class ErrorKind { Input, Write, Run } error_kind = ErrorKind::Run;
     const auto t0 = std::chrono::steady_clock::now();
     const auto worker = [&] {
@@ -133,11 +133,22 @@ RankJobsCount run_rank_jobs(const RankJobsDef& def) {
     std::vector<std::thread> pool;
     for (int t = 0; t < std::min<int>(def.threads, int(mine.size())); ++t) pool.emplace_back(worker);
     for (auto& th : pool) th.join();
-    if (ranks.any_failed(!error.empty() || interrupted)) {
-        if (error_kind == ErrorKind::Input) throw InputError(def.what + " stopped: " + error);
-        if (error_kind == ErrorKind::Write) throw WriteError(def.what + " stopped: " + error);
-        if (!error.empty()) throw RunError(def.what + " run failed: " + error);
-        if (!interrupted) throw RunError(def.what + " run failed: on another rank (its output says which)");
+    // How the command ends, the same on every rank, so that every rank stops with the same exit
+    // code (mpirun reports the code of whichever rank stops first): bad input on any rank wins
+    // (exit 2: the user has something to fix), then a failed write (5), then a failed run (3);
+    // a signal (4) only when no rank failed otherwise. The rank that met the deciding error
+    // names it; the others point to its output.
+    enum Outcome { kDone = 0, kInterrupted = 1, kRunFailed = 2, kWriteFailed = 3, kBadInput = 4 };
+    const int this_rank = error.empty() ? (interrupted ? kInterrupted : kDone)
+                     : error_kind == ErrorKind::Input ? kBadInput
+                     : error_kind == ErrorKind::Write ? kWriteFailed
+                                                      : kRunFailed;
+    const int outcome = ranks.max_over_ranks(this_rank);
+    if (outcome != kDone) {
+        const std::string said = outcome == this_rank ? error : "on another rank (its output says which)";
+        if (outcome == kBadInput) throw InputError(def.what + " stopped: " + said);
+        if (outcome == kWriteFailed) throw WriteError(def.what + " stopped: " + said);
+        if (outcome == kRunFailed) throw RunError(def.what + " run failed: " + said);
         long finished = 0;
         for (size_t j = 0; j < def.count; ++j) finished += def.finished(j) ? 1 : 0;
         throw Interrupted(def.what + " stopped by a signal: " + std::to_string(finished) + " of " + std::to_string(def.count) +

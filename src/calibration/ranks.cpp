@@ -4,6 +4,7 @@
 #include <cstdlib>
 
 #include "core/error.h"
+#include "core/interrupt.h"
 
 #ifdef DEMLAB_MPI
 #include <mpi.h>
@@ -45,15 +46,15 @@ Ranks::~Ranks() {
 #endif
 }
 
-bool Ranks::any_failed(bool failed) const {
+int Ranks::max_over_ranks(int value) const {
 #ifdef DEMLAB_MPI
     if (started_) {
-        int mine = failed ? 1 : 0, any = 0;
-        MPI_Allreduce(&mine, &any, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
-        return any != 0;
+        int largest = value;
+        MPI_Allreduce(&value, &largest, 1, MPI_INT, MPI_MAX, MPI_COMM_WORLD);
+        return largest;
     }
 #endif
-    return failed;
+    return value;
 }
 
 void Ranks::abort_others(const char* message, int code) {
@@ -74,6 +75,12 @@ int Ranks::run_command(const std::function<int()>& command) {
         return command();
     } catch (const InputError& e) {
         abort_others(e.what(), kExitInput);
+        throw;
+    } catch (const Interrupted& e) {
+        abort_others(e.what(), kExitInterrupted);
+        throw;
+    } catch (const WriteError& e) {
+        abort_others(e.what(), kExitWrite);
         throw;
     } catch (const std::exception& e) {
         abort_others(e.what(), kExitRun);

@@ -17,13 +17,16 @@ public:
     int size() const { return size_; }
     bool root() const { return rank_ == 0; }
     // waits for every rank; true if any rank passed failed = true
-    bool any_failed(bool failed) const;
+    bool any_failed(bool failed) const { return max_over_ranks(failed ? 1 : 0) != 0; }
+    // waits for every rank; the largest value any rank passed
+    int max_over_ranks(int value) const;
     // an error on this rank alone (after the last collective call): the others would wait
     // for it forever, so the message goes to stderr and mpirun stops them all (exit code)
     // (nothing when MPI was not started: an error every rank meets alike ends each alone)
     static void abort_others(const char* message, int code);
     // runs a sweep command; an exception from it first stops the other ranks (abort_others,
-    // exit code 2 for an input error, 3 otherwise), then goes on to the caller
+    // with the exit code `demlab` gives for it alone: 2 input, 4 interrupted, 5 a failed
+    // write, 3 otherwise), then goes on to the caller
     static int run_command(const std::function<int()>& command);
     ~Ranks();
 
