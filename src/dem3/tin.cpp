@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <map>
+#include <cstdio>
 #include <cstdlib>
 #include <sstream>
 #include <utility>
@@ -83,7 +84,7 @@ Tin Tin::from_grid(const EsriGrid& g, const std::string& path) {
         }
     if (t.triangles_.empty())
         throw InputError(path + ": the grid has no cell whose four corners hold elevations, so no terrain to triangulate");
-    t.build();
+    t.build(path);
     return t;
 }
 
@@ -114,11 +115,11 @@ Tin Tin::from_points(const std::vector<Vec3>& points, const std::string& path) {
     // the same TIN whatever order CGAL visits its faces in
     for (auto& tri : t.triangles_) std::rotate(tri.begin(), std::min_element(tri.begin(), tri.end()), tri.end());
     std::sort(t.triangles_.begin(), t.triangles_.end());
-    t.build();
+    t.build(path);
     return t;
 }
 
-void Tin::build() {
+void Tin::build(const std::string& path) {
     lower_ = Vec3::Constant(INFINITY);
     upper_ = Vec3::Constant(-INFINITY);
     for (const Vec3& v : vertices_) {
@@ -129,7 +130,8 @@ void Tin::build() {
     std::map<std::pair<std::uint32_t, std::uint32_t>, std::uint32_t> edge_of;
     triangle_edges_.assign(triangles_.size(), {0, 0, 0});
     edge_faces_.clear();
-    double edge_sum = 0.0;
+    std::vector<double> edge_length;                                 // m, in map view
+    std::vector<double> nearest(vertices_.size(), INFINITY);         // m, each vertex's shortest edge
     for (std::uint32_t f = 0; f < triangles_.size(); ++f)
         for (int k = 0; k < 3; ++k) {
             const std::uint32_t a = triangles_[f][size_t(k)], b = triangles_[f][size_t((k + 1) % 3)];
@@ -137,7 +139,10 @@ void Tin::build() {
             auto [it, fresh] = edge_of.emplace(std::make_pair(key.first, key.second), std::uint32_t(edge_faces_.size()));
             if (fresh) {
                 edge_faces_.push_back({f, f});
-                edge_sum += (vertices_[a] - vertices_[b]).head<2>().norm();
+                const double length = (vertices_[a] - vertices_[b]).head<2>().norm();
+                edge_length.push_back(length);
+                nearest[a] = std::min(nearest[a], length);
+                nearest[b] = std::min(nearest[b], length);
             } else {
                 edge_faces_[it->second][1] = f;
             }
@@ -152,14 +157,19 @@ void Tin::build() {
     std::vector<std::uint32_t> fill(vertex_face_start_.begin(), vertex_face_start_.end() - 1);
     for (std::uint32_t f = 0; f < triangles_.size(); ++f)
         for (std::uint32_t v : triangles_[f]) vertex_faces_[fill[v]++] = f;
-    // buckets about two mean edges wide: a few triangles each
-    bucket_ = std::max(2.0 * edge_sum / double(std::max<size_t>(edge_faces_.size(), 1)), 1e-9);
+    // Buckets about two median edges wide: a few triangles each. (The median, not the mean: a
+    // stray point far from the rest adds a fan of edges as long as its distance, and the mean
+    // grew with them: one point 100 km off a 150 m slope of 1 m cells made the mean edge 115 m,
+    // every triangle one bucket's, and the run 83 times slower.) At most 2^24 buckets (64 MB of
+    // starts): a box that would need more takes wider ones, up to twice as wide each way.
+    std::nth_element(edge_length.begin(), edge_length.begin() + std::ptrdiff_t(edge_length.size() / 2), edge_length.end());
+    const double median_edge = edge_length.empty() ? 1.0 : edge_length[edge_length.size() / 2];
+    bucket_ = std::max(2.0 * median_edge, 1e-9);
     const double sx = upper_.x() - lower_.x(), sy = upper_.y() - lower_.y();
-    buckets_x_ = std::clamp(int(sx / bucket_) + 1, 1, 4096);
-    buckets_y_ = std::clamp(int(sy / bucket_) + 1, 1, 4096);
-    bucket_ = std::max({bucket_, sx / buckets_x_, sy / buckets_y_});
-    std::vector<std::vector<std::uint32_t>> lists(size_t(buckets_x_) * size_t(buckets_y_));
-    for (std::uint32_t f = 0; f < triangles_.size(); ++f) {
+    const double wanted = (sx / bucket_ + 1.0) * (sy / bucket_ + 1.0);
+    constexpr double kMaxBuckets = 16777216.0;  // 2^24
+    // the triangles' boxes, in buckets; and how many bucket entries they make
+    auto span = [&](std::uint32_t f, int& i0, int& i1, int& j0, int& j1) {
         double x0 = INFINITY, y0 = INFINITY, x1 = -INFINITY, y1 = -INFINITY;
         for (std::uint32_t v : triangles_[f]) {
             x0 = std::min(x0, vertices_[v].x());
@@ -167,16 +177,59 @@ void Tin::build() {
             y0 = std::min(y0, vertices_[v].y());
             y1 = std::max(y1, vertices_[v].y());
         }
-        const int i0 = std::clamp(int((x0 - lower_.x()) / bucket_), 0, buckets_x_ - 1), i1 = std::clamp(int((x1 - lower_.x()) / bucket_), 0, buckets_x_ - 1);
-        const int j0 = std::clamp(int((y0 - lower_.y()) / bucket_), 0, buckets_y_ - 1), j1 = std::clamp(int((y1 - lower_.y()) / bucket_), 0, buckets_y_ - 1);
-        for (int j = j0; j <= j1; ++j)
-            for (int i = i0; i <= i1; ++i) lists[size_t(j) * size_t(buckets_x_) + size_t(i)].push_back(f);
+        i0 = std::clamp(int((x0 - lower_.x()) / bucket_), 0, buckets_x_ - 1), i1 = std::clamp(int((x1 - lower_.x()) / bucket_), 0, buckets_x_ - 1);
+        j0 = std::clamp(int((y0 - lower_.y()) / bucket_), 0, buckets_y_ - 1), j1 = std::clamp(int((y1 - lower_.y()) / bucket_), 0, buckets_y_ - 1);
+    };
+    double entries = 0.0;
+    if (wanted <= 4.0 * kMaxBuckets) {
+        if (wanted > kMaxBuckets) bucket_ *= std::sqrt(wanted / kMaxBuckets) * (1.0 + 1e-9);
+        buckets_x_ = int(sx / bucket_) + 1;
+        buckets_y_ = int(sy / bucket_) + 1;
+        bucket_ = std::max({bucket_, sx / buckets_x_, sy / buckets_y_});
+        for (std::uint32_t f = 0; f < triangles_.size(); ++f) {
+            int i0, i1, j0, j1;
+            span(f, i0, i1, j0, j1);
+            entries += double(i1 - i0 + 1) * double(j1 - j0 + 1);
+        }
     }
-    bucket_start_.assign(lists.size() + 1, 0);
-    bucket_items_.clear();
-    for (size_t b = 0; b < lists.size(); ++b) {
-        bucket_items_.insert(bucket_items_.end(), lists[b].begin(), lists[b].end());
-        bucket_start_[b + 1] = std::uint32_t(bucket_items_.size());
+    // A search that would need buckets more than twice as wide as two median edges, or list
+    // the triangles in more than 16 buckets each on average plus 2^26 entries (256 MB: a fan of
+    // long triangles to a far point, each listed wherever its box reaches): refused, naming the
+    // point farthest from any other, rather than run many times slower or fill the memory.
+    if (wanted > 4.0 * kMaxBuckets || entries > 16.0 * double(triangles_.size()) + 4.0 * kMaxBuckets) {
+        const size_t far = size_t(std::max_element(nearest.begin(), nearest.end()) - nearest.begin());
+        auto g = [](double v) {
+            char text[32];
+            std::snprintf(text, sizeof text, "%.6g", v);
+            return std::string(text);
+        };
+        throw InputError(
+            path + ": point " + std::to_string(far + 1) + " at (" + g(vertices_[far].x()) + ", " + g(vertices_[far].y()) +
+            ") is " + g(nearest[far]) + " m from its nearest neighbour in map view, where half the triangles' edges are "
+            "shorter than " + g(median_edge) + " m: the terrain spans " + g(sx) + " by " + g(sy) +
+            " m, too wide a spread of spacings for the contact search. A stray point (a row of zeros, a NODATA value, "
+            "another coordinate system) is the usual cause: remove it; or crop the terrain, or resample it to one "
+            "spacing");
+    }
+    // the lists in one array (CSR), each in ascending triangle order: counted, then filled
+    const size_t n_buckets = size_t(buckets_x_) * size_t(buckets_y_);
+    bucket_start_.assign(n_buckets + 1, 0);
+    for (std::uint32_t f = 0; f < triangles_.size(); ++f) {
+        int i0, i1, j0, j1;
+        span(f, i0, i1, j0, j1);
+        for (int j = j0; j <= j1; ++j)
+            for (int i = i0; i <= i1; ++i) ++bucket_start_[size_t(j) * size_t(buckets_x_) + size_t(i) + 1];
+    }
+    for (size_t b = 0; b < n_buckets; ++b) bucket_start_[b + 1] += bucket_start_[b];
+    bucket_items_.assign(bucket_start_.back(), 0);
+    {
+        std::vector<std::uint32_t> next(bucket_start_.begin(), bucket_start_.end() - 1);
+        for (std::uint32_t f = 0; f < triangles_.size(); ++f) {
+            int i0, i1, j0, j1;
+            span(f, i0, i1, j0, j1);
+            for (int j = j0; j <= j1; ++j)
+                for (int i = i0; i <= i1; ++i) bucket_items_[next[size_t(j) * size_t(buckets_x_) + size_t(i)]++] = f;
+        }
     }
     plane_normal_.resize(triangles_.size());
     plane_offset_.resize(triangles_.size());
@@ -187,10 +240,10 @@ void Tin::build() {
         plane_normal_[f] = len > 0.0 ? Vec3(n / len) : Vec3::Zero();
         plane_offset_[f] = plane_normal_[f].dot(a);
     }
-    bucket_top_.assign(lists.size(), -INFINITY);
-    for (size_t b = 0; b < lists.size(); ++b)
-        for (std::uint32_t f : lists[b])
-            for (std::uint32_t v : triangles_[f]) bucket_top_[b] = std::max(bucket_top_[b], vertices_[v].z());
+    bucket_top_.assign(n_buckets, -INFINITY);
+    for (size_t b = 0; b < n_buckets; ++b)
+        for (std::uint32_t k = bucket_start_[b]; k < bucket_start_[b + 1]; ++k)
+            for (std::uint32_t v : triangles_[bucket_items_[k]]) bucket_top_[b] = std::max(bucket_top_[b], vertices_[v].z());
 }
 
 void Tin::triangles_near(double x0, double y0, double x1, double y1, std::vector<std::uint32_t>& out) const {

@@ -46,11 +46,14 @@ public:
     const std::vector<Vec3>& vertices() const { return vertices_; }
     const std::vector<std::array<std::uint32_t, 3>>& triangles() const { return triangles_; }
     Vec3 lower_corner() const { return lower_; }  // m, the bounding box
+    double search_bucket() const { return bucket_; }  // m, the side of the map-view search's buckets
     Vec3 upper_corner() const { return upper_; }
 
 private:
-    // edges, adjacency and the map-view search; after vertices_ and triangles_ are set
-    void build();
+    // edges, adjacency and the map-view search; after vertices_ and triangles_ are set.
+    // InputError naming the file (path) when the points' spacings spread too far for the
+    // search (a stray point far from the rest).
+    void build(const std::string& path);
     // the triangles whose map-view boxes meet [x0, x1] x [y0, y1], ascending (out is cleared)
     void triangles_near(double x0, double y0, double x1, double y1, std::vector<std::uint32_t>& out) const;
 
