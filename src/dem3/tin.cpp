@@ -160,15 +160,23 @@ void Tin::build(const std::string& path) {
     // Buckets about two median edges wide: a few triangles each. (The median, not the mean: a
     // stray point far from the rest adds a fan of edges as long as its distance, and the mean
     // grew with them: one point 100 km off a 150 m slope of 1 m cells made the mean edge 115 m,
-    // every triangle one bucket's, and the run 83 times slower.) At most 2^24 buckets (64 MB of
-    // starts): a box that would need more takes wider ones, up to twice as wide each way.
+    // every triangle one bucket's, and the run 83 times slower.) About four buckets a triangle
+    // at most, or 2^21 (a mixed grid of 25 m and 0.25 m cells would want 10^8 of 12 bytes), and
+    // at most 16 entries a triangle plus 2^26 (256 MB: a
+    // fan of long triangles to a far point, or the long ones filling a concave outline, are
+    // listed wherever their boxes reach): a terrain that would need more takes wider buckets,
+    // widened until it fits (one bucket always does). Its search is slower then, and says so
+    // once the buckets are more than four times as wide as its spacing wants.
     std::nth_element(edge_length.begin(), edge_length.begin() + std::ptrdiff_t(edge_length.size() / 2), edge_length.end());
     const double median_edge = edge_length.empty() ? 1.0 : edge_length[edge_length.size() / 2];
-    bucket_ = std::max(2.0 * median_edge, 1e-9);
+    const double wanted_bucket = std::max(2.0 * median_edge, 1e-9);
+    bucket_ = wanted_bucket;
     const double sx = upper_.x() - lower_.x(), sy = upper_.y() - lower_.y();
+    const double max_buckets = std::max(4.0 * double(triangles_.size()), 2097152.0);  // 12 bytes each
     const double wanted = (sx / bucket_ + 1.0) * (sy / bucket_ + 1.0);
-    constexpr double kMaxBuckets = 16777216.0;  // 2^24
-    // the triangles' boxes, in buckets; and how many bucket entries they make
+    if (wanted > max_buckets) bucket_ *= std::sqrt(wanted / max_buckets) * (1.0 + 1e-9);
+    const double max_entries = std::min(16.0 * double(triangles_.size()) + 67108864.0, 2147483648.0);
+    // a triangle's box in buckets
     auto span = [&](std::uint32_t f, int& i0, int& i1, int& j0, int& j1) {
         double x0 = INFINITY, y0 = INFINITY, x1 = -INFINITY, y1 = -INFINITY;
         for (std::uint32_t v : triangles_[f]) {
@@ -180,36 +188,38 @@ void Tin::build(const std::string& path) {
         i0 = std::clamp(int((x0 - lower_.x()) / bucket_), 0, buckets_x_ - 1), i1 = std::clamp(int((x1 - lower_.x()) / bucket_), 0, buckets_x_ - 1);
         j0 = std::clamp(int((y0 - lower_.y()) / bucket_), 0, buckets_y_ - 1), j1 = std::clamp(int((y1 - lower_.y()) / bucket_), 0, buckets_y_ - 1);
     };
-    double entries = 0.0;
-    if (wanted <= 4.0 * kMaxBuckets) {
-        if (wanted > kMaxBuckets) bucket_ *= std::sqrt(wanted / kMaxBuckets) * (1.0 + 1e-9);
+    while (true) {
         buckets_x_ = int(sx / bucket_) + 1;
         buckets_y_ = int(sy / bucket_) + 1;
         bucket_ = std::max({bucket_, sx / buckets_x_, sy / buckets_y_});
-        for (std::uint32_t f = 0; f < triangles_.size(); ++f) {
+        double entries = 0.0;
+        for (std::uint32_t f = 0; f < triangles_.size() && entries <= max_entries; ++f) {
             int i0, i1, j0, j1;
             span(f, i0, i1, j0, j1);
             entries += double(i1 - i0 + 1) * double(j1 - j0 + 1);
         }
+        if (entries <= max_entries || (buckets_x_ == 1 && buckets_y_ == 1)) break;
+        bucket_ *= 1.25;  // (a quarter at a time: the narrowest that fits, within a quarter)
     }
-    // A search that would need buckets more than twice as wide as two median edges, or list
-    // the triangles in more than 16 buckets each on average plus 2^26 entries (256 MB: a fan of
-    // long triangles to a far point, each listed wherever its box reaches): refused, naming the
-    // point farthest from any other, rather than run many times slower or fill the memory.
-    if (wanted > 4.0 * kMaxBuckets || entries > 16.0 * double(triangles_.size()) + 4.0 * kMaxBuckets) {
-        const size_t far = size_t(std::max_element(nearest.begin(), nearest.end()) - nearest.begin());
+    const double widened = bucket_ / wanted_bucket;
+    if (widened > 4.0) {
         auto g = [](double v) {
             char text[32];
             std::snprintf(text, sizeof text, "%.6g", v);
             return std::string(text);
         };
-        throw InputError(
-            path + ": point " + std::to_string(far + 1) + " at (" + g(vertices_[far].x()) + ", " + g(vertices_[far].y()) +
-            ") is " + g(nearest[far]) + " m from its nearest neighbour in map view, where half the triangles' edges are "
-            "shorter than " + g(median_edge) + " m: the terrain spans " + g(sx) + " by " + g(sy) +
-            " m, too wide a spread of spacings for the contact search. A stray point (a row of zeros, a NODATA value, "
-            "another coordinate system) is the usual cause: remove it; or crop the terrain, or resample it to one "
-            "spacing");
+        const size_t far = size_t(std::max_element(nearest.begin(), nearest.end()) - nearest.begin());
+        const std::string cause =
+            nearest[far] > 100.0 * median_edge
+                ? "point " + std::to_string(far + 1) + " at (" + g(vertices_[far].x()) + ", " + g(vertices_[far].y()) + ") is " +
+                      g(nearest[far]) + " m from its nearest neighbour: a stray point (a row of zeros, a NODATA value, "
+                      "another coordinate system) is the usual cause; remove it"
+                : "its spacings spread widely (mixed resolutions, or an outline far from convex, whose hull the "
+                  "triangulation fills with long triangles); crop it, or resample it to one spacing";
+        std::fprintf(stderr,
+                     "demlab: warning: %s: half the terrain's triangle edges are shorter than %s m, but it spans %s by %s m: "
+                     "its contact search runs with buckets %s times as wide as that spacing wants, and so slower; %s\n",
+                     path.c_str(), g(median_edge).c_str(), g(sx).c_str(), g(sy).c_str(), g(widened).c_str(), cause.c_str());
     }
     // the lists in one array (CSR), each in ascending triangle order: counted, then filled
     const size_t n_buckets = size_t(buckets_x_) * size_t(buckets_y_);

@@ -50,9 +50,9 @@ public:
     Vec3 upper_corner() const { return upper_; }
 
 private:
-    // edges, adjacency and the map-view search; after vertices_ and triangles_ are set.
-    // InputError naming the file (path) when the points' spacings spread too far for the
-    // search (a stray point far from the rest).
+    // edges, adjacency and the map-view search; after vertices_ and triangles_ are set. A
+    // warning naming the file (path), and the point most likely stray, when the search's buckets
+    // had to be made much wider than the terrain's spacing wants.
     void build(const std::string& path);
     // the triangles whose map-view boxes meet [x0, x1] x [y0, y1], ascending (out is cleared)
     void triangles_near(double x0, double y0, double x1, double y1, std::vector<std::uint32_t>& out) const;
