@@ -74,9 +74,12 @@ pkill -TERM -P "$launcher"
 rc=0
 wait "$launcher" || rc=$?
 test "$rc" -eq 4 || { cat "$work/long.log"; echo "SIGTERM to the ranks: exit $rc, not 4"; exit 1; }
+stopped=$(ls "$work"/long/runs/*/checkpoint.bin | wc -l)
+test "$stopped" -ge 1
 "${mpi[@]}" "$exe" sweep "$work/long.toml" --jobs 1 --out "$work/long" > "$work/long.log" 2>&1
-test "$(grep -c 'resumed from its checkpoint' "$work/long.log")" -eq 2
+test "$(grep -c 'resumed from its checkpoint' "$work/long.log")" -eq "$stopped"
 "$exe" sweep "$work/long.toml" --jobs 1 --out "$work/long-one" > "$work/long-one.log"
-cmp "$work/long/sweep.csv" "$work/long-one/sweep.csv"
+# the same table but for the column `reused` (a run that finished before the signal is reused)
+cmp <(cut -d, -f1-3,5- "$work/long/sweep.csv") <(cut -d, -f1-3,5- "$work/long-one/sweep.csv")
 echo "mpi: the same calibration tables and sweep.csv on 1 and 2 ranks, resumed across rank counts without recomputing; \
 one exit code on every rank; stopped ranks resumed from their checkpoints"

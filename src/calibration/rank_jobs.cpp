@@ -49,9 +49,19 @@ RankJobsCount run_rank_jobs(const RankJobsDef& def) {
     std::mutex mu;
     size_t next = 0;
     std::string error;
-    // the first error's class: bad input (exit 2), a failed write (5), a failed run (3); under
-    // MPI the ranks' classes are compared once all are done (below)
-    enum class ErrorKind { Input, Write, Run } error_kind = ErrorKind::Run;
+    // How the command ends, the same on every rank and for any number of jobs at once: bad input
+    // wins (exit 2: the user has something to fix), then a failed write (5), then a failed run
+    // (3); a signal (4) only when nothing failed otherwise. Within a rank the most telling error
+    // is kept (two jobs failing at once: which came first is timing); across the ranks they are
+    // compared once all are done (below).
+    enum Outcome { kDone = 0, kInterrupted = 1, kRunFailed = 2, kWriteFailed = 3, kBadInput = 4 };
+    int failure = kDone;  // this rank's worst error (kRunFailed and up), with its message
+    const auto keep_error = [&](int kind, const std::string& message) {
+        if (kind > failure) {
+            failure = kind;
+            error = message;
+        }
+    };
     const auto t0 = std::chrono::steady_clock::now();
     const auto worker = [&] {
         while (true) {
@@ -111,41 +121,27 @@ RankJobsCount run_rank_jobs(const RankJobsDef& def) {
                 } catch (const std::exception&) {
                 }
                 std::lock_guard<std::mutex> lock(mu);
-                if (error.empty()) {  // the first error decides the exit code
-                    error = tag + ": " + e.what();
-                    error_kind = ErrorKind::Input;
-                }
+                keep_error(kBadInput, tag + ": " + e.what());
             } catch (const WriteError& e) {  // a full disk, a file size limit: exit 5, as `demlab run`
                 std::lock_guard<std::mutex> lock(mu);
-                if (error.empty()) {
-                    error = dir + ": " + e.what();
-                    error_kind = ErrorKind::Write;
-                }
+                keep_error(kWriteFailed, dir + ": " + e.what());
             } catch (const std::exception& e) {
                 std::lock_guard<std::mutex> lock(mu);
-                if (error.empty()) {
-                    error = dir + ": " + e.what();
-                    error_kind = ErrorKind::Run;
-                }
+                keep_error(kRunFailed, dir + ": " + e.what());
             }
         }
     };
     std::vector<std::thread> pool;
     for (int t = 0; t < std::min<int>(def.threads, int(mine.size())); ++t) pool.emplace_back(worker);
     for (auto& th : pool) th.join();
-    // How the command ends, the same on every rank, so that every rank stops with the same exit
-    // code (mpirun reports the code of whichever rank stops first): bad input on any rank wins
-    // (exit 2: the user has something to fix), then a failed write (5), then a failed run (3);
-    // a signal (4) only when no rank failed otherwise. The rank that met the deciding error
-    // names it; the others point to its output.
-    enum Outcome { kDone = 0, kInterrupted = 1, kRunFailed = 2, kWriteFailed = 3, kBadInput = 4 };
-    const int this_rank = error.empty() ? (interrupted ? kInterrupted : kDone)
-                     : error_kind == ErrorKind::Input ? kBadInput
-                     : error_kind == ErrorKind::Write ? kWriteFailed
-                                                      : kRunFailed;
+    // every rank stops with the same exit code (mpirun reports the code of whichever rank
+    // stops first); the rank that met the deciding error names it, the others point to its
+    // output and name their own
+    const int this_rank = failure != kDone ? failure : interrupted ? kInterrupted : kDone;
     const int outcome = ranks.max_over_ranks(this_rank);
     if (outcome != kDone) {
-        const std::string said = outcome == this_rank ? error : "on another rank (its output says which)";
+        const std::string said = outcome == this_rank ? error
+                                 : "on another rank (its output says which)" + (error.empty() ? "" : "; on this rank: " + error);
         if (outcome == kBadInput) throw InputError(def.what + " stopped: " + said);
         if (outcome == kWriteFailed) throw WriteError(def.what + " stopped: " + said);
         if (outcome == kRunFailed) throw RunError(def.what + " run failed: " + said);
