@@ -521,7 +521,7 @@ TEST(Sweep, AnInterruptedSweepEndsWithExitFourAndTheSameCommandFinishesIt) {
     fs::remove_all(dir);
     fs::create_directories(dir);
     std::ofstream(dir / "s.toml") << "[sweep]\nscenario = \"" << DEMLAB_SOURCE_DIR << "/scenarios/geometry-A.toml\"\n"
-                                  << "set = [\"release.scale=20\", \"stop.t_max=3\", \"stop.rest_ke_fraction=1e-12\", "
+                                  << "set = [\"release.scale=20\", \"stop.t_max=1\", \"stop.rest_ke_fraction=1e-12\", "
                                      "\"output.snapshot_interval=0\"]\n[grid]\n\"material.friction_disc_deg\" = [14, 15, 16]\n";
     const std::string sweep = std::string(DEMLAB_EXE) + " sweep " + (dir / "s.toml").string() + " --jobs 2 --out " +
                               (dir / "out").string() + " >" + (dir / "log").string() + " 2>&1";
