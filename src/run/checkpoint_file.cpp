@@ -163,9 +163,11 @@ bool checkpoint_continues(const std::string& dir, const Scenario& s) {
         if (!header.has_inputs || !same_scenario(header.scenario_text, resolved_toml(s))) return false;
         check_same_inputs(header.inputs, scenario_inputs(s), dir);
         return true;
-    } catch (const std::exception&) {
+    } catch (const InputError&) {
         return false;  // damaged, or an input file edited since: the job starts again
     }
+    // (anything else, memory for a huge checkpoint say, goes on to the job's error: the folder,
+    // checkpoint and all, stays for the next try rather than being emptied)
 }
 
 CheckpointInfo read_checkpoint_info(const std::string& run_dir) {
