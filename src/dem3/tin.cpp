@@ -6,9 +6,9 @@
 
 #include <algorithm>
 #include <cmath>
-#include <map>
 #include <cstdio>
 #include <cstdlib>
+#include <map>
 #include <sstream>
 #include <utility>
 
@@ -160,13 +160,13 @@ void Tin::build(const std::string& path) {
     // Buckets about two median edges wide: a few triangles each. (The median, not the mean: a
     // stray point far from the rest adds a fan of edges as long as its distance, and the mean
     // grew with them: one point 100 km off a 150 m slope of 1 m cells made the mean edge 115 m,
-    // every triangle one bucket's, and the run 83 times slower.) About four buckets a triangle
-    // at most, or 2^21 (a mixed grid of 25 m and 0.25 m cells would want 10^8 of 12 bytes), and
-    // at most 16 entries a triangle plus 2^26 (256 MB: a
-    // fan of long triangles to a far point, or the long ones filling a concave outline, are
-    // listed wherever their boxes reach): a terrain that would need more takes wider buckets,
-    // widened until it fits (one bucket always does). Its search is slower then, and says so
-    // once the buckets are more than four times as wide as its spacing wants.
+    // every triangle one bucket's, and the run 83 times slower.) At most four buckets a
+    // triangle, or 2^21 (a mixed grid of 25 m and 0.25 m cells would want 10^8 of 12 bytes),
+    // and at most 16 entries a triangle plus 2^26 (256 MB: a fan of long triangles to a far
+    // point, or the long ones filling a concave outline, are listed wherever their boxes
+    // reach): a terrain that would need more takes wider buckets, widened until it fits (one
+    // bucket always does). Its search is slower then, and says so once the buckets are more
+    // than four times as wide as its spacing wants.
     std::nth_element(edge_length.begin(), edge_length.begin() + std::ptrdiff_t(edge_length.size() / 2), edge_length.end());
     const double median_edge = edge_length.empty() ? 1.0 : edge_length[edge_length.size() / 2];
     const double wanted_bucket = std::max(2.0 * median_edge, 1e-9);
