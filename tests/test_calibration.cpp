@@ -4,18 +4,24 @@
 
 #include <sys/wait.h>
 
+#include <atomic>
+#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <set>
 #include <sstream>
+#include <thread>
 
 #include "calibration/calibration.h"
+#include "calibration/rank_jobs.h"
 #include "calibration/sweep.h"
 #include "run/run_folder.h"
 #include "run/summary_file.h"
 #include "geometry/deposit.h"
 #include "core/error.h"
+#include "core/interrupt.h"
+#include "core/output_dir.h"
 #include "scenario/scenario.h"
 #include "files.h"
 
@@ -509,6 +515,107 @@ TEST(Sweep, ARowWithInputFoundWrongAtItsRunIsAnInputErrorNamingTheRow) {
         EXPECT_NE(m.find("row002"), std::string::npos) << m;
         EXPECT_NE(m.find("output.track"), std::string::npos) << m;
     }
+    fs::remove_all(dir);
+}
+
+namespace {
+// Two jobs on two threads that fail at once: job 0 throws FIRST, then job 1 throws SECOND once
+// job 0's error has had time to be kept. Returns the class run_rank_jobs threw with its message.
+template <typename First, typename Second>
+std::pair<std::string, std::string> two_failures(const char* tag) {
+    const fs::path dir = fs::temp_directory_path() / (std::string("demlab-rankjobs-") + tag + "-" + std::to_string(::getpid()));
+    fs::remove_all(dir);
+    std::atomic<int> started{0};
+    std::atomic<bool> first_thrown{false};
+    RankJobsDef def;
+    def.count = 2;
+    def.threads = 2;
+    def.what = "sweep";
+    def.folder = [&](size_t k) { return (dir / ("job" + std::to_string(k))).string(); };
+    def.finished = [](size_t) { return false; };
+    def.resumable = [](size_t) { return false; };
+    def.describe = [](size_t k) { return "job" + std::to_string(k); };
+    def.run = [&](size_t k, bool) {
+        ++started;
+        while (started.load() < 2) std::this_thread::yield();  // both jobs taken before either fails
+        if (k == 0) {
+            first_thrown = true;
+            throw First("job 0's error");
+        }
+        while (!first_thrown.load()) std::this_thread::yield();
+        std::this_thread::sleep_for(std::chrono::milliseconds(200));  // job 0's error kept by now
+        throw Second("job 1's error");
+    };
+    std::pair<std::string, std::string> out{"none", ""};
+    try {
+        run_rank_jobs(def);
+    } catch (const InputError& e) {
+        out = {"input", e.what()};
+    } catch (const WriteError& e) {
+        out = {"write", e.what()};
+    } catch (const RunError& e) {
+        out = {"run", e.what()};
+    } catch (const Interrupted& e) {
+        out = {"interrupted", e.what()};
+    }
+    fs::remove_all(dir);
+    return out;
+}
+}  // namespace
+
+// Two jobs of one machine failing at once end the sweep with the most telling error, bad input
+// (exit 2) before a failed write (5) before a failed run (3), whichever failed first: the order
+// in which two runs fail is a matter of timing, and the exit code must not be. (The first
+// error to arrive was kept before: a failed run hid the bad input the user has to fix.)
+TEST(RankJobs, TwoJobsFailingAtOnceEndWithTheMostTellingErrorWhicheverCameFirst) {
+    auto r = two_failures<RunError, InputError>("run-input");
+    EXPECT_EQ(r.first, "input") << r.second;
+    EXPECT_NE(r.second.find("job 1's error"), std::string::npos) << r.second;
+    r = two_failures<InputError, RunError>("input-run");
+    EXPECT_EQ(r.first, "input") << r.second;
+    EXPECT_NE(r.second.find("job 0's error"), std::string::npos) << r.second;
+    r = two_failures<RunError, WriteError>("run-write");
+    EXPECT_EQ(r.first, "write") << r.second;
+    r = two_failures<WriteError, RunError>("write-run");
+    EXPECT_EQ(r.first, "write") << r.second;
+    r = two_failures<InputError, WriteError>("input-write");
+    EXPECT_EQ(r.first, "input") << r.second;
+    // a run stopped by a signal beside one that failed: the failure decides (exit 3, not 4)
+    r = two_failures<Interrupted, RunError>("signal-run");
+    EXPECT_EQ(r.first, "run") << r.second;
+    EXPECT_NE(r.second.find("job 1's error"), std::string::npos) << r.second;
+}
+
+// A run folder whose checkpoint cannot be read for a reason other than its content (memory,
+// the system: checkpoint_continues lets anything but an InputError through) fails the job and
+// keeps the folder with its checkpoint for the next try; only a folder whose checkpoint is of
+// another run (or that has none) is emptied and run again.
+TEST(RankJobs, AFolderWhoseCheckpointCannotBeReadIsKeptAndTheJobFails) {
+    const fs::path dir = fs::temp_directory_path() / ("demlab-rankjobs-keep-" + std::to_string(::getpid()));
+    fs::remove_all(dir);
+    const fs::path job = dir / "job0";
+    fs::create_directories(job);
+    mark_output_dir(job.string());
+    std::ofstream(job / "checkpoint.bin") << "the stopped run's state";
+    bool ran = false;
+    RankJobsDef def;
+    def.count = 1;
+    def.threads = 1;
+    def.what = "sweep";
+    def.folder = [&](size_t) { return job.string(); };
+    def.finished = [](size_t) { return false; };
+    def.resumable = [](size_t) -> bool { throw std::bad_alloc(); };
+    def.describe = [](size_t) { return std::string("job0"); };
+    def.run = [&](size_t, bool) { ran = true; };
+    EXPECT_THROW(run_rank_jobs(def), RunError);
+    EXPECT_FALSE(ran);
+    EXPECT_EQ(test_read((job / "checkpoint.bin").string()), "the stopped run's state");
+    // a checkpoint of another run (checkpoint_continues says false): the folder is emptied and
+    // the job runs afresh
+    def.resumable = [](size_t) { return false; };
+    run_rank_jobs(def);
+    EXPECT_TRUE(ran);
+    EXPECT_FALSE(fs::exists(job / "checkpoint.bin"));
     fs::remove_all(dir);
 }
 
