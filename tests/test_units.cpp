@@ -7,6 +7,7 @@
 #include <cmath>
 #include <fstream>
 #include <set>
+#include <sstream>
 
 #include "core/csv.h"
 #include "run/measures.h"
@@ -154,6 +155,27 @@ TEST(Units, PlotsReadTheColumnsByName) {
         EXPECT_NE(std::string(e.what()).find("s_front_m"), std::string::npos) << e.what();
         EXPECT_NE(std::string(e.what()).find("front.csv"), std::string::npos) << e.what();
     }
+    fs::remove_all(dir);
+}
+
+// A wall group's name in forces.csv's header reaches the plots' legend as a gnuplot string,
+// quoted: a header crafted to close the quote and call system() is drawn as text, never run.
+TEST(Units, AColumnNameInForcesCsvCannotRunAGnuplotCommand) {
+    const fs::path dir = run_flume("units-plot-quote", "dem");
+    const fs::path pwned = dir / "pwned";
+    const std::string part = "a'.system('touch " + pwned.string() + "').'";
+    const std::string text = read_file(dir / "forces.csv");
+    std::istringstream in(text);
+    std::string line;
+    std::ostringstream out;
+    for (bool first = true; std::getline(in, line); first = false)
+        out << line << (first ? ",fx_" + part + "_N_per_m,fy_" + part + "_N_per_m" : ",0,0") << "\n";
+    std::ofstream(dir / "forces.csv") << out.str();
+    make_plots(dir.string(), 320, 200);
+    const std::string gp = read_file(dir / "plots/plots.gp");
+    EXPECT_NE(gp.find("title 'a''.system(''touch "), std::string::npos) << gp;
+    EXPECT_EQ(gp.find("title 'a'.system("), std::string::npos) << gp;
+    EXPECT_FALSE(fs::exists(pwned));
     fs::remove_all(dir);
 }
 

@@ -167,7 +167,7 @@ void plot_forces(const std::string& run_dir, const std::string& dir, std::ostrin
                    << faint[std::min<size_t>(k, 5)] << "' notitle";
             for (size_t k = 0; k < n_parts; ++k)
                 gp << ", 'forces_smoothed.csv' using 1:" << o + k + 2 << " with lines lw " << (k == 0 ? 3 : 2)
-                   << (k == 0 ? " dt 2" : "") << " lc rgb '" << colour[std::min<size_t>(k, 5)] << "' title '" << label(parts[k]) << "'";
+                   << (k == 0 ? " dt 2" : "") << " lc rgb '" << colour[std::min<size_t>(k, 5)] << "' title " << gnuplot_quote(label(parts[k]));
             gp << "\n";
         }
         made.push_back(dir + "/forces_x.png");
