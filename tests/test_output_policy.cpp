@@ -399,6 +399,28 @@ TEST(OutputPolicy, ProcessArgumentsArriveAsGiven) {
     fs::remove_all(dir);
 }
 
+// A path printed inside a command for the user to paste (`continue with: demlab resume DIR`)
+// is one shell word that reads back as the path: nothing in it runs, and a leading '-' is not
+// an option. (It was printed bare: a run named r$(touch X) printed a command that ran touch.)
+TEST(OutputPolicy, APathInAPrintedCommandIsOneShellWord) {
+    const fs::path dir = temp_dir("shell-word");
+    fs::create_directories(dir);
+    for (const std::string& name : {std::string("runs/plain-1.0_a"), std::string("r$(touch X)"), std::string("a b"),
+                                    std::string("it's"), std::string("`touch Y`;touch Z"), std::string("-h"),
+                                    std::string("x\nnew line"), std::string("")}) {
+        ProcessDef p;
+        p.argv = {"sh", "-c", "printf '%s|' " + shell_word(name)};
+        p.cwd = dir.string();
+        std::string got;
+        p.on_line = [&](const std::string& l) { got += l; };
+        EXPECT_EQ(run_process(p), 0) << name;
+        EXPECT_EQ(got, (name[0] == '-' ? "./" + name : name) + "|") << shell_word(name);
+    }
+    EXPECT_EQ(shell_word("runs/plain-1.0_a"), "runs/plain-1.0_a");
+    for (const char* f : {"X", "Y", "Z"}) EXPECT_FALSE(fs::exists(dir / f)) << f;
+    fs::remove_all(dir);
+}
+
 }  // namespace demlab
 
 namespace demlab {

@@ -5,8 +5,10 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <cctype>
 #include <cerrno>
 #include <cstdlib>
+#include <cstring>
 #include <sstream>
 
 namespace demlab {
@@ -98,6 +100,17 @@ int run_process(const ProcessDef& def) {
     if (WIFEXITED(status)) return WEXITSTATUS(status);
     if (WIFSIGNALED(status)) return 128 + WTERMSIG(status);
     return -1;
+}
+
+std::string shell_word(const std::string& text) {
+    const std::string word = !text.empty() && text[0] == '-' ? "./" + text : text;
+    bool plain = !word.empty();
+    for (const char c : word)
+        plain = plain && c != '\0' && (std::isalnum(static_cast<unsigned char>(c)) || std::strchr("_./+,:=@%-", c) != nullptr);
+    if (plain) return word;
+    std::string o = "'";
+    for (const char c : word) o += c == '\'' ? std::string("'\\''") : std::string(1, c);
+    return o + "'";
 }
 
 std::string gnuplot_quote(const std::string& text) {

@@ -28,4 +28,10 @@ bool program_available(const std::string& program);
 // command) replaced by '_'.
 std::string gnuplot_quote(const std::string& text);
 
+// TEXT as one word a POSIX shell reads back unchanged, for a command printed for the user to
+// paste (`continue with: demlab resume DIR`): as it is when it holds only characters no shell
+// treats specially, else in single quotes (a quote inside as '\''); a leading '-' gets "./"
+// before it, so that the word is never read as an option.
+std::string shell_word(const std::string& text);
+
 }  // namespace demlab

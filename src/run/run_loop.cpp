@@ -4,6 +4,7 @@
 
 #include "core/error.h"
 #include "core/interrupt.h"
+#include "core/process.h"
 #include "core/progress.h"
 #include "core/validate.h"
 
@@ -84,7 +85,7 @@ std::string run_loop(Solver& solver, RunParts& parts, const Scenario& s, const R
             progress.finish();
             parts.write_checkpoint();
             throw Interrupted("signal " + std::to_string(sig) + " at t = " + format_number(solver.time()) + " s (step " +
-                              std::to_string(solver.step_count()) + "): checkpoint written; continue with: demlab resume " + o.out_dir);
+                              std::to_string(solver.step_count()) + "): checkpoint written; continue with: demlab resume " + shell_word(o.out_dir));
         }
         if (o.checkpoint_every > 0 && solver.step_count() % 10 == 0) {
             const auto now = std::chrono::steady_clock::now();
