@@ -235,7 +235,7 @@ TEST(Validation, UnsettledReleaseIsRefusedUnlessAccepted) {
     std::filesystem::remove_all(dir);
 }
 
-// Names that would write outside runs/, discs that overlap at t = 0 and an empty output folder
+// Names that would write outside runs/ or hold a control character, discs that overlap at t = 0 and an empty output folder
 // are input errors, refused before any output.
 TEST(Validation, PathNamesOverlapsAndEmptyFoldersAreRefused) {
     for (const char* name : {"../x", "a/b", ".hidden", ""}) {
@@ -243,6 +243,13 @@ TEST(Validation, PathNamesOverlapsAndEmptyFoldersAreRefused) {
             Scenario s = parse_scenario(std::string("[scenario]\nname = \"") + name + "\"\n[[discs]]\nposition = [0, 0]\nradius = 0.01\n", "n.toml");
             finish_scenario(s);
         }, {"scenario.name", "plain name"});
+    }
+    // nor a control character: "x\0y" made the folder runs/x and left it behind
+    for (const char* name : {"x\\u0000y", "two\\nlines", "tab\\there", "del\\u007f"}) {
+        expect_refused([&] {
+            Scenario s = parse_scenario(std::string("[scenario]\nname = \"") + name + "\"\n[[discs]]\nposition = [0, 0]\nradius = 0.01\n", "n.toml");
+            finish_scenario(s);
+        }, {"scenario.name", "control character"});
     }
     expect_refused([] {
         Scenario s = parse_scenario("[[discs]]\nposition = [0, 0]\nradius = 0.01\n[[discs]]\nposition = [0.5, 0]\nradius = 0.01\n"

@@ -204,7 +204,7 @@ struct LawKeys {
 
 void add_scenario_and_material_keys(std::vector<Key>& k) {
     // scenario
-    k.push_back(text("scenario.name", "name of the scenario, used in outputs", [](Scenario& s) -> std::string& { return s.name; }));
+    k.push_back(text("scenario.name", "name of the scenario, used in outputs and as the default run folder runs/<name>: a plain name (no '/', '\\', '..' or control character, not starting with '.')", [](Scenario& s) -> std::string& { return s.name; }));
     k.push_back(text("scenario.description", "free text", [](Scenario& s) -> std::string& { return s.description; }));
     k.push_back(text("scenario.solver", "dem: the discs (the thesis' PFC2D model); dan: the depth-averaged continuum model on a flume's path ([dan], docs/dan.md); dem3: spheres with the DEBRIS law on a 3-D terrain ([dem3], docs/debris.md)", [](Scenario& s) -> std::string& { return s.solver; }, {"dem", "dan", "dem3"}));
     {

@@ -618,6 +618,13 @@ void finish_scenario(Scenario& s) {
         s.name.find("..") != std::string::npos || s.name[0] == '.')
         throw InputError(where + "scenario.name = \"" + s.name + "\": must be a plain name (no '/', '\\' or '..', not starting "
                          "with '.'); it names the run folder runs/<name>");
+    // nor a control character: a NUL cut the folder's name short (runs/x for "x\0y", left
+    // behind empty when the write failed), a line end or tab makes a name no one can type
+    for (size_t k = 0; k < s.name.size(); ++k)
+        if (const unsigned char c = static_cast<unsigned char>(s.name[k]); c < 0x20 || c == 0x7f)
+            throw InputError(where + "scenario.name holds a control character (code " + std::to_string(int(c)) +
+                             ") at character " + std::to_string(k + 1) + ": it names the run folder runs/<name>; "
+                             "use letters, digits, spaces and punctuation");
     finish_explicit_discs(s);
     // the given discs' and the lattice's smallest radius bounds the rolling penetration as the
     // generated masses' does (below); the world checks it again, without the file's name
