@@ -518,6 +518,43 @@ TEST(Sweep, ARowWithInputFoundWrongAtItsRunIsAnInputErrorNamingTheRow) {
     fs::remove_all(dir);
 }
 
+// An output folder a sweep or calibration cannot make (a symbolic link to nowhere, a file on
+// the way) is refused as input (exit 2) naming the folder and why, before any run; it was a
+// raw file-system message, and for calibrate a failed run (exit 3), on rank 0 alone.
+TEST(Sweep, AnOutputFolderThatCannotBeMadeIsRefusedAsInputNamingIt) {
+    DensitySweep w("demlab-sweep-unmakeable");
+    std::ofstream(w.dir / "afile") << "the user's\n";
+    fs::create_symlink(w.dir / "nowhere", w.dir / "dangling");
+    CalibrationConfig cal = load_calibration(std::string(DEMLAB_SOURCE_DIR) + "/calibration/dam-break.toml");
+    cal.scale = 20;
+    cal.angles = {15.0};
+    cal.refine = false;
+    for (const auto& [out, why] : {std::pair<std::string, std::string>{"dangling", "symbolic link"},
+                                   std::pair<std::string, std::string>{"afile/x", "Not a directory"}}) {
+        SweepOptions o;
+        o.out = (w.dir / out).string();
+        o.jobs = 1;
+        try {
+            run_sweep(w.config("[1000.0]"), o);
+            ADD_FAILURE() << out << " was accepted";
+        } catch (const InputError& e) {
+            EXPECT_NE(std::string(e.what()).find("cannot create output folder '" + o.out + "'"), std::string::npos) << e.what();
+            EXPECT_NE(std::string(e.what()).find(why), std::string::npos) << e.what();
+        }
+        CalibrationOptions co;
+        co.out = o.out;
+        co.jobs = 1;
+        try {
+            calibrate(cal, co);
+            ADD_FAILURE() << out << " was accepted";
+        } catch (const InputError& e) {
+            EXPECT_NE(std::string(e.what()).find(why), std::string::npos) << e.what();
+        }
+    }
+    EXPECT_FALSE(fs::exists(w.dir / "nowhere"));
+    EXPECT_EQ(test_read((w.dir / "afile").string()), "the user's\n");
+}
+
 namespace {
 // Two jobs on two threads that fail at once: job 0 throws FIRST, then job 1 throws SECOND once
 // job 0's error has had time to be kept. Returns the class run_rank_jobs threw with its message.

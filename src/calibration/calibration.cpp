@@ -244,24 +244,14 @@ void open_calibration_folder_here(const CalibrationConfig& c, const CalibrationO
             check_output_dir(o.out, true, {c.source, c.scenario});
         }
     }
-    fs::create_directories(o.out + "/runs");
+    create_output_tree(o.out, o.out + "/runs");
     mark_output_dir(o.out);
     write_file_atomic(marker, cfg);
 }
 
 // Rank 0 opens the folder; the others wait for it (and stop with it if it refused).
 void open_calibration_folder(const CalibrationConfig& c, const CalibrationOptions& o) {
-    const Ranks& ranks = Ranks::world();
-    std::string error;
-    if (ranks.root()) {
-        try {
-            open_calibration_folder_here(c, o);
-        } catch (const InputError& e) {
-            error = e.what();
-        }
-    }
-    if (ranks.any_failed(!error.empty()))
-        throw InputError(error.empty() ? "output folder '" + o.out + "' was refused by rank 0 (its output says why)" : error);
+    open_folder_on_root(o.out, [&] { open_calibration_folder_here(c, o); });
 }
 
 // Runs the dam break for each (angle, seed) not yet finished, `jobs` at a time, and gathers

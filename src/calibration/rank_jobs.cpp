@@ -30,6 +30,28 @@ bool finished_run_of(const std::string& dir, const std::string& fingerprint) {
     }
 }
 
+void open_folder_on_root(const std::string& out, const std::function<void()>& open) {
+    const Ranks& ranks = Ranks::world();
+    enum Kind { kOpened = 0, kRefused = 1, kWriteFailed = 2 };
+    int kind = kOpened;
+    std::string error;
+    if (ranks.root()) {
+        try {
+            open();
+        } catch (const WriteError& e) {
+            kind = kWriteFailed;
+            error = e.what();
+        } catch (const std::exception& e) {
+            kind = kRefused;
+            error = e.what();
+        }
+    }
+    const int worst = ranks.max_over_ranks(kind);
+    const std::string said = error.empty() ? "output folder '" + out + "' was refused by rank 0 (its output says why)" : error;
+    if (worst == kWriteFailed) throw WriteError(said);
+    if (worst == kRefused) throw InputError(said);
+}
+
 RankJobsCount run_rank_jobs(const RankJobsDef& def) {
     const Ranks& ranks = Ranks::world();
     std::vector<size_t> mine;

@@ -41,4 +41,10 @@ bool finished_run_of(const std::string& dir, const std::string& fingerprint);
 
 RankJobsCount run_rank_jobs(const RankJobsDef& def);
 
+// Rank 0 opens the sweep's output folder OUT with OPEN (checks, makes, marks it); the other ranks
+// wait for it. A failure reaches every rank as the same class: a failed write (WriteError, exit 5)
+// or a refused folder (InputError, exit 2, for anything else), so that no rank waits for ever and
+// mpirun ends with one code.
+void open_folder_on_root(const std::string& out, const std::function<void()>& open);
+
 }  // namespace demlab

@@ -253,30 +253,23 @@ SweepResult run_sweep(const SweepConfig& c, const SweepOptions& o) {
         return id.str();
     };
     const std::string id = id_naming(c.scenario);
-    std::string error;
-    if (ranks.root()) {
-        try {
-            check_output_path(o.out);
-            const std::string marker = o.out + "/sweep.id";
-            const std::string have = read_text_or_empty(marker);
-            // a folder of this sweep made by an earlier build, whose id named the scenario as
-            // given relative to the working directory: the same sweep from the same directory
-            const bool earlier = !c.scenario_as_given.empty() && have == id_naming(c.scenario_as_given);
-            if (fs::exists(o.out) && have != id && !earlier) {
-                if (!o.force)
-                    throw InputError("output folder '" + o.out + "' exists and was not made by this sweep; choose another --out or pass --force");
-                // forced over another folder: only one demlab made, holding no input (output_dir.h)
-                check_output_dir(o.out, true, {c.source, c.scenario});
-            }
-            fs::create_directories(o.out + "/runs");
-            mark_output_dir(o.out);
-            write_file_atomic(marker, id);
-        } catch (const std::exception& e) {
-            error = e.what();
+    open_folder_on_root(o.out, [&] {
+        check_output_path(o.out);
+        const std::string marker = o.out + "/sweep.id";
+        const std::string have = read_text_or_empty(marker);
+        // a folder of this sweep made by an earlier build, whose id named the scenario as
+        // given relative to the working directory: the same sweep from the same directory
+        const bool earlier = !c.scenario_as_given.empty() && have == id_naming(c.scenario_as_given);
+        if (fs::exists(o.out) && have != id && !earlier) {
+            if (!o.force)
+                throw InputError("output folder '" + o.out + "' exists and was not made by this sweep; choose another --out or pass --force");
+            // forced over another folder: only one demlab made, holding no input (output_dir.h)
+            check_output_dir(o.out, true, {c.source, c.scenario});
         }
-    }
-    if (ranks.any_failed(!error.empty()))
-        throw InputError(error.empty() ? "output folder '" + o.out + "' was refused by rank 0 (its output says why)" : error);
+        create_output_tree(o.out, o.out + "/runs");
+        mark_output_dir(o.out);
+        write_file_atomic(marker, id);
+    });
 
     auto dir_of = [&](const Job& j) { return o.out + "/runs/" + run_name(j.fingerprint); };
     RankJobsDef def;

@@ -226,6 +226,17 @@ void check_regenerated_output_dir(const std::string& dir) {
                             "delete the folder to have it made anew");
 }
 
+void create_output_tree(const std::string& dir, const std::string& path) {
+    std::error_code ec;
+    fs::create_directories(path, ec);
+    if (!ec) return;
+    std::error_code ignore;
+    if (fs::is_symlink(fs::symlink_status(dir, ignore)) && !fs::exists(dir, ignore))
+        throw InputError("cannot create output folder '" + dir + "': it is a symbolic link to '" +
+                         fs::read_symlink(dir, ignore).string() + "', which does not exist");
+    throw InputError("cannot create output folder '" + dir + "': " + ec.message());
+}
+
 void mark_output_dir(const std::string& dir) {
     if (!is_demlab_output(dir)) write_file_atomic(marker_path(dir), kMarkerHead);
 }

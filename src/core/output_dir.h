@@ -40,6 +40,10 @@ void prepare_output_dir(const std::string& dir, bool force, const std::vector<st
 // the files demlab recorded there.
 void check_regenerated_output_dir(const std::string& dir);
 
+// Makes the folder `path` and its parents (a sweep's OUT/runs); InputError naming `dir` (the
+// output folder) when they cannot be made: a symbolic link to nowhere, a file on the way.
+void create_output_tree(const std::string& dir, const std::string& path);
+
 // Writes the marker into a folder demlab made by other means (a run's frames/, plots/).
 void mark_output_dir(const std::string& dir);
 
