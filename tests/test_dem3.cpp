@@ -135,21 +135,39 @@ TEST(Dem3, SlidesDownAPlaneOfManyTrianglesAtTheClosedFormWithoutAJumpAtEdges) {
 }
 
 namespace {
-World3 pile(int threads, double mu, double safety = 0.8) {
+// a bowl z = (x^2 + y^2)/40 and 125 spheres dropped into it; centred at (x0, y0)
+World3 pile(int threads, double mu, double safety = 0.8, double x0 = 0.0, double y0 = 0.0) {
     Dem3Def d;
     d.safety = safety;
     d.mu = mu;
     d.youngs_modulus = 1e9;
     d.threads = threads;
-    // a bowl z = (x^2 + y^2)/40 and 125 spheres dropped into it
-    World3 w(d, terrain(20, 2.0, [](double x, double y) { return (x * x + y * y) / 40.0; }, -20.0, -20.0));
+    World3 w(d, terrain(20, 2.0, [x0, y0](double x, double y) { return ((x - x0) * (x - x0) + (y - y0) * (y - y0)) / 40.0; },
+                        x0 - 20.0, y0 - 20.0));
     for (int i = 0; i < 5; ++i)
         for (int j = 0; j < 5; ++j)
             for (int k = 0; k < 5; ++k)
-                w.add_sphere(Vec3(-4.5 + 2.2 * i + 0.1 * k, -4.5 + 2.2 * j + 0.05 * k, 3.0 + 2.2 * k), Vec3::Zero(), 1.0, 2000.0);
+                w.add_sphere(Vec3(x0 - 4.5 + 2.2 * i + 0.1 * k, y0 - 4.5 + 2.2 * j + 0.05 * k, 3.0 + 2.2 * k), Vec3::Zero(), 1.0, 2000.0);
     return w;
 }
 }  // namespace
+
+// The same pile on a terrain in UTM coordinates (a northing of 5,000 km) runs as at the origin:
+// the same contacts step by step and the same energies to rounding. The cells' keys counted the
+// indices from zero in 21 bits: beyond 2^20 cells the y index ran into x's bits, and pairs
+// were gathered twice (the kinetic energy off by a tenth).
+TEST(Dem3, APileFarFromTheOriginRunsAsAtTheOrigin) {
+    World3 here = pile(1, 0.3), there = pile(1, 0.3, 0.8, 6.0e5, 5.0e6);
+    long differing = 0;
+    while (here.time() < 1.0) {
+        here.step();
+        there.step();
+        differing += here.contacts() != there.contacts() ? 1 : 0;
+    }
+    EXPECT_GT(here.contacts(), 0);
+    EXPECT_EQ(differing, 0);
+    EXPECT_NEAR(there.energy().kinetic, here.energy().kinetic, 1e-6 * std::abs(here.energy().potential));
+}
 
 TEST(Dem3, UndampedPileKeepsItsEnergyAndAGasItsMomentum) {
     for (double safety : {0.8, 0.3}) {

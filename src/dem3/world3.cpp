@@ -11,11 +11,16 @@ namespace demlab {
 namespace {
 constexpr double kGrowth = DebrisLaw::kStepGrowth;  // the 2-D law's rule and its reasons
 constexpr double kAhead = DebrisLaw::kAheadSteps;
-constexpr std::uint64_t kCellBias = std::uint64_t(1) << 20;
+// A cell's key: its indices counted from the cells' origin (World3::cell_origin_), 21 bits
+// each, x highest and z lowest, so that the sorted list runs column by column. Counted from the
+// origin rather than from zero: a terrain in national or UTM coordinates (a northing of 1.2e6 m)
+// has cell indices beyond 2^20, whose bits ran into the next field and put distant spheres into
+// one cell, their pairs gathered twice. The order of the keys is that of the indices, so the
+// sums' order does not depend on the origin.
+constexpr std::int64_t kCellSpan = std::int64_t(1) << 21;
 
-std::uint64_t cell_key(std::int64_t x, std::int64_t y, std::int64_t z) {
-    return (std::uint64_t(x + std::int64_t(kCellBias)) << 42) | (std::uint64_t(y + std::int64_t(kCellBias)) << 21) |
-           std::uint64_t(z + std::int64_t(kCellBias));
+std::uint64_t cell_key(const std::int64_t* origin, std::int64_t x, std::int64_t y, std::int64_t z) {
+    return (std::uint64_t(x - origin[0]) << 42) | (std::uint64_t(y - origin[1]) << 21) | std::uint64_t(z - origin[2]);
 }
 }  // namespace
 
@@ -104,10 +109,30 @@ void World3::build_cells() {
     const double ahead = kAhead * (dt_ > 0.0 ? dt_ : def_.dt_max) * 2.0 * v_max;
     cell_ = std::max(2.0 * r_max_ + ahead, 1e-9);
     cells_.clear();
+    // the origin one cell below the lowest sphere's (the queries look one cell around)
+    std::int64_t lo[3] = {INT64_MAX, INT64_MAX, INT64_MAX}, hi[3] = {INT64_MIN, INT64_MIN, INT64_MIN};
+    for (size_t i = 0; i < pos_.size(); ++i) {
+        if (lost_[i]) continue;
+        for (int a = 0; a < 3; ++a) {
+            const double c = std::floor(pos_[i][a] / cell_);
+            if (!(std::abs(c) < 1e15))
+                throw RunError("sphere " + std::to_string(i) + " is at " + format_number(pos_[i][a]) + " m along axis " +
+                               std::to_string(a) + ": the run blew up (reduce dem3.dt_max or set dem3.dt_fixed smaller)");
+            lo[a] = std::min(lo[a], std::int64_t(c));
+            hi[a] = std::max(hi[a], std::int64_t(c));
+        }
+    }
+    for (int a = 0; a < 3; ++a) {
+        cell_origin_[a] = lo[a] - 1;
+        if (lo[a] <= hi[a] && hi[a] + 1 - cell_origin_[a] >= kCellSpan)
+            throw RunError("the spheres spread over more than " + std::to_string(kCellSpan - 3) + " cells of " + format_number(cell_) +
+                           " m along axis " + std::to_string(a) + " (from " + format_number(double(lo[a]) * cell_) + " to " +
+                           format_number(double(hi[a] + 1) * cell_) + " m): the run blew up");
+    }
     for (size_t i = 0; i < pos_.size(); ++i) {
         if (lost_[i]) continue;
         const Vec3& p = pos_[i];
-        cells_.emplace_back(cell_key(std::int64_t(std::floor(p.x() / cell_)), std::int64_t(std::floor(p.y() / cell_)),
+        cells_.emplace_back(cell_key(cell_origin_, std::int64_t(std::floor(p.x() / cell_)), std::int64_t(std::floor(p.y() / cell_)),
                                      std::int64_t(std::floor(p.z() / cell_))),
                             std::uint32_t(i));
     }
@@ -139,7 +164,8 @@ void World3::gather(size_t i, double ahead_dt, Load& l, std::vector<TinContact>&
                        cz = std::int64_t(std::floor(p.z() / cell_));
     for (std::int64_t dx = -1; dx <= 1; ++dx)
         for (std::int64_t dy = -1; dy <= 1; ++dy) {
-                const std::uint64_t first = cell_key(cx + dx, cy + dy, cz - 1), last = cell_key(cx + dx, cy + dy, cz + 1);
+                const std::uint64_t first = cell_key(cell_origin_, cx + dx, cy + dy, cz - 1),
+                                    last = cell_key(cell_origin_, cx + dx, cy + dy, cz + 1);
                 auto it = std::lower_bound(cells_.begin(), cells_.end(), std::make_pair(first, std::uint32_t(0)));
                 for (; it != cells_.end() && it->first <= last; ++it) {
                     const size_t j = it->second;

@@ -117,6 +117,7 @@ private:
     // the cell list, rebuilt every step: spheres sorted by cell
     double cell_ = 1.0, r_max_ = 0.0;
     std::vector<std::pair<std::uint64_t, std::uint32_t>> cells_;
+    std::int64_t cell_origin_[3] = {0, 0, 0};  // the cells' indices are counted from here (build_cells)
     double time_ = 0.0, dt_ = 0.0;
     long steps_ = 0;
     long contacts_ = 0;
