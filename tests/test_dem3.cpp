@@ -213,6 +213,35 @@ TEST(Dem3, UndampedPileKeepsItsEnergyAndAGasItsMomentum) {
     EXPECT_LT((momentum() - p0).norm() / scale_p, 1e-12);
 }
 
+// A step that carries a sphere farther than half its radius stops the run (exit 3) naming the
+// key: a 1 s step from rest dropped every sphere 9.8 m through the bed, and the run ended with
+// exit 0 as "all spheres left the terrain"; a 0.1 s fixed step ran a blow-up to "rest".
+TEST(Dem3, AStepThatCarriesASphereFartherThanHalfItsRadiusStopsTheRun) {
+    for (const bool fixed : {false, true}) {
+        Dem3Def d;
+        d.youngs_modulus = 1e8;
+        if (fixed) d.dt_fixed = 0.5;
+        else d.dt_max = 1.0;
+        World3 w(d, flat(100.0));
+        w.add_sphere(Vec3(0.0, 0.0, 2.0), Vec3::Zero(), 0.5, 2000.0);
+        try {
+            w.step();
+            ADD_FAILURE() << "a step of " << (fixed ? d.dt_fixed : d.dt_max) << " s was taken";
+        } catch (const RunError& e) {
+            const std::string m = e.what();
+            EXPECT_NE(m.find(fixed ? "dem3.dt_fixed" : "dem3.dt_max"), std::string::npos) << m;
+            EXPECT_NE(m.find("half its radius"), std::string::npos) << m;
+        }
+        // the same sphere at the default ceiling (0.01 s) falls onto the bed and stays on it
+        Dem3Def sound;
+        sound.youngs_modulus = 1e8;
+        World3 ok(sound, flat(100.0));
+        ok.add_sphere(Vec3(0.0, 0.0, 2.0), Vec3::Zero(), 0.5, 2000.0);
+        while (ok.time() < 2.0) ok.step();
+        EXPECT_EQ(ok.lost_count(), 0u);
+    }
+}
+
 TEST(Dem3, ASphereIsLostWhereItLeavesTheTerrainAndTheLedgerStillCloses) {
     // a sphere sliding without friction off the edge of a flat 100 m terrain at 5 m/s: lost
     // within a step of its centre passing the edge by its radius, not after falling

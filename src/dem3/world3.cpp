@@ -17,6 +17,9 @@ constexpr double kAhead = DebrisLaw::kAheadSteps;
 // has cell indices beyond 2^20, whose bits ran into the next field and put distant spheres into
 // one cell, their pairs gathered twice. The order of the keys is that of the indices, so the
 // sums' order does not depend on the origin.
+// the most a sphere may move in one step, in radii (integrate)
+constexpr double kMaxTravel = 0.5;
+
 constexpr std::int64_t kCellSpan = std::int64_t(1) << 21;
 
 std::uint64_t cell_key(const std::int64_t* origin, std::int64_t x, std::int64_t y, std::int64_t z) {
@@ -267,6 +270,8 @@ void World3::integrate(double dt) {
     const Vec3 lo = tin_->lower_corner(), hi = tin_->upper_corner();
     const double margin = std::max(hi.z() - lo.z(), 10.0 * r_max_);
     double kinetic = 0.0, friction = 0.0;
+    double worst_travel = 0.0;  // the largest (travel / radius)^2 of the step
+    size_t worst = 0;
     for (size_t i = 0; i < pos_.size(); ++i) {
         if (lost_[i]) continue;
         const Load& l = load_[i];
@@ -288,6 +293,10 @@ void World3::integrate(double dt) {
         kinetic += 0.5 * m * v_old.dot(v_new);
         vel_[i] = v_new;
         pos_[i] += dt * v_new;
+        if (const double travel = (dt * dt) * v_new.squaredNorm() / (radius_[i] * radius_[i]); travel > worst_travel) {
+            worst_travel = travel;
+            worst = i;
+        }
         const Vec3& p = pos_[i];
         // past the terrain's edge in map view there is no bed: the sphere is lost there (it
         // would only fall), or below the terrain by its height
@@ -300,6 +309,17 @@ void World3::integrate(double dt) {
     }
     energy_.kinetic = kinetic;
     energy_.dissipated += friction;
+    // a sphere that moves more than half its radius in a step can pass through the bed or another
+    // sphere before a contact sees it (a 1 s step from rest drops it 9.8 m): the run stops, as the
+    // 2-D world's fixed step does (World::kMaxTravel), instead of losing the spheres as strays.
+    // A sound run moves far less: snow-slide-3d 0.007 of the radius a step, Attabad's 10 m
+    // spheres at 0.01 s under 0.1.
+    if (!(worst_travel <= kMaxTravel * kMaxTravel))
+        throw RunError("sphere " + std::to_string(worst) + " (radius " + format_number(radius_[worst]) + " m) moved " +
+                       format_number(dt * vel_[worst].norm()) + " m in one step of " + format_number(dt) + " s at " +
+                       format_number(vel_[worst].norm()) + " m/s, more than half its radius, at t = " + format_number(time_) +
+                       " s: a step that long passes through the bed or another sphere unseen, or the run blew up; give " +
+                       (def_.dt_fixed > 0.0 ? "a smaller dem3.dt_fixed" : "a smaller dem3.dt_max or dem3.safety"));
 }
 
 void World3::save_state(BinaryWriter& out) const {
