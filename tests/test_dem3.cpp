@@ -372,7 +372,10 @@ TEST(Dem3, BadScenariosAreRefusedBeforeAnyOutput) {
     auto refused = [&](const std::string& key_value, const std::string& needle) {
         Scenario s = load_scenario((dir / "slide.toml").string());
         try {
-            apply_override(s, key_value);
+            for (size_t a = 0, b; a <= key_value.size(); a = b + 1) {  // overrides split by ';'
+                b = std::min(key_value.find(';', a), key_value.size());
+                apply_override(s, key_value.substr(a, b - a));
+            }
             finish_scenario(s);
             run_scenario(s, {(dir / "out").string(), false, {}});
             ADD_FAILURE() << key_value << " was not refused";
@@ -386,5 +389,10 @@ TEST(Dem3, BadScenariosAreRefusedBeforeAnyOutput) {
     refused("dem3.release_lo=[100.0, 100.0]", "release box");
     refused("dem3.radius=-1", "dem3.radius");
     refused("dem3.release_thickness=0", "release_thickness");
+    // a release too large to set up in a minute is refused at once (it ran for hours, or a box
+    // of 1e9 m overflowed the counts into "holds no sphere")
+    refused("dem3.radius=0.0001", "samples, more than");
+    refused("dem3.release_lo=[-1e9, -1e9]", "samples, more than");
+    refused("dem3.radius=0.05;dem3.release_thickness=400", "sites to test");
     fs::remove_all(dir);
 }

@@ -6,14 +6,30 @@
 #include <Eigen/Dense>
 
 #include "core/error.h"
+#include "core/validate.h"
 
 namespace demlab {
+
+namespace {
+// the most samples of the release box and lattice sites a release may test: each costs a
+// terrain query (about a microsecond), so a minute of set-up at most
+constexpr double kMaxReleaseSamples = 2e7;
+constexpr double kMaxReleaseSites = 5e7;
+}  // namespace
 
 ClosePackedRelease close_packed_release(const Tin& bed, const std::function<bool(double, double, double&)>& top, const Vec2& lo,
                                         const Vec2& hi, double R, LatticeLayers layering) {
     ClosePackedRelease out;
     // the bulk volume and the elevations' range, on samples a quarter radius apart
     const double step = 0.25 * R;
+    // bounded before any work: a box of kilometres, or a radius of a millimetre, took minutes
+    // or hours of sampling without a word (and a box of 1e9 m overflowed the counts)
+    const double samples = std::max(1.0, std::ceil((hi.x() - lo.x()) / step)) * std::max(1.0, std::ceil((hi.y() - lo.y()) / step));
+    if (!(samples <= kMaxReleaseSamples))
+        throw InputError("the release box dem3.release_lo - dem3.release_hi (" + format_number(hi.x() - lo.x()) + " m x " +
+                         format_number(hi.y() - lo.y()) + " m) is sampled every quarter of dem3.radius = " + format_number(R) +
+                         " m: " + format_number(samples) + " samples, more than " + format_number(kMaxReleaseSamples) +
+                         "; give a box within the release area or larger spheres");
     const int nx = std::max(1, int(std::ceil((hi.x() - lo.x()) / step))), ny = std::max(1, int(std::ceil((hi.y() - lo.y()) / step)));
     const double cx = (hi.x() - lo.x()) / nx, cy = (hi.y() - lo.y()) / ny;
     double z_lo = INFINITY, z_hi = -INFINITY;
@@ -36,6 +52,15 @@ ClosePackedRelease close_packed_release(const Tin& bed, const std::function<bool
     if (!std::isfinite(z_lo) || !(z_hi > z_lo)) return out;
     const double s3 = std::sqrt(3.0), layer = 2.0 * std::sqrt(2.0 / 3.0) * R;
     const Vec3 a1(2.0 * R, 0, 0), a2(R, s3 * R, 0), a3(R, R / s3, layer);
+    // the lattice's sites, counted before they are tested (the box's columns and rows, the
+    // layers between the lowest bed and the highest top: on a slope far more than are kept)
+    const double sites = (std::ceil((z_hi - z_lo) / layer) + 1.0) * (std::ceil((hi.y() - lo.y()) / (s3 * R)) + 4.0) *
+                         (std::ceil((hi.x() - lo.x()) / (2.0 * R)) + 4.0);
+    if (!(sites <= kMaxReleaseSites))
+        throw InputError("the release's lattice of spheres of dem3.radius = " + format_number(R) + " m has " + format_number(sites) +
+                         " sites to test over the box dem3.release_lo - dem3.release_hi, from the lowest bed to the highest top (" +
+                         format_number(z_lo) + " to " + format_number(z_hi) + " m), more than " + format_number(kMaxReleaseSites) +
+                         ": give larger spheres, a smaller box or a lower top (dem3.release_top, dem3.release_thickness)");
     const int layers = int(std::ceil((z_hi - z_lo) / layer)) + 1;
     const int rows = int(std::ceil((hi.y() - lo.y()) / (s3 * R))) + 2;
     const double span_x = hi.x() - lo.x();

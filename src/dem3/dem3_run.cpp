@@ -84,7 +84,11 @@ public:
             z += d.release_thickness;
             return true;
         };
-        release_ = close_packed_release(*tin_, top_at, d.release_lo, d.release_hi, d.radius, d.release_layers);
+        try {
+            release_ = close_packed_release(*tin_, top_at, d.release_lo, d.release_hi, d.radius, d.release_layers);
+        } catch (const InputError& e) {
+            throw InputError(s.source + ": " + e.what());
+        }
         if (release_.centres.empty())
             throw InputError(s.source + ": the release box [" + format_number(d.release_lo.x()) + ", " + format_number(d.release_lo.y()) +
                              "] - [" + format_number(d.release_hi.x()) + ", " + format_number(d.release_hi.y()) +
