@@ -103,6 +103,37 @@ TEST(OutputPolicy, ForceNeverDeletesWhatDemlabDidNotMakeOrAnInput) {
     fs::remove_all(work);
 }
 
+// Row 1c: another output made inside a finished run folder (a run, frames rendered under
+// another name) is not the run's: a --force on the run is refused naming it, and it stays. The
+// run's own plots/ and frames/, also when `demlab plot` or `demlab render` made them later, are
+// replaced with the run. (A marked folder inside counted as the run's whatever its name, and
+// --force deleted the other run without a word.)
+TEST(OutputPolicy, ForceOnARunKeepsTheOtherOutputsMadeInsideIt) {
+    const fs::path work = temp_dir("force-nested");
+    const fs::path run = finished_run(work, "r");
+    EXPECT_EQ(demlab({"run", "r.toml", "--out", "r/other", "--no-plots"}, work), 0) << read_file(work / "stderr.txt");
+    EXPECT_EQ(demlab({"render", "r", "--out", "r/frames-hd", "--size", "64x48"}, work), 0) << read_file(work / "stderr.txt");
+    EXPECT_EQ(demlab({"render", "r", "--size", "64x48", "--force"}, work), 0) << read_file(work / "stderr.txt");  // r/frames
+    if (program_available("gnuplot")) {
+        EXPECT_EQ(demlab({"plot", "r"}, work), 0) << read_file(work / "stderr.txt");
+    }
+    const auto other = listing(run / "other");
+    EXPECT_EQ(demlab({"run", "r.toml", "--out", "r", "--force"}, work), kExitInput);
+    const std::string said = read_file(work / "stderr.txt");
+    EXPECT_NE(said.find("'frames-hd'"), std::string::npos) << said;
+    EXPECT_NE(said.find("'other'"), std::string::npos) << said;
+    EXPECT_EQ(said.find("'frames'"), std::string::npos) << said;
+    EXPECT_EQ(said.find("'plots'"), std::string::npos) << said;
+    EXPECT_EQ(listing(run / "other"), other);
+    EXPECT_TRUE(fs::exists(run / "frames-hd"));
+    // moved out of the way, the run is replaced with its own frames and plots
+    fs::rename(run / "other", work / "other");
+    fs::rename(run / "frames-hd", work / "frames-hd");
+    EXPECT_EQ(demlab({"run", "r.toml", "--out", "r", "--force"}, work), 0) << read_file(work / "stderr.txt");
+    EXPECT_EQ(listing(work / "other"), other);
+    fs::remove_all(work);
+}
+
 // Row 1b: a folder that merely has the name a forced output would move its old folder to (a
 // user's run called X.replaced) is never removed or moved: not by a new output into X, not by
 // a forced one (which takes the next free name), not by one that fails; and the old folder a

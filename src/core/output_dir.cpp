@@ -127,14 +127,17 @@ bool recorded_entries(const std::string& dir, std::vector<std::string>& files) {
 }
 
 // The entries below dir that its marker does not list (prefixed with `prefix`), and those of
-// the folders with their own marker inside it (frames/, plots/), which keep their own lists.
+// the folders with their own marker inside it that it lists (frames/, plots/), which keep their
+// own lists. A marked folder the list does not name is another output the user made there (a
+// run, a comparison, frames rendered elsewhere than frames/): foreign as a whole, never
+// deleted with this one.
 void collect_foreign(const std::string& dir, const std::string& prefix, std::vector<std::string>& foreign) {
     std::vector<std::string> recorded;
     if (!recorded_entries(dir, recorded)) return;  // no list: all of it is demlab's as before
     for (const std::string& e : listed_entries(dir)) {
         const std::string path = dir + "/" + e;
-        if (is_demlab_output(path)) collect_foreign(path, prefix + e + "/", foreign);
-        else if (!std::binary_search(recorded.begin(), recorded.end(), e)) foreign.push_back(prefix + e);
+        if (!std::binary_search(recorded.begin(), recorded.end(), e)) foreign.push_back(prefix + e);
+        else if (is_demlab_output(path)) collect_foreign(path, prefix + e + "/", foreign);
     }
 }
 
@@ -300,6 +303,20 @@ void record_output_files(const std::string& dir) {
     for (const std::string& e : entries)
         if (is_demlab_output(dir + "/" + e)) record_output_files(dir + "/" + e);
     write_file_atomic(marker_path(dir), marker_text(kMarkerHead, aside_token(dir), &entries));
+}
+
+void record_in_parent(const std::string& dir) {
+    std::string d = dir;
+    while (d.size() > 1 && d.back() == '/') d.pop_back();
+    const fs::path path(d);
+    const std::string parent = path.parent_path().empty() ? "." : path.parent_path().string();
+    const std::string name = path.filename().string();
+    std::string head;
+    std::vector<std::string> files;
+    if (!is_demlab_output(parent) || !read_marker(parent, head, &files)) return;  // no list: all of it is demlab's
+    if (std::binary_search(files.begin(), files.end(), name)) return;
+    files.insert(std::upper_bound(files.begin(), files.end(), name), name);
+    write_file_atomic(marker_path(parent), marker_text(head, aside_token(parent), &files));
 }
 
 void remove_replaced_output(const std::string& dir) {
