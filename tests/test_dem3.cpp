@@ -385,6 +385,10 @@ TEST(Dem3, BadScenariosAreRefusedBeforeAnyOutput) {
         EXPECT_FALSE(fs::exists(dir / "out")) << key_value;
     };
     refused("dem3.terrain=\"missing.asc\"", "missing.asc");
+    // a missing file is named with the key that gave it (the message said terrain.grid)
+    refused("dem3.terrain=\"missing.asc\"", "(dem3.terrain)");
+    refused("dem3.terrain=\"missing.xyz\"", "(dem3.terrain)");
+    refused("dem3.release_top=\"missing.asc\"", "(dem3.release_top)");
     refused("dem3.release_hi=[1.0, 26.0]", "release box");
     refused("dem3.release_lo=[100.0, 100.0]", "release box");
     refused("dem3.radius=-1", "dem3.radius");

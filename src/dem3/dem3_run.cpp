@@ -26,15 +26,16 @@ bool is_grid_file(const std::string& path) {
     return ext == ".asc";
 }
 
-// a terrain file as a TIN, and the grid it came from (an empty grid for points)
-std::shared_ptr<const Tin> read_terrain(const std::string& path, EsriGrid* grid) {
+// a terrain file as a TIN, and the grid it came from (an empty grid for points); `key` names
+// the key that gave the file in its errors
+std::shared_ptr<const Tin> read_terrain(const std::string& path, const std::string& key, EsriGrid* grid) {
     if (is_grid_file(path)) {
-        EsriGrid g = read_esri_grid(path);
+        EsriGrid g = read_esri_grid(path, "elevation grid (" + key + ")");
         auto tin = std::make_shared<const Tin>(Tin::from_grid(g, path));
         if (grid) *grid = std::move(g);
         return tin;
     }
-    return std::make_shared<const Tin>(Tin::from_points(read_xyz_points(path), path));
+    return std::make_shared<const Tin>(Tin::from_points(read_xyz_points(path, "x y z point file (" + key + ")"), path));
 }
 
 class Dem3Loop final : public Solver {
@@ -75,9 +76,9 @@ public:
           on_snapshot_(o.on_snapshot) {
         const Dem3Scenario& d = s.dem3;
         EsriGrid grid;
-        tin_ = read_terrain(d.terrain, &grid);
+        tin_ = read_terrain(d.terrain, "dem3.terrain", &grid);
         std::shared_ptr<const Tin> top;
-        if (!d.release_top.empty()) top = read_terrain(d.release_top, nullptr);
+        if (!d.release_top.empty()) top = read_terrain(d.release_top, "dem3.release_top", nullptr);
         auto top_at = [&](double x, double y, double& z) {
             if (top) return top->height_at(x, y, z);
             if (!tin_->height_at(x, y, z)) return false;

@@ -402,8 +402,8 @@ bool Tin::height_at(double x, double y, double& z) const {
 
 namespace demlab {
 
-std::vector<Vec3> read_xyz_points(const std::string& path) {
-    std::istringstream in(read_input_file(path, kMaxTableBytes, "x y z point file"));
+std::vector<Vec3> read_xyz_points(const std::string& path, const std::string& what) {
+    std::istringstream in(read_input_file(path, kMaxTableBytes, what));
     std::vector<Vec3> points;
     std::string line;
     int no = 0;

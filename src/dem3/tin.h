@@ -77,6 +77,6 @@ private:
 // An "x y z" point file (DEBRIS' input: the bed and the level surface), one point a row,
 // '#' comments and blank rows skipped; bounded like every input file. InputError (exit 2) with
 // the file, the line and what is wrong.
-std::vector<Vec3> read_xyz_points(const std::string& path);
+std::vector<Vec3> read_xyz_points(const std::string& path, const std::string& what = "x y z point file");
 
 }  // namespace demlab

@@ -39,8 +39,8 @@ bool EsriGrid::sample(const Vec2& p, double& out) const {
     return true;
 }
 
-EsriGrid read_esri_grid(const std::string& path) {
-    const std::string text = read_input_file(path, kMaxTableBytes, "elevation grid (terrain.grid)");
+EsriGrid read_esri_grid(const std::string& path, const std::string& what) {
+    const std::string text = read_input_file(path, kMaxTableBytes, what);
     std::istringstream in(text);
     EsriGrid g;
     std::string line;

@@ -28,7 +28,7 @@ struct EsriGrid {
 
 // Reads an .asc file (bounded like every input file); InputError (exit 2) with the file,
 // line and what is wrong for a malformed header, a short or long row, a non-number.
-EsriGrid read_esri_grid(const std::string& path);
+EsriGrid read_esri_grid(const std::string& path, const std::string& what = "elevation grid (terrain.grid)");
 
 // The section from a to b sampled every `spacing` m (and at b): points (distance from a,
 // elevation). InputError naming the point for a sample outside the grid or on NODATA.
