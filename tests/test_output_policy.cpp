@@ -134,6 +134,34 @@ TEST(OutputPolicy, ForceOnARunKeepsTheOtherOutputsMadeInsideIt) {
     fs::remove_all(work);
 }
 
+// Row 1d: a symbolic link put into a run folder is never written through: `demlab plot` is
+// refused while plots/ holds one (it drew a PNG over the file the link named, outside the
+// folder), and a resume refuses a series file replaced by one (it cut the linked file back).
+TEST(OutputPolicy, ALinkInARunFolderIsRefusedNotWrittenThrough) {
+    if (!program_available("gnuplot")) GTEST_SKIP() << "gnuplot is not installed";
+    const fs::path work = temp_dir("links");
+    const fs::path run = finished_run(work, "r");
+    write_text(work / "victim.txt", "the user's\n");
+    fs::remove(run / "plots/forces_x.png");
+    fs::create_symlink(work / "victim.txt", run / "plots/forces_x.png");
+    EXPECT_EQ(demlab({"plot", "r"}, work), kExitInput);
+    EXPECT_NE(read_file(work / "stderr.txt").find("forces_x.png"), std::string::npos) << read_file(work / "stderr.txt");
+    EXPECT_EQ(demlab({"run", "r.toml", "--out", "r", "--force"}, work), kExitInput);
+    EXPECT_EQ(read_file(work / "victim.txt"), "the user's\n");
+    // a plots/ of the user's (no marker) holding a plots.gp and a link: not taken for demlab's
+    fs::remove_all(run / "plots");
+    write_text(run / "plots/plots.gp", "# mine\n");
+    fs::create_symlink(work / "victim.txt", run / "plots/gnuplot.log");
+    EXPECT_EQ(demlab({"plot", "r"}, work), kExitInput);
+    EXPECT_EQ(read_file(work / "victim.txt"), "the user's\n");
+    // a series file resumed through a link
+    SeriesFile series;
+    fs::create_symlink(work / "victim.txt", work / "front.csv.part");
+    EXPECT_THROW(series.reopen((work / "front.csv").string(), 3), InputError);
+    EXPECT_EQ(read_file(work / "victim.txt"), "the user's\n");
+    fs::remove_all(work);
+}
+
 // Row 1b: a folder that merely has the name a forced output would move its old folder to (a
 // user's run called X.replaced) is never removed or moved: not by a new output into X, not by
 // a forced one (which takes the next free name), not by one that fails; and the old folder a

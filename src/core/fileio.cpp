@@ -90,6 +90,9 @@ void SeriesFile::reopen(const std::string& path, uint64_t size) {
     path_ = path;
     const std::string part = path + ".part";
     std::error_code ec;
+    // a link put in its place would have the run write into the file it points at
+    if (fs::is_symlink(fs::symlink_status(part, ec)))
+        throw InputError("cannot resume: " + part + " is a symbolic link, not the file the run wrote; demlab writes only its own files");
     const auto have = fs::file_size(part, ec);
     if (ec || have < size)
         throw InputError("cannot resume: " + part + " is missing or shorter than at the checkpoint (" +

@@ -133,10 +133,15 @@ bool recorded_entries(const std::string& dir, std::vector<std::string>& files) {
 // deleted with this one.
 void collect_foreign(const std::string& dir, const std::string& prefix, std::vector<std::string>& foreign) {
     std::vector<std::string> recorded;
-    if (!recorded_entries(dir, recorded)) return;  // no list: all of it is demlab's as before
+    const bool listed = recorded_entries(dir, recorded);  // no list: all of it is demlab's as before
     for (const std::string& e : listed_entries(dir)) {
         const std::string path = dir + "/" + e;
-        if (!std::binary_search(recorded.begin(), recorded.end(), e)) foreign.push_back(prefix + e);
+        // demlab makes no symbolic links: one is the user's, and writing to its name would
+        // write to the file it points at, outside the folder (a plot drawn over a user's file)
+        std::error_code ec;
+        if (fs::is_symlink(fs::symlink_status(path, ec))) foreign.push_back(prefix + e);
+        else if (!listed) continue;
+        else if (!std::binary_search(recorded.begin(), recorded.end(), e)) foreign.push_back(prefix + e);
         else if (is_demlab_output(path)) collect_foreign(path, prefix + e + "/", foreign);
     }
 }

@@ -61,15 +61,16 @@ int run_process(const ProcessDef& def) {
         };
         // (the files are named relative to the caller's folder: opened before the chdir)
         redirect(in, O_RDONLY, 0);
+        // (an output file's name that is a symbolic link is refused, not written through)
         if (pipe_fd[1] >= 0) {
             if (::dup2(pipe_fd[1], 1) < 0) ::_exit(127);
         } else {
-            redirect(out, O_WRONLY | O_CREAT | O_TRUNC, 1);
+            redirect(out, O_WRONLY | O_CREAT | O_TRUNC | O_NOFOLLOW, 1);
         }
         if (pipe_fd[1] >= 0 && def.stderr_file.empty()) {
             if (::dup2(pipe_fd[1], 2) < 0) ::_exit(127);
         } else {
-            redirect(err, O_WRONLY | O_CREAT | O_TRUNC, 2);
+            redirect(err, O_WRONLY | O_CREAT | O_TRUNC | O_NOFOLLOW, 2);
         }
         if (cwd && ::chdir(cwd) != 0) ::_exit(127);
         ::execv(exe.c_str(), args.data());

@@ -393,7 +393,7 @@ std::vector<std::string> make_plots(const std::string& run_dir, int width, int h
         bool only_plots = true;
         for (const auto& e : fs::directory_iterator(dir)) {
             const std::string name = e.path().filename().string(), ext = e.path().extension().string();
-            only_plots = only_plots && e.is_regular_file() &&
+            only_plots = only_plots && !e.is_symlink() && e.is_regular_file() &&
                          (ext == ".png" || name == "plots.gp" || name == "gnuplot.log" || name == "forces_smoothed.csv" ||
                           name == "barrier_pressure_peak.csv" || name == "barrier_pressure_map.dat");
         }
