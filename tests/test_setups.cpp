@@ -263,6 +263,8 @@ TEST(TerrainProfile, BarrierStandsOnTheProfile) {
     expect_refused([&] { load("[[2, 0.1], [2, 0.5]]"); }, {"terrain.barrier", "not on the profile"});
     expect_refused([&] { load("[[2, 0], [2.5, 0]]"); }, {"terrain.barrier", "must rise"});
     expect_refused([&] { load("[[2, 0], [2, 0]]"); }, {"terrain.barrier", "coincide"});
+    expect_refused([&] { load("[[2, 0], [1, 1]]"); }, {"terrain.barrier", "back upstream"});
+    expect_refused([&] { load("[[2, 0], [2, 1], [1.9, 1.2]]"); }, {"terrain.barrier", "from point 1 to 2"});
     const Scenario s = load("[[2, 0], [2, 0.3], [2.1, 0.3], [2.1, 0]]");
     const auto setup = make_setup(s);
     ASSERT_EQ(setup->walls().size(), 5u);

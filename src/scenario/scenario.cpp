@@ -339,6 +339,14 @@ void finish_terrain(Scenario& s) {
             if ((b[k + 1] - b[k]).norm() < 1e-6)
                 throw InputError(where + "terrain.barrier: points " + std::to_string(k) + " and " + std::to_string(k + 1) +
                                  " coincide (a segment must be longer than 1 um)");
+        // none of it back over the flow: the bed path runs on up the barrier's last segment, and
+        // one leaning upstream reached back over the release (the front measured past the
+        // barrier at t = 0)
+        for (size_t k = 0; k + 1 < b.size(); ++k)
+            if (b[k + 1].x() < b[k].x())
+                throw InputError(where + "terrain.barrier: from point " + std::to_string(k) + " to " + std::to_string(k + 1) + " it goes back upstream (x from " +
+                                 format_number(b[k].x()) + " to " + format_number(b[k + 1].x()) +
+                                 " m); a barrier may rise vertically or lean downstream, not over the flow");
         // the foot on a profile segment (x increasing): within 1 mm of the ground at its x
         const Vec2 foot = b[0];
         t.barrier_on_segment = -1;
