@@ -131,6 +131,12 @@ TEST(OutputPolicy, ForceOnARunKeepsTheOtherOutputsMadeInsideIt) {
     fs::rename(run / "frames-hd", work / "frames-hd");
     EXPECT_EQ(demlab({"run", "r.toml", "--out", "r", "--force"}, work), 0) << read_file(work / "stderr.txt");
     EXPECT_EQ(listing(work / "other"), other);
+    // an earlier build's run: its plots/ drawn after the run's list was written, so unlisted
+    EXPECT_EQ(demlab({"run", "r.toml", "--out", "r", "--force", "--no-plots"}, work), 0) << read_file(work / "stderr.txt");
+    write_text(run / "plots/forces_x.png", "png\n");
+    mark_output_dir((run / "plots").string());
+    record_output_files((run / "plots").string());
+    EXPECT_EQ(demlab({"run", "r.toml", "--out", "r", "--force"}, work), 0) << read_file(work / "stderr.txt");
     fs::remove_all(work);
 }
 

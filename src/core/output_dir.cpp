@@ -127,10 +127,11 @@ bool recorded_entries(const std::string& dir, std::vector<std::string>& files) {
 }
 
 // The entries below dir that its marker does not list (prefixed with `prefix`), and those of
-// the folders with their own marker inside it that it lists (frames/, plots/), which keep their
-// own lists. A marked folder the list does not name is another output the user made there (a
-// run, a comparison, frames rendered elsewhere than frames/): foreign as a whole, never
-// deleted with this one.
+// the folders with their own marker inside it that it lists, which keep their own lists. A
+// marked folder the list does not name is another output the user made there (a run, a
+// comparison, frames rendered elsewhere): foreign as a whole, never deleted with this one. Only
+// a run's own plots/ and frames/ belong to it unlisted: earlier builds drew the plots after the
+// run's list was written, and a plot or render stopped before its end does not list them.
 void collect_foreign(const std::string& dir, const std::string& prefix, std::vector<std::string>& foreign) {
     std::vector<std::string> recorded;
     const bool listed = recorded_entries(dir, recorded);  // no list: all of it is demlab's as before
@@ -141,8 +142,10 @@ void collect_foreign(const std::string& dir, const std::string& prefix, std::vec
         std::error_code ec;
         if (fs::is_symlink(fs::symlink_status(path, ec))) foreign.push_back(prefix + e);
         else if (!listed) continue;
+        else if (is_demlab_output(path) && (std::binary_search(recorded.begin(), recorded.end(), e) ||
+                                            (prefix.empty() && (e == "plots" || e == "frames"))))
+            collect_foreign(path, prefix + e + "/", foreign);
         else if (!std::binary_search(recorded.begin(), recorded.end(), e)) foreign.push_back(prefix + e);
-        else if (is_demlab_output(path)) collect_foreign(path, prefix + e + "/", foreign);
     }
 }
 

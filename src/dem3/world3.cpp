@@ -128,7 +128,7 @@ void World3::build_cells() {
     for (int a = 0; a < 3; ++a) {
         cell_origin_[a] = lo[a] - 1;
         if (lo[a] <= hi[a] && hi[a] + 1 - cell_origin_[a] >= kCellSpan)
-            throw RunError("the spheres spread over more than " + std::to_string(kCellSpan - 3) + " cells of " + format_number(cell_) +
+            throw RunError("the spheres spread over more than " + std::to_string(kCellSpan - 2) + " cells of " + format_number(cell_) +
                            " m along axis " + std::to_string(a) + " (from " + format_number(double(lo[a]) * cell_) + " to " +
                            format_number(double(hi[a] + 1) * cell_) + " m): the run blew up");
     }
@@ -293,7 +293,8 @@ void World3::integrate(double dt) {
         kinetic += 0.5 * m * v_old.dot(v_new);
         vel_[i] = v_new;
         pos_[i] += dt * v_new;
-        if (const double travel = (dt * dt) * v_new.squaredNorm() / (radius_[i] * radius_[i]); travel > worst_travel) {
+        if (const double travel = (dt * dt) * v_new.squaredNorm() / (radius_[i] * radius_[i]);
+            travel > worst_travel || (std::isnan(travel) && !std::isnan(worst_travel))) {
             worst_travel = travel;
             worst = i;
         }
@@ -312,8 +313,8 @@ void World3::integrate(double dt) {
     // a sphere that moves more than half its radius in a step can pass through the bed or another
     // sphere before a contact sees it (a 1 s step from rest drops it 9.8 m): the run stops, as the
     // 2-D world's fixed step does (World::kMaxTravel), instead of losing the spheres as strays.
-    // A sound run moves far less: snow-slide-3d 0.007 of the radius a step, Attabad's 10 m
-    // spheres at 0.01 s under 0.1.
+    // A sound run moves far less: snow-slide-3d at most 0.007 of the radius a step over its
+    // first 0.35 s; Attabad's 10 m spheres at 0.01 s reach half a radius only at 500 m/s.
     if (!(worst_travel <= kMaxTravel * kMaxTravel))
         throw RunError("sphere " + std::to_string(worst) + " (radius " + format_number(radius_[worst]) + " m) moved " +
                        format_number(dt * vel_[worst].norm()) + " m in one step of " + format_number(dt) + " s at " +
