@@ -465,13 +465,11 @@ TEST(Validation, ForceKeepsOffTheUsersOwnFilesInARunFolder) {
     write_file_atomic((dir / "notes.txt").string(), "my notes\n");
     fs::create_directories(dir / "snapshots/mine");
     write_file_atomic((dir / "snapshots/mine/fig.txt").string(), "x\n");
-    // and inside a folder with its own marker, made for the run later (as `demlab plot` makes
-    // plots/ and lists it in the run's marker)
+    // and inside a folder with its own marker (as plots/ and frames/ are)
     fs::create_directories(dir / "plots");
     mark_output_dir((dir / "plots").string());
     write_file_atomic((dir / "plots/a.png").string(), "png\n");
     record_output_files((dir / "plots").string());
-    record_in_parent((dir / "plots").string());
     write_file_atomic((dir / "plots/b.txt").string(), "mine\n");
     const std::string what = expect_refused([&] { run_scenario(s, {dir.string(), true, {}}); },
                                             {"'notes.txt'", "'snapshots/mine'", "'plots/b.txt'", "4 entries"});

@@ -313,20 +313,6 @@ void record_output_files(const std::string& dir) {
     write_file_atomic(marker_path(dir), marker_text(kMarkerHead, aside_token(dir), &entries));
 }
 
-void record_in_parent(const std::string& dir) {
-    std::string d = dir;
-    while (d.size() > 1 && d.back() == '/') d.pop_back();
-    const fs::path path(d);
-    const std::string parent = path.parent_path().empty() ? "." : path.parent_path().string();
-    const std::string name = path.filename().string();
-    std::string head;
-    std::vector<std::string> files;
-    if (!is_demlab_output(parent) || !read_marker(parent, head, &files)) return;  // no list: all of it is demlab's
-    if (std::binary_search(files.begin(), files.end(), name)) return;
-    files.insert(std::upper_bound(files.begin(), files.end(), name), name);
-    write_file_atomic(marker_path(parent), marker_text(head, aside_token(parent), &files));
-}
-
 void remove_replaced_output(const std::string& dir) {
     record_output_files(dir);  // complete: what is in it now is demlab's
     std::error_code ec;

@@ -57,11 +57,6 @@ std::string replaced_output_dir(const std::string& dir);
 // marked folders inside it (a later --force deletes nothing else).
 void record_output_files(const std::string& dir);
 
-// A folder a later command wrote for the output it sits in (`demlab plot RUN`'s RUN/plots,
-// `demlab render RUN`'s RUN/frames) joins that output's file list, so that a --force on it
-// replaces it with the rest; any other output folder made inside it is kept from a --force.
-void record_in_parent(const std::string& dir);
-
 // record_output_files, and the old folder a forced prepare_output_dir moved aside is removed.
 void remove_replaced_output(const std::string& dir);
 

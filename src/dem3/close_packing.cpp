@@ -24,13 +24,14 @@ ClosePackedRelease close_packed_release(const Tin& bed, const std::function<bool
     const double step = 0.25 * R;
     // bounded before any work: a box of kilometres, or a radius of a millimetre, took minutes
     // or hours of sampling without a word (and a box of 1e9 m overflowed the counts)
-    const double samples = std::max(1.0, std::ceil((hi.x() - lo.x()) / step)) * std::max(1.0, std::ceil((hi.y() - lo.y()) / step));
+    const double columns = std::max(1.0, std::ceil((hi.x() - lo.x()) / step)), lines = std::max(1.0, std::ceil((hi.y() - lo.y()) / step));
+    const double samples = columns * lines;
     if (!(samples <= kMaxReleaseSamples))
         throw InputError("the release box dem3.release_lo - dem3.release_hi (" + format_number(hi.x() - lo.x()) + " m x " +
                          format_number(hi.y() - lo.y()) + " m) is sampled every quarter of dem3.radius = " + format_number(R) +
                          " m: " + format_number(samples) + " samples, more than " + format_number(kMaxReleaseSamples) +
                          "; give a box within the release area or larger spheres");
-    const int nx = std::max(1, int(std::ceil((hi.x() - lo.x()) / step))), ny = std::max(1, int(std::ceil((hi.y() - lo.y()) / step)));
+    const int nx = int(columns), ny = int(lines);
     const double cx = (hi.x() - lo.x()) / nx, cy = (hi.y() - lo.y()) / ny;
     double z_lo = INFINITY, z_hi = -INFINITY;
     // the bed's plane z = c0 + c1 (x - xm) + c2 (y - ym) by least squares over the samples

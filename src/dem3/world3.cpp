@@ -17,14 +17,14 @@ constexpr double kAhead = DebrisLaw::kAheadSteps;
 // has cell indices beyond 2^20, whose bits ran into the next field and put distant spheres into
 // one cell, their pairs gathered twice. The order of the keys is that of the indices, so the
 // sums' order does not depend on the origin.
-// the most a sphere may move in one step, in radii (integrate)
-constexpr double kMaxTravel = 0.5;
-
 constexpr std::int64_t kCellSpan = std::int64_t(1) << 21;
 
 std::uint64_t cell_key(const std::int64_t* origin, std::int64_t x, std::int64_t y, std::int64_t z) {
     return (std::uint64_t(x - origin[0]) << 42) | (std::uint64_t(y - origin[1]) << 21) | std::uint64_t(z - origin[2]);
 }
+
+// the most a sphere may move in one step, in radii (integrate)
+constexpr double kMaxTravel = 0.5;
 }  // namespace
 
 World3::World3(const Dem3Def& def, std::shared_ptr<const Tin> terrain) : def_(def), tin_(std::move(terrain)) {

@@ -424,7 +424,6 @@ std::vector<std::string> make_plots(const std::string& run_dir, int width, int h
     // runs: no path or name a user chose ever reaches a command line or the script
     run_gnuplot(dir, "plots.gp", made);
     record_output_files(dir);  // (so a --force on the run keeps off what the user adds here)
-    record_in_parent(dir);     // (the run's own plots: a --force on the run replaces them)
     return made;
 }
 

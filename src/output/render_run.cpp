@@ -161,7 +161,6 @@ int render_run(const RenderRunOptions& o) {
     try {
         const int frames = render_chosen(o, out, style, color, snaps, chosen, every, frame_at);
         if (!out.empty()) remove_replaced_output(out);
-        if (o.out.empty() && !out.empty()) record_in_parent(out);  // the run's own frames/
         return frames;
     } catch (...) {
         if (!out.empty()) abandon_output(out);
